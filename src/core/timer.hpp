@@ -1,0 +1,54 @@
+// Wall-clock timing of the stages of a step, printed by --profile.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <string_view>
+
+namespace sandflow {
+
+class Stopwatch {
+ public:
+  Stopwatch() : start_(Clock::now()) {}
+  double seconds() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+  void reset() { start_ = Clock::now(); }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  Clock::time_point start_;
+};
+
+enum class Stage { Emit, Neighbours, Forces, Integrate, Output, kCount };
+
+inline std::string_view stage_name(Stage s) {
+  switch (s) {
+    case Stage::Emit: return "emit";
+    case Stage::Neighbours: return "neighbours";
+    case Stage::Forces: return "forces";
+    case Stage::Integrate: return "integrate";
+    case Stage::Output: return "output";
+    default: return "?";
+  }
+}
+
+struct Profile {
+  std::array<double, static_cast<int>(Stage::kCount)> seconds{};
+  double& operator[](Stage s) { return seconds[static_cast<int>(s)]; }
+  double operator[](Stage s) const { return seconds[static_cast<int>(s)]; }
+};
+
+/// Adds the lifetime of the scope to one stage of a Profile.
+class ScopedStage {
+ public:
+  ScopedStage(Profile& p, Stage s) : p_(p), s_(s) {}
+  ~ScopedStage() { p_[s_] += w_.seconds(); }
+  ScopedStage(const ScopedStage&) = delete;
+  ScopedStage& operator=(const ScopedStage&) = delete;
+
+ private:
+  Profile& p_;
+  Stage s_;
+  Stopwatch w_;
+};
+
+}  // namespace sandflow

@@ -1,0 +1,110 @@
+// A scene as plain data, after parsing and validation: every field in SI units, angles already in
+// radians where the struct says so. The loader (scene_loader.hpp) fills it from a TOML file; the
+// World is built from it. Defaults here are the documented defaults of docs/scenes.md.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/vec3.hpp"
+
+namespace sandflow {
+
+enum class Mode { Surface, Dem };
+
+struct MaterialConfig {
+  Real density = 2600.0;            ///< grain density [kg/m^3]
+  Real diameter = 0.01;             ///< mean grain diameter [m]
+  Real diameter_spread = 0.0;       ///< radii uniform in d*(1 +- spread)/2 [-], in [0, 0.5]
+  Real k_n = 1.0e4;                 ///< normal stiffness [N/m]
+  Real k_t_ratio = 2.0 / 7.0;       ///< tangential stiffness k_t / k_n [-]
+  Real restitution = 0.3;           ///< normal coefficient of restitution e, in (0, 1]
+  Real tangential_damping_ratio = 0.5;  ///< c_t / c_n [-]
+  Real friction = 0.6;              ///< Coulomb friction mu between grains [-]
+  Real rolling_friction = 0.1;      ///< rolling resistance mu_r (torque cap mu_r R_eff |F_n|) [-]
+  Real rolling_stiffness_ratio = 1.0;  ///< k_r / k_t: stiffness of the rolling spring [-]
+  Real rolling_damping_ratio = 1.0;    ///< c_r / c_t [-]
+  Real wall_friction = 0.6;         ///< Coulomb friction between grains and geometry [-]
+  Real wall_rolling_friction = 0.1; ///< rolling resistance between grains and geometry [-]
+};
+
+struct SimulationConfig {
+  Mode mode = Mode::Surface;
+  Vec3 gravity{0, 0, -9.81};        ///< [m/s^2]
+  std::optional<Real> dt;           ///< fixed time step [s]; unset: dt_fraction * t_c
+  Real dt_fraction = 0.05;          ///< dt = dt_fraction * t_c when dt is unset (t_c/20)
+  Real skin = 0.2;                  ///< Verlet skin as a fraction of the mean diameter [-]
+  int sort_every = 20;              ///< re-sort grains by cell every N neighbour rebuilds
+  std::uint64_t seed = 1;           ///< random seed of the emitters
+  int threads = 0;                  ///< 0: all cores
+};
+
+struct OutputConfig {
+  Real fps = 30.0;                  ///< frames per simulated second [1/s]
+  std::optional<Real> duration;     ///< simulated time [s]; unset: end of emission + settle_time
+  Real settle_time = 1.5;           ///< [s] after the last grain is emitted (duration unset)
+  std::optional<int> frames;        ///< explicit frame count (from --frames)
+  bool write_frames = true;         ///< write frames/NNNN.ply
+};
+
+enum class GeometryType { Plane, Box, Cylinder, Sphere };
+enum class RenderStyle { Solid, Glass, Hidden };
+
+struct GeometryConfig {
+  GeometryType type = GeometryType::Plane;
+  std::string name;                 ///< for messages and rendering
+  RenderStyle render = RenderStyle::Solid;
+  std::optional<Real> friction;     ///< overrides material.wall_friction
+  // plane
+  Vec3 point{0, 0, 0};              ///< a point of the plane [m]
+  Vec3 normal{0, 0, 1};             ///< unit normal, pointing to the free side
+  // box, cylinder, sphere
+  Vec3 center{0, 0, 0};             ///< [m]
+  Vec3 size{1, 1, 1};               ///< box: full extents along its local axes [m]
+  Vec3 rotation_deg{0, 0, 0};       ///< box, cylinder: Euler angles about x, y, z [deg]
+  Real radius = 0.5;                ///< cylinder, sphere [m]
+  Real height = 1.0;                ///< cylinder: length along its axis (local z) [m]
+  bool container = false;           ///< box, cylinder: grains live inside, behind walls
+  bool open_top = true;             ///< container: no lid
+  Real wall_thickness = 0.02;       ///< container walls [m]
+};
+
+enum class EmitterType { Pour, Block, Lattice };
+enum class PourShape { Disk, Rect };
+
+struct EmitterConfig {
+  EmitterType type = EmitterType::Pour;
+  std::string name;
+  std::int64_t count = 0;           ///< grains this emitter makes in total
+  Real start = 0.0;                 ///< time of the first grain [s]
+  Vec3 velocity{0, 0, 0};           ///< initial velocity [m/s]
+  Real jitter = 0.25;               ///< random offset, as a fraction of the free gap [-], [0, 1]
+  // pour
+  PourShape shape = PourShape::Disk;
+  Vec3 center{0, 0, 0};             ///< pour: centre of the disk/rectangle; block: box centre
+  Real radius = 0.05;               ///< pour disk radius [m]
+  Vec3 size{0.1, 0.1, 0.1};         ///< pour rect: x, y extents (z ignored); block/lattice: box
+  Real rate = 1000.0;               ///< pour rate [grains/s]
+  Real spacing = 1.05;              ///< lattice/slot spacing as a multiple of the largest diameter
+};
+
+struct SceneConfig {
+  std::string path;                 ///< file it came from
+  std::string name;
+  std::string description;
+  MaterialConfig material;
+  SimulationConfig simulation;
+  OutputConfig output;
+  std::vector<GeometryConfig> geometry;
+  std::vector<EmitterConfig> emitters;
+
+  std::int64_t total_grains() const {
+    std::int64_t n = 0;
+    for (const auto& e : emitters) n += e.count;
+    return n;
+  }
+};
+
+}  // namespace sandflow
