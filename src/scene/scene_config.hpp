@@ -31,7 +31,7 @@ struct MaterialConfig {
 };
 
 struct SimulationConfig {
-  Mode mode = Mode::Surface;
+  Mode mode = Mode::Dem;            ///< surface mode arrives with the height field (issue 3)
   Vec3 gravity{0, 0, -9.81};        ///< [m/s^2]
   std::optional<Real> dt;           ///< fixed time step [s]; unset: dt_fraction * t_c
   Real dt_fraction = 0.05;          ///< dt = dt_fraction * t_c when dt is unset (t_c/20)

@@ -1,0 +1,54 @@
+// The progress line of long commands: frame, grains, speed, ETA. Redrawn in place on a terminal;
+// on a pipe or a file, one plain line every so often instead.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include "core/timer.hpp"
+
+namespace sandflow {
+
+class Progress {
+ public:
+  Progress(std::string label, int total_frames)
+      : label_(std::move(label)), total_(total_frames), tty_(isatty(STDERR_FILENO) != 0) {}
+
+  void update(int frame, std::int64_t grains) {
+    const double elapsed = clock_.seconds();
+    const double per_frame = elapsed / std::max(1, frame);
+    const double eta = per_frame * (total_ - frame);
+    const std::string line =
+        fmt::format("{} frame {}/{}  grains {}  {:.1f} frames/min  ETA {}", label_, frame, total_,
+                    grains, 60.0 / std::max(per_frame, 1e-9), format_duration(eta));
+    if (tty_) {
+      std::fprintf(stderr, "\r%s\033[K", line.c_str());
+      if (frame == total_) std::fputc('\n', stderr);
+    } else if (elapsed - last_plain_ >= 30.0 || frame == total_) {
+      std::fprintf(stderr, "%s\n", line.c_str());
+      last_plain_ = elapsed;
+    }
+    std::fflush(stderr);
+  }
+
+  static std::string format_duration(double s) {
+    const auto t = static_cast<std::int64_t>(s + 0.5);
+    if (t >= 3600) return fmt::format("{}h{:02d}m", t / 3600, (t % 3600) / 60);
+    if (t >= 60) return fmt::format("{}m{:02d}s", t / 60, t % 60);
+    return fmt::format("{}s", t);
+  }
+
+ private:
+  std::string label_;
+  int total_;
+  bool tty_;
+  Stopwatch clock_;
+  double last_plain_ = 0;
+};
+
+}  // namespace sandflow

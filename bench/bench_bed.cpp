@@ -1,0 +1,215 @@
+// The settled-bed benchmark, the sandflow half of bench/compare_lammps.sh: 100,000 monodisperse
+// spheres (d = 2 mm, rho = 2500 kg/m^3, k_n = 500 N/m, k_t = 2/7 k_n, e = 0.5, mu = 0.5, no rolling
+// resistance, dt = 1e-5 s) settled in a box, then 2,000 steps timed. The settled bed is cached in a
+// file so both engines time the same grains, and can be written as a LAMMPS data file.
+#include <omp.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "core/timer.hpp"
+#include "dem/dem_solver.hpp"
+#include "scene/world.hpp"
+
+using namespace sandflow;
+
+namespace {
+
+constexpr Real kD = 0.002, kRho = 2500, kKn = 500, kE = 0.5, kMu = 0.5, kDt = 1e-5;
+
+struct Bed {
+  Real side = 0;  ///< box footprint side [m]
+  Grains grains;
+};
+
+MaterialConfig bed_material() {
+  MaterialConfig m;
+  m.density = kRho;
+  m.diameter = kD;
+  m.diameter_spread = 0;
+  m.k_n = kKn;
+  m.k_t_ratio = 2.0 / 7.0;
+  m.restitution = kE;
+  m.tangential_damping_ratio = 0.5;
+  m.friction = kMu;
+  m.rolling_friction = 0;
+  m.wall_friction = kMu;
+  m.wall_rolling_friction = 0;
+  return m;
+}
+
+std::vector<GeometryConfig> bed_walls(Real side) {
+  auto plane = [](Vec3 p, Vec3 n) {
+    GeometryConfig g;
+    g.type = GeometryType::Plane;
+    g.point = p;
+    g.normal = n;
+    return g;
+  };
+  return {plane({0, 0, 0}, {0, 0, 1}), plane({0, 0, 0}, {1, 0, 0}), plane({side, 0, 0}, {-1, 0, 0}),
+          plane({0, 0, 0}, {0, 1, 0}), plane({0, side, 0}, {0, -1, 0})};
+}
+
+// A loose jittered lattice dropped into the box and left to settle.
+Bed make_bed(std::int64_t n, int settle_frames) {
+  SceneConfig scene;
+  scene.path = "bench_bed";
+  scene.name = "bed";
+  scene.material = bed_material();
+  scene.simulation.dt = kDt;
+  scene.output.fps = 100;  // a frame = 1,000 steps
+  // footprint: about 1/1000 of N grains per layer, at least 20 x 20
+  const Real per_side = std::max(20.0, std::round(std::sqrt(static_cast<Real>(n) / 40.0)));
+  Bed bed;
+  bed.side = per_side * kD * 1.1;
+  scene.geometry = bed_walls(bed.side);
+  EmitterConfig e;
+  e.type = EmitterType::Block;
+  e.count = n;
+  e.spacing = 1.1;
+  e.jitter = 1.0;
+  const Real layers = std::ceil(static_cast<Real>(n) / (per_side * per_side)) + 1;
+  e.size = {bed.side, bed.side, layers * kD * 1.1};
+  e.center = {bed.side / 2, bed.side / 2, e.size.z / 2};
+  scene.emitters = {e};
+  World world(scene);
+  for (int f = 0; f < settle_frames; ++f) {
+    const FrameStats st = world.advance_frame();
+    std::fprintf(stderr, "settling: t = %.2f s, kinetic energy %.3e J, contacts/grain %.2f\n",
+                 st.time, st.kinetic_energy, 2.0 * st.contacts / static_cast<double>(st.n_total));
+  }
+  bed.grains = world.grains();
+  return bed;
+}
+
+template <class T>
+void put(std::ofstream& o, const std::vector<T>& a) {
+  o.write(reinterpret_cast<const char*>(a.data()), static_cast<std::streamsize>(a.size() * sizeof(T)));
+}
+template <class T>
+void get(std::ifstream& i, std::vector<T>& a, std::size_t n) {
+  a.resize(n);
+  i.read(reinterpret_cast<char*>(a.data()), static_cast<std::streamsize>(n * sizeof(T)));
+}
+
+void save_bed(const std::string& path, const Bed& b) {
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  std::ofstream o(path + ".tmp", std::ios::binary);
+  const std::uint64_t n = b.grains.size();
+  o.write("SFBED001", 8);
+  o.write(reinterpret_cast<const char*>(&n), 8);
+  o.write(reinterpret_cast<const char*>(&b.side), 8);
+  put(o, b.grains.id), put(o, b.grains.x), put(o, b.grains.v), put(o, b.grains.w), put(o, b.grains.r);
+  o.close();
+  std::filesystem::rename(path + ".tmp", path);
+}
+
+bool load_bed(const std::string& path, Bed& b) {
+  std::ifstream i(path, std::ios::binary);
+  char magic[8];
+  std::uint64_t n = 0;
+  if (!i.read(magic, 8) || std::memcmp(magic, "SFBED001", 8) != 0) return false;
+  i.read(reinterpret_cast<char*>(&n), 8);
+  i.read(reinterpret_cast<char*>(&b.side), 8);
+  std::vector<GrainId> id;
+  std::vector<Vec3> x, v, w;
+  std::vector<Real> r;
+  get(i, id, n), get(i, x, n), get(i, v, n), get(i, w, n), get(i, r, n);
+  if (!i) return false;
+  b.grains = {};
+  for (std::size_t k = 0; k < n; ++k) {
+    b.grains.add(id[k], x[k], v[k], r[k], kRho);
+    b.grains.w.back() = w[k];
+  }
+  return true;
+}
+
+void write_lammps(const std::string& path, const Bed& b) {
+  Real top = 0;
+  for (const Vec3& p : b.grains.x) top = std::max(top, p.z);
+  std::ofstream o(path);
+  o << fmt::format("sandflow settled bed\n\n{} atoms\n1 atom types\n\n", b.grains.size());
+  o << fmt::format("0 {:.10g} xlo xhi\n0 {:.10g} ylo yhi\n0 {:.10g} zlo zhi\n\n", b.side, b.side,
+                   2 * top + 0.01);
+  o << "Atoms # sphere\n\n";
+  for (std::size_t k = 0; k < b.grains.size(); ++k) {
+    const Vec3& p = b.grains.x[k];
+    o << fmt::format("{} 1 {:.10g} {} {:.12g} {:.12g} {:.12g}\n", k + 1, 2 * b.grains.r[k], kRho,
+                     p.x, p.y, p.z);
+  }
+  o << "\nVelocities\n\n";
+  for (std::size_t k = 0; k < b.grains.size(); ++k) {
+    const Vec3& v = b.grains.v[k];
+    const Vec3& w = b.grains.w[k];
+    o << fmt::format("{} {:.10g} {:.10g} {:.10g} {:.10g} {:.10g} {:.10g}\n", k + 1, v.x, v.y, v.z,
+                     w.x, w.y, w.z);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::int64_t n = 100000;
+  int threads = 1, steps = 2000, settle_frames = 15;
+  std::string bed_path, lammps_path;
+  for (int k = 1; k < argc; ++k) {
+    const std::string a = argv[k];
+    auto next = [&]() -> std::string {
+      if (k + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return argv[++k];
+    };
+    if (a == "--grains") n = std::stoll(next());
+    else if (a == "--threads") threads = std::stoi(next());
+    else if (a == "--steps") steps = std::stoi(next());
+    else if (a == "--settle-frames") settle_frames = std::stoi(next());
+    else if (a == "--bed") bed_path = next();
+    else if (a == "--write-lammps") lammps_path = next();
+    else {
+      std::fprintf(stderr,
+                   "usage: bench_bed [--grains N] [--threads T] [--steps S] [--settle-frames F] "
+                   "[--bed FILE] [--write-lammps FILE]\n");
+      return 2;
+    }
+  }
+  omp_set_num_threads(std::max(2, threads));  // settle with both cores
+  Bed bed;
+  if (bed_path.empty() || !load_bed(bed_path, bed)) {
+    bed = make_bed(n, settle_frames);
+    if (!bed_path.empty()) save_bed(bed_path, bed);
+  }
+  if (!lammps_path.empty()) write_lammps(lammps_path, bed);
+  omp_set_num_threads(threads);
+
+  // time the settled bed with the DEM layer alone, the part LAMMPS's run loop does too
+  const MaterialConfig mat = bed_material();
+  DemParams params;
+  params.contact = contact_params(mat);
+  params.skin = 0.2 * kD;
+  const Geometry geometry = Geometry::from_config(bed_walls(bed.side), mat);
+  DemSolver dem(params);
+  Profile profile;
+  for (int s = 0; s < 200; ++s) dem.step(bed.grains, geometry, kDt, profile);  // warm up
+  profile = {};
+  dem.counters() = {};
+  Stopwatch clock;
+  for (int s = 0; s < steps; ++s) dem.step(bed.grains, geometry, kDt, profile);
+  const double seconds = clock.seconds();
+  const auto grains = static_cast<double>(bed.grains.size());
+  std::printf("stages: neighbours %.3f s, forces %.3f s, integrate %.3f s, rebuilds %lld\n",
+              profile[Stage::Neighbours], profile[Stage::Forces], profile[Stage::Integrate],
+              static_cast<long long>(dem.counters().rebuilds));
+  std::printf("engine=sandflow threads=%d grains=%lld steps=%d seconds=%.4f grain_steps_per_s=%.6g "
+              "contacts_per_grain=%.4f\n",
+              threads, static_cast<long long>(bed.grains.size()), steps, seconds,
+              grains * steps / seconds, 2.0 * static_cast<double>(dem.counters().contacts) / grains);
+  return 0;
+}

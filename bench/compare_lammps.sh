@@ -1,0 +1,262 @@
+#!/usr/bin/env bash
+# Times the same settled bed of spheres in sandflow (bench_bed) and in LAMMPS
+# (pair_style gran/hooke/history), at 1 and at 2 threads / MPI processes.
+# See bench/README.md for what is measured and why it is like for like.
+#
+# Last line of output: ratio_1=X ratio_2=Y  (sandflow grain-steps/s over
+# LAMMPS's, at 1 and at 2 threads/processes).
+# Exit status: 0 ok; 3 the contacts per grain of the two engines differ by
+# more than 5% (the ratio line is still printed, but the comparison is not like
+# for like); anything else: an error, explained on stderr.
+set -euo pipefail
+
+usage() {
+  cat <<'EOF'
+usage: bench/compare_lammps.sh [--grains N] [--steps N] [--build DIR] [--rebuild]
+
+  --grains N   grains in the bed (default 100000). Each N has its own cached
+               bed, bench_cache/bed<N>.bin (100000 -> bed100k.bin); building
+               and settling a new bed takes minutes, once.
+  --steps N    timed steps (default 2000)
+  --build DIR  CMake build directory holding bench/bench_bed (default: build,
+               relative to the repository root). Configured (Release) and
+               built if bench_bed is missing.
+  --rebuild    run 'cmake --build DIR --target bench_bed' even if it exists
+  -h, --help   this help
+
+Installs Debian's lammps (and openmpi-bin) with apt-get if they are missing.
+Logs go to bench_cache/ in the repository root.
+EOF
+}
+
+die() { echo "compare_lammps.sh: error: $*" >&2; exit 1; }
+note() { echo "compare_lammps.sh: $*" >&2; }
+
+# ---------------------------------------------------------------- options
+GRAINS=100000
+STEPS=2000
+BUILD=build
+REBUILD=0
+WARM=200           # untimed LAMMPS steps before the timed run (contact history)
+
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --grains) [[ $# -ge 2 ]] || die "--grains needs a value"; GRAINS=$2; shift 2 ;;
+    --grains=*) GRAINS=${1#*=}; shift ;;
+    --steps) [[ $# -ge 2 ]] || die "--steps needs a value"; STEPS=$2; shift 2 ;;
+    --steps=*) STEPS=${1#*=}; shift ;;
+    --build) [[ $# -ge 2 ]] || die "--build needs a value"; BUILD=$2; shift 2 ;;
+    --build=*) BUILD=${1#*=}; shift ;;
+    --rebuild) REBUILD=1; shift ;;
+    -h|--help) usage; exit 0 ;;
+    *) usage >&2; die "unknown argument: $1" ;;
+  esac
+done
+[[ "$GRAINS" =~ ^[1-9][0-9]*$ ]] || die "--grains must be a positive integer, got '$GRAINS'"
+[[ "$STEPS" =~ ^[1-9][0-9]*$ ]] || die "--steps must be a positive integer, got '$STEPS'"
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$ROOT"
+[[ "$BUILD" = /* ]] || BUILD="$ROOT/$BUILD"
+BENCH_BED="$BUILD/bench/bench_bed"
+LMP_INPUT="$ROOT/bench/lammps/bed.in"
+[[ -f "$LMP_INPUT" ]] || die "missing $LMP_INPUT"
+
+CACHE="$ROOT/bench_cache"
+mkdir -p "$CACHE"
+# Keep the cache (beds, data files, logs) out of git whatever .gitignore says.
+[[ -f "$CACHE/.gitignore" ]] || printf '*\n' > "$CACHE/.gitignore"
+
+if (( GRAINS % 1000 == 0 )); then LABEL="$((GRAINS / 1000))k"; else LABEL="$GRAINS"; fi
+BED="bench_cache/bed${LABEL}.bin"
+DATA="bench_cache/bed${LABEL}.data"
+
+# ------------------------------------------------------ physical parameters
+# Must match what bench_bed simulates (see bench/README.md).
+D=0.002            # diameter [m]
+RHO=2500           # density [kg/m^3]
+KN=500             # normal stiffness [N/m]
+REST=0.5           # coefficient of restitution
+MU=0.5             # Coulomb friction, pairs and walls
+DT=1e-5            # time step [s]
+SKIN=0.0004        # neighbor skin = 0.2 d [m]
+
+# kt = 2/7 kn; beta = -ln e / sqrt(pi^2 + ln^2 e);
+# sandflow's dashpot c_n = 2 beta sqrt(m_eff kn), LAMMPS's m_eff gamma_n, so
+# gamma_n = 2 beta sqrt(kn / m_eff): m_eff = m/2 for two equal grains,
+# m_eff = m against a wall. gamma_t = gamma_n / 2 (sandflow: c_t = c_n / 2).
+read -r KT GN GT GNW GTW MASS BETA < <(awk -v d="$D" -v rho="$RHO" -v kn="$KN" -v e="$REST" 'BEGIN {
+  pi = atan2(0, -1); le = log(e)
+  m = rho * pi / 6 * d * d * d
+  beta = -le / sqrt(pi * pi + le * le)
+  gn = 2 * beta * sqrt(kn / (m / 2)); gnw = 2 * beta * sqrt(kn / m)
+  printf "%.12g %.12g %.12g %.12g %.12g %.12g %.12g\n", kn * 2 / 7, gn, gn / 2, gnw, gnw / 2, m, beta
+}')
+
+# ------------------------------------------------------------- LAMMPS setup
+SUDO=()
+if [[ $(id -u) -ne 0 ]]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO=(sudo); fi
+fi
+
+apt_install() {
+  command -v apt-get >/dev/null 2>&1 || die "apt-get not found: install $* by hand"
+  if [[ $(id -u) -ne 0 && ${#SUDO[@]} -eq 0 ]]; then
+    die "need root or sudo to install $* (or install it by hand: apt-get install $*)"
+  fi
+  note "installing $* with apt-get"
+  "${SUDO[@]}" apt-get update -q >&2 || die "apt-get update failed"
+  "${SUDO[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "$@" >&2 \
+    || die "apt-get install $* failed"
+}
+
+# Debian's lammps depends on mpi-default-bin (openmpi-bin), so mpirun usually
+# arrives with it; openmpi-bin is installed separately only if it did not.
+command -v lmp >/dev/null 2>&1 || apt_install lammps
+command -v lmp >/dev/null 2>&1 || die "lmp still not on PATH after installing lammps"
+command -v mpirun >/dev/null 2>&1 || apt_install openmpi-bin
+command -v mpirun >/dev/null 2>&1 || die "mpirun still not on PATH after installing openmpi-bin"
+LMP=$(command -v lmp)
+lmp_styles=$("$LMP" -h 2>/dev/null || true)
+grep -q 'gran/hooke/history' <<<"$lmp_styles" \
+  || die "$LMP has no pair_style gran/hooke/history (LAMMPS built without the GRANULAR package)"
+grep -q 'contact/atom' <<<"$lmp_styles" || die "$LMP has no compute contact/atom"
+
+MPIRUN=(mpirun)
+[[ $(id -u) -eq 0 ]] && MPIRUN+=(--allow-run-as-root)
+MPIRUN+=(--oversubscribe)
+
+# -------------------------------------------------------------- sandflow setup
+if [[ ! -x "$BENCH_BED" ]]; then
+  note "building bench_bed in $BUILD"
+  if [[ ! -f "$BUILD/CMakeCache.txt" ]]; then
+    cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release >&2 || die "cmake configure failed"
+  fi
+  cmake --build "$BUILD" -j2 --target bench_bed >&2 || die "building bench_bed failed"
+elif [[ $REBUILD -eq 1 ]]; then
+  cmake --build "$BUILD" -j2 --target bench_bed >&2 || die "building bench_bed failed"
+fi
+[[ -x "$BENCH_BED" ]] || die "no executable $BENCH_BED after building"
+if [[ -f "$BUILD/CMakeCache.txt" ]]; then
+  btype=$(sed -n 's/^CMAKE_BUILD_TYPE:[A-Z]*=//p' "$BUILD/CMakeCache.txt")
+  case "$btype" in
+    Release|RelWithDebInfo) ;;
+    *) note "WARNING: $BUILD is a '${btype:-<none>}' build, not Release: sandflow's numbers will be low" ;;
+  esac
+fi
+
+# value of key=VALUE in a line of key=value words
+field() { tr ' ' '\n' <<<"$1" | sed -n "s/^$2=//p" | head -n1; }
+
+# run_sandflow THREADS [extra args...]: sets SF_SECONDS SF_GSS SF_CPG
+run_sandflow() {
+  local t=$1; shift
+  local log="$CACHE/sandflow_${LABEL}_t${t}.log"
+  local cmd=("$BENCH_BED" --grains "$GRAINS" --bed "$BED" "$@" --threads "$t" --steps "$STEPS")
+  note "sandflow, $t thread(s): ${cmd[*]}  (log: ${log#"$ROOT"/})"
+  if ! OMP_NUM_THREADS=$t "${cmd[@]}" >"$log" 2>&1; then
+    tail -n 20 "$log" >&2
+    die "bench_bed failed (threads=$t), see $log"
+  fi
+  local line
+  line=$(grep -E '^engine=' "$log" | tail -n1 || true)
+  [[ -n "$line" ]] || { tail -n 20 "$log" >&2; die "no 'engine=' line in bench_bed's output, see $log"; }
+  local g s
+  g=$(field "$line" grains); s=$(field "$line" steps)
+  SF_SECONDS=$(field "$line" seconds); SF_GSS=$(field "$line" grain_steps_per_s)
+  SF_CPG=$(field "$line" contacts_per_grain)
+  [[ "$g" == "$GRAINS" ]] || die "bench_bed reports grains=$g, expected $GRAINS: $line"
+  [[ "$s" == "$STEPS" ]] || die "bench_bed reports steps=$s, expected $STEPS: $line"
+  [[ -n "$SF_SECONDS" && -n "$SF_GSS" && -n "$SF_CPG" ]] \
+    || die "bench_bed's line lacks seconds, grain_steps_per_s or contacts_per_grain: $line"
+}
+
+# run_lammps PROCS: sets LM_SECONDS LM_GSS LM_CPG
+run_lammps() {
+  local np=$1
+  local log="$CACHE/lammps_${LABEL}_np${np}.log"
+  local cmd=()
+  if [[ $np -eq 1 ]]; then cmd=("$LMP"); else cmd=("${MPIRUN[@]}" -np "$np" "$LMP"); fi
+  cmd+=(-in "$LMP_INPUT" -log "$log" -screen none
+        -var data "$ROOT/$DATA" -var kn "$KN" -var kt "$KT"
+        -var gn "$GN" -var gt "$GT" -var gnw "$GNW" -var gtw "$GTW"
+        -var mu "$MU" -var dt "$DT" -var skin "$SKIN"
+        -var warm "$WARM" -var steps "$STEPS")
+  note "LAMMPS, $np process(es)  (log: ${log#"$ROOT"/})"
+  rm -f "$log"
+  if ! OMP_NUM_THREADS=1 "${cmd[@]}" >"$CACHE/lammps_${LABEL}_np${np}.out" 2>&1; then
+    { tail -n 20 "$log" 2>/dev/null; tail -n 20 "$CACHE/lammps_${LABEL}_np${np}.out"; } >&2
+    die "LAMMPS failed ($np process(es)): ${cmd[*]}"
+  fi
+  # "Loop time of X on P procs for S steps with N atoms" of the timed run
+  local loop
+  loop=$(awk '/^SANDFLOW_BENCH_TIMED_RUN_BEGIN$/ {f = 1} f && /^Loop time of / {print; exit}' "$log")
+  [[ -n "$loop" ]] || die "no 'Loop time' line after the timed-run marker in $log"
+  local p s n
+  read -r LM_SECONDS p s n < <(awk '{print $4, $6, $9, $12}' <<<"$loop")
+  [[ "$p" == "$np" ]] || die "LAMMPS ran on $p procs, expected $np: $loop"
+  [[ "$s" == "$STEPS" ]] || die "LAMMPS ran $s steps, expected $STEPS: $loop"
+  [[ "$n" == "$GRAINS" ]] || die "LAMMPS has $n atoms at the end, expected $GRAINS (grains lost?): $loop"
+  LM_CPG=$(awk '/^SANDFLOW_BENCH_CONTACTS_PER_GRAIN [-0-9.eE+]+$/ {v = $2} END {print v}' "$log")
+  [[ -n "$LM_CPG" ]] || die "no contacts-per-grain line in $log"
+  LM_GSS=$(awk -v n="$GRAINS" -v s="$STEPS" -v t="$LM_SECONDS" 'BEGIN {printf "%.6g", n * s / t}')
+}
+
+# ------------------------------------------------------------------ the runs
+# Timings are only meaningful on an otherwise idle machine (2 cores here):
+# a compile running alongside can slow the 2-process LAMMPS run several-fold.
+if [[ -r /proc/loadavg ]]; then
+  load=$(cut -d' ' -f1 /proc/loadavg)
+  if awk -v l="$load" 'BEGIN {exit !(l > 0.5)}'; then
+    note "WARNING: load average is $load: other work is running, timings will be unreliable"
+  fi
+fi
+note "bed: $GRAINS grains, d=$D m, rho=$RHO kg/m^3, kn=$KN N/m, kt=$KT N/m, e=$REST, mu=$MU, dt=$DT s; timed steps: $STEPS"
+note "LAMMPS damping: gamma_n=$GN gamma_t=$GT (pairs), $GNW $GTW (walls) [1/s]; beta=$BETA, m=$MASS kg"
+[[ -f "$ROOT/$BED" ]] || note "no cached bed $BED: bench_bed builds and settles it first (minutes)"
+
+# The first sandflow run (2 threads: fastest if the bed must be settled) also
+# writes the settled bed for LAMMPS, so the two always start from one bed.
+run_sandflow 2 --write-lammps "$DATA"
+SF2=("$SF_SECONDS" "$SF_GSS" "$SF_CPG")
+[[ -s "$ROOT/$DATA" ]] || die "bench_bed did not write $DATA"
+natoms=$(awk '$2 == "atoms" {print $1; exit}' "$ROOT/$DATA")
+[[ "$natoms" == "$GRAINS" ]] || die "$DATA has '${natoms:-?}' atoms, expected $GRAINS"
+run_sandflow 1
+SF1=("$SF_SECONDS" "$SF_GSS" "$SF_CPG")
+
+run_lammps 1
+LM1=("$LM_SECONDS" "$LM_GSS" "$LM_CPG")
+run_lammps 2
+LM2=("$LM_SECONDS" "$LM_GSS" "$LM_CPG")
+
+# ------------------------------------------------------------------- report
+echo
+echo "settled bed: $GRAINS grains, $STEPS timed steps (dt = $DT s)"
+printf '%-9s %12s %10s %14s %15s\n' engine threads/procs seconds grain-steps/s contacts/grain
+row() { printf '%-9s %12s %10.3f %14.4g %15.3f\n' "$@"; }
+row sandflow 1 "${SF1[@]}"
+row sandflow 2 "${SF2[@]}"
+row LAMMPS 1 "${LM1[@]}"
+row LAMMPS 2 "${LM2[@]}"
+echo
+
+status=0
+check=$(awk -v s1="${SF1[2]}" -v s2="${SF2[2]}" -v l1="${LM1[2]}" -v l2="${LM2[2]}" 'BEGIN {
+  s = (s1 + s2) / 2; l = (l1 + l2) / 2
+  if (l <= 0 || s <= 0) { printf "FAIL %.3f %.3f inf\n", s, l; exit }
+  rel = (s > l ? s - l : l - s) / l * 100
+  printf "%s %.3f %.3f %.2f\n", (rel <= 5 ? "OK" : "FAIL"), s, l, rel
+}')
+read -r verdict cs cl rel <<<"$check"
+if [[ "$verdict" == OK ]]; then
+  echo "contacts per grain: sandflow $cs, LAMMPS $cl: agree within ${rel}% (limit 5%): like for like"
+else
+  echo "FAIL: contacts per grain differ: sandflow $cs, LAMMPS $cl (${rel}%, limit 5%)."
+  echo "FAIL: the two engines are not simulating the same bed; the ratios below are NOT like for like."
+  echo "compare_lammps.sh: FAIL: contacts per grain differ by ${rel}% (> 5%): not like for like" >&2
+  status=3
+fi
+awk -v a="${SF1[1]}" -v b="${LM1[1]}" -v c="${SF2[1]}" -v d="${LM2[1]}" \
+  'BEGIN {printf "ratio_1=%.2f ratio_2=%.2f\n", a / b, c / d}'
+exit $status

@@ -1,0 +1,138 @@
+// The contact law of DESIGN.md §3 as pure functions of two bodies' state and the contact's
+// history, so that it can be tested against closed forms and shared by grain pairs and walls.
+//
+//   normal:      F_n = k_n delta - c_n v_n, clamped at 0 (no pull),
+//                c_n = 2 sqrt(m_eff k_n) beta, beta = -ln e / sqrt(pi^2 + ln^2 e)
+//   tangential:  spring on the accumulated displacement xi (rotated into the current tangent
+//                plane each step), F_t = -k_t xi - c_t v_t, capped at mu F_n (xi rescaled on slip)
+//   rolling:     spring-dashpot on the accumulated rolling displacement psi ("EPSD" kind),
+//                F_r = -k_r psi - c_r v_r capped at mu_r F_n; torque R_eff n x F_r
+//
+// Conventions: n points from body j to body i; the results are the force and torques on i, and
+// the torque on j (the force on j is the opposite of the force on i).
+#pragma once
+
+#include <cmath>
+
+#include "core/vec3.hpp"
+
+namespace sandflow {
+
+struct ContactParams {
+  Real k_n = 0;     ///< normal stiffness [N/m]
+  Real beta = 0;    ///< damping factor from restitution [-]
+  Real k_t = 0;     ///< tangential stiffness [N/m]
+  Real c_t_ratio = 0.5;  ///< c_t / c_n [-]
+  Real mu = 0;      ///< Coulomb friction [-]
+  Real k_r = 0;     ///< rolling stiffness [N/m]
+  Real c_r_ratio = 1.0;  ///< c_r / c_t [-]
+  Real mu_r = 0;    ///< rolling friction [-]
+};
+
+/// beta of c_n = 2 sqrt(m_eff k_n) beta for restitution e of the *unclamped* linear dashpot,
+/// e = exp(-beta pi / sqrt(1 - beta^2)).
+inline Real damping_beta_unclamped(Real restitution) {
+  const Real le = std::log(restitution);
+  return -le / std::sqrt(kPi * kPi + le * le);
+}
+
+/// Restitution of one collision under the law as used here, with F_n clamped at 0: the clamp
+/// removes the dashpot's pull at the end of the contact, so grains leave faster than the
+/// unclamped formula says (e = 0.3 becomes ~0.40). Integrates the dimensionless collision
+/// delta'' = -(delta + 2 beta delta') (while positive) with RK4 until the force vanishes.
+Real clamped_restitution(Real beta);
+
+/// beta such that a head-on collision under the clamped law has restitution e in (0, 1].
+Real damping_beta(Real restitution);
+
+/// Contact duration of a linear spring-dashpot (undamped): t_c = pi sqrt(m_eff / k_n) [s].
+inline Real contact_time(Real m_eff, Real k_n) { return kPi * std::sqrt(m_eff / k_n); }
+
+/// History of one contact, kept from the moment it opens.
+struct ContactHistory {
+  Vec3 xi;   ///< accumulated tangential displacement [m]
+  Vec3 psi;  ///< accumulated rolling displacement [m]
+};
+
+struct ContactGeometry {
+  Vec3 n;          ///< unit normal, from j to i
+  Real delta;      ///< overlap > 0 [m]
+  Real arm_i;      ///< distance from i's centre to the contact point [m]
+  Real arm_j;      ///< distance from j's centre to the contact point (0 for a wall) [m]
+  Real m_eff;      ///< effective mass [kg]
+  Real r_eff;      ///< effective rolling radius [m]
+};
+
+struct ContactForce {
+  Vec3 force_i;    ///< force on i (on j: the opposite) [N]
+  Vec3 torque_i;   ///< [N m]
+  Vec3 torque_j;   ///< [N m]
+  Real f_n;        ///< normal force magnitude (>= 0) [N]
+};
+
+/// Rotates a history vector into the plane normal to n, keeping its length.
+inline Vec3 rotate_into_plane(const Vec3& a, const Vec3& n) {
+  const Real len2 = norm2(a);
+  if (len2 == 0) return a;
+  const Vec3 p = a - n * dot(a, n);
+  const Real plen2 = norm2(p);
+  if (plen2 == 0) return {};
+  return p * std::sqrt(len2 / plen2);
+}
+
+/// Spring-dashpot on a history vector s with a Coulomb-type cap: returns the force and updates s.
+/// On slip the history is rescaled so that the spring alone would give the capped force.
+inline Vec3 capped_spring(Vec3& s, const Vec3& rate, Real k, Real c, Real cap, Real dt) {
+  s += rate * dt;
+  Vec3 f = s * (-k) - rate * c;
+  const Real f2 = norm2(f);
+  if (f2 > cap * cap) {
+    f *= (f2 > 0 ? cap / std::sqrt(f2) : 0.0);
+    s = (f + rate * c) * (-1.0 / k);
+  }
+  return f;
+}
+
+/// The full law. v_rel = v_i - v_j (centres); w_i, w_j angular velocities. With rolling = false the
+/// rolling part is skipped (a compile-time switch: the benchmark bed has no rolling resistance).
+template <bool kRolling>
+inline ContactForce contact_force(const ContactParams& p, const ContactGeometry& g,
+                                  const Vec3& v_rel, const Vec3& w_i, const Vec3& w_j,
+                                  ContactHistory& h, Real dt) {
+  const Vec3& n = g.n;
+  // relative velocity of the surfaces at the contact point
+  const Vec3 v_c = v_rel - cross(w_i * g.arm_i + w_j * g.arm_j, n);
+  const Real v_n = dot(v_c, n);
+  const Vec3 v_t = v_c - n * v_n;
+
+  // normal: spring-dashpot, never pulling
+  const Real c_n = 2.0 * std::sqrt(g.m_eff * p.k_n) * p.beta;
+  Real f_n = p.k_n * g.delta - c_n * v_n;
+  if (f_n < 0) f_n = 0;
+
+  // tangential: history spring with Coulomb cap
+  const Real c_t = p.c_t_ratio * c_n;
+  h.xi = rotate_into_plane(h.xi, n);
+  const Vec3 f_t = capped_spring(h.xi, v_t, p.k_t, c_t, p.mu * f_n, dt);
+
+  ContactForce out;
+  out.f_n = f_n;
+  out.force_i = n * f_n + f_t;
+  const Vec3 nxft = cross(n, f_t);
+  out.torque_i = nxft * (-g.arm_i);
+  out.torque_j = nxft * (-g.arm_j);
+
+  if constexpr (kRolling) {
+    // rolling: relative rolling velocity of the surfaces, spring-dashpot capped at mu_r R F_n
+    const Vec3 v_r = cross(w_i - w_j, n) * g.r_eff;
+    h.psi = rotate_into_plane(h.psi, n);
+    const Real c_r = p.c_r_ratio * c_t;
+    const Vec3 f_r = capped_spring(h.psi, v_r, p.k_r, c_r, p.mu_r * f_n, dt);
+    const Vec3 t_r = cross(n, f_r) * g.r_eff;
+    out.torque_i += t_r;
+    out.torque_j -= t_r;
+  }
+  return out;
+}
+
+}  // namespace sandflow

@@ -1,0 +1,66 @@
+// One DEM step over the hot grains (DESIGN.md §3): neighbours, contact forces, integration.
+// Both modes of sandflow call exactly this code; surface mode only changes which grains are hot.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/timer.hpp"
+#include "dem/contact.hpp"
+#include "dem/grains.hpp"
+#include "dem/neighbor_list.hpp"
+#include "geometry/shapes.hpp"
+
+namespace sandflow {
+
+struct DemParams {
+  ContactParams contact;  ///< grain-grain law (walls use it with their own friction)
+  Real skin = 0.002;      ///< Verlet skin [m]
+  int sort_every = 20;    ///< re-sort grains by cell every N rebuilds (0: never)
+  Vec3 gravity{0, 0, -9.81};
+};
+
+/// What the last steps saw; reset by the caller when it reads them.
+struct DemCounters {
+  std::int64_t contacts = 0;     ///< touching grain-grain pairs, at the last step
+  std::int64_t wall_contacts = 0;
+  Real max_overlap_rel = 0;      ///< largest overlap / smaller diameter, since the last reset
+  std::int64_t rebuilds = 0;     ///< neighbour-list rebuilds, since the last reset
+};
+
+class DemSolver {
+ public:
+  explicit DemSolver(const DemParams& params);
+
+  /// Advances the ACTIVE grains by dt; INTERFACE grains push but stay put.
+  void step(Grains& grains, const Geometry& geometry, Real dt, Profile& profile);
+
+  /// Call after grains were added, removed or changed state: the next step rebuilds the lists.
+  void invalidate() { need_rebuild_ = true; }
+
+  const DemParams& params() const { return params_; }
+  const PairList& pairs() const { return pairs_; }
+  DemCounters& counters() { return counters_; }
+
+ private:
+  void rebuild(Grains& grains, const Geometry& geometry);
+  void sort_by_cell(Grains& grains);
+  template <bool kRolling>
+  void pair_forces(const Grains& grains, Real dt);
+  template <bool kRolling>
+  Real integrate(Grains& grains, const Geometry& geometry, Real dt);
+
+  DemParams params_;
+  bool rolling_;
+  std::vector<ContactParams> wall_params_;
+  CellGrid grid_;
+  PairList pairs_, old_pairs_;
+  WallList walls_, old_walls_;
+  std::vector<std::uint32_t> slot_of_id_;  ///< grain id -> slot at the last rebuild
+  std::vector<Vec3> x_at_build_;
+  bool need_rebuild_ = true;
+  std::int64_t rebuild_count_ = 0;
+  DemCounters counters_;
+};
+
+}  // namespace sandflow

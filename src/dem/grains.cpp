@@ -1,0 +1,41 @@
+#include "dem/grains.hpp"
+
+#include <utility>
+
+namespace sandflow {
+
+void Grains::add(GrainId gid, const Vec3& pos, const Vec3& vel, Real radius, Real density) {
+  const Real mass = density * (4.0 / 3.0) * kPi * radius * radius * radius;
+  id.push_back(gid);
+  state.push_back(GrainState::Active);
+  x.push_back(pos);
+  v.push_back(vel);
+  w.push_back({});
+  r.push_back(radius);
+  m.push_back(mass);
+  inv_m.push_back(1.0 / mass);
+  inv_I.push_back(1.0 / (0.4 * mass * radius * radius));
+}
+
+namespace {
+template <class T>
+void apply_permutation(std::vector<T>& a, std::span<const std::uint32_t> perm) {
+  std::vector<T> out(a.size());
+  for (std::size_t k = 0; k < perm.size(); ++k) out[k] = a[perm[k]];
+  a = std::move(out);
+}
+}  // namespace
+
+void Grains::permute(std::span<const std::uint32_t> perm) {
+  apply_permutation(id, perm);
+  apply_permutation(state, perm);
+  apply_permutation(x, perm);
+  apply_permutation(v, perm);
+  apply_permutation(w, perm);
+  apply_permutation(r, perm);
+  apply_permutation(m, perm);
+  apply_permutation(inv_m, perm);
+  apply_permutation(inv_I, perm);
+}
+
+}  // namespace sandflow

@@ -1,0 +1,53 @@
+// Grains in the three states of DESIGN.md §2, stored as structure of arrays.
+//
+// The hot store holds the grains that take part in DEM: ACTIVE ones (integrated) and INTERFACE
+// ones (fixed, but they push). Each property is one contiguous array, indexed by a slot that
+// changes when grains are re-sorted by cell; `id` is the stable identity of a grain. STATIC grains
+// live in a separate cold store that costs only a position and a radius (and the column that
+// files them, so erosion can wake them).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/vec3.hpp"
+
+namespace sandflow {
+
+enum class GrainState : std::uint8_t { Active = 0, Interface = 1, Static = 2 };
+
+using GrainId = std::uint32_t;
+
+/// ACTIVE and INTERFACE grains: everything the DEM step reads and writes.
+struct Grains {
+  std::vector<GrainId> id;
+  std::vector<GrainState> state;
+  std::vector<Vec3> x;       ///< centre [m]
+  std::vector<Vec3> v;       ///< velocity [m/s]
+  std::vector<Vec3> w;       ///< angular velocity [rad/s]
+  std::vector<Real> r;       ///< radius [m]
+  std::vector<Real> m;       ///< mass [kg]
+  std::vector<Real> inv_m;   ///< 1/mass [1/kg]
+  std::vector<Real> inv_I;   ///< 1/moment of inertia (solid sphere) [1/(kg m^2)]
+
+  std::size_t size() const { return id.size(); }
+
+  /// Appends an ACTIVE grain of the given density.
+  void add(GrainId gid, const Vec3& pos, const Vec3& vel, Real radius, Real density);
+
+  /// Reorders every array so that slot k holds what slot perm[k] held.
+  void permute(std::span<const std::uint32_t> perm);
+};
+
+/// STATIC grains: position and radius only, filed by height-field column.
+struct StaticStore {
+  std::vector<GrainId> id;
+  std::vector<Vec3> x;
+  std::vector<Real> r;
+  std::vector<std::uint32_t> column;
+
+  std::size_t size() const { return id.size(); }
+};
+
+}  // namespace sandflow

@@ -1,0 +1,175 @@
+#include "geometry/shapes.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace sandflow {
+
+namespace {
+constexpr Real kInf = std::numeric_limits<Real>::infinity();
+
+// Bounds of an oriented box given by centre, local half extents and rotation.
+void oriented_bounds(const Vec3& c, const Vec3& half, const Mat3& rot, Vec3& lo, Vec3& hi) {
+  Vec3 ext;
+  for (int i = 0; i < 3; ++i)
+    ext[i] = std::abs(rot.m[i][0]) * half.x + std::abs(rot.m[i][1]) * half.y +
+             std::abs(rot.m[i][2]) * half.z;
+  lo = c - ext;
+  hi = c + ext;
+}
+}  // namespace
+
+void HalfSpace::bounds(Vec3& lo, Vec3& hi) const {
+  lo = {-kInf, -kInf, -kInf};
+  hi = {kInf, kInf, kInf};
+}
+
+SolidBox::SolidBox(const Vec3& center, const Vec3& half, const Mat3& rotation)
+    : center_(center), half_(half), rot_(rotation), rot_t_(rotation.transposed()) {}
+
+SurfacePoint SolidBox::closest(const Vec3& p) const {
+  const Vec3 q = rot_t_ * (p - center_);
+  const Vec3 d{std::abs(q.x) - half_.x, std::abs(q.y) - half_.y, std::abs(q.z) - half_.z};
+  const Vec3 sgn{q.x < 0 ? -1.0 : 1.0, q.y < 0 ? -1.0 : 1.0, q.z < 0 ? -1.0 : 1.0};
+  Vec3 n_local;
+  Real dist;
+  if (d.x > 0 || d.y > 0 || d.z > 0) {
+    // outside: distance to the nearest point of the box (a face, an edge or a corner)
+    const Vec3 out{std::max(d.x, 0.0) * sgn.x, std::max(d.y, 0.0) * sgn.y,
+                   std::max(d.z, 0.0) * sgn.z};
+    dist = norm(out);
+    n_local = out / dist;
+  } else {
+    // inside: the nearest face
+    int k = (d.x > d.y) ? (d.x > d.z ? 0 : 2) : (d.y > d.z ? 1 : 2);
+    dist = d[k];
+    n_local[k] = sgn[k];
+  }
+  return {dist, rot_ * n_local};
+}
+
+void SolidBox::bounds(Vec3& lo, Vec3& hi) const { oriented_bounds(center_, half_, rot_, lo, hi); }
+
+SurfacePoint SolidSphere::closest(const Vec3& p) const {
+  const Vec3 d = p - center_;
+  const Real len = norm(d);
+  const Vec3 n = len > 0 ? d / len : Vec3{0, 0, 1};
+  return {len - radius_, n};
+}
+
+void SolidSphere::bounds(Vec3& lo, Vec3& hi) const {
+  lo = center_ - Vec3{radius_, radius_, radius_};
+  hi = center_ + Vec3{radius_, radius_, radius_};
+}
+
+SolidCylinder::SolidCylinder(const Vec3& center, Real radius, Real inner_radius, Real height,
+                             const Mat3& rotation)
+    : center_(center),
+      radius_(radius),
+      inner_radius_(inner_radius),
+      half_height_(height / 2),
+      rot_(rotation),
+      rot_t_(rotation.transposed()) {}
+
+SurfacePoint SolidCylinder::closest(const Vec3& p) const {
+  // The cross-section in the (radial, axial) half-plane is a rectangle: [inner, outer] x [-h, h].
+  const Vec3 q = rot_t_ * (p - center_);
+  const Real rho = std::hypot(q.x, q.y);
+  const Vec3 radial = rho > 0 ? Vec3{q.x / rho, q.y / rho, 0} : Vec3{1, 0, 0};
+  const Real mid = 0.5 * (radius_ + inner_radius_);
+  const Real half_width = 0.5 * (radius_ - inner_radius_);
+  const Real a = rho - mid;  // radial coordinate relative to the middle of the wall
+  const Real da = std::abs(a) - half_width;
+  const Real dz = std::abs(q.z) - half_height_;
+  const Real sa = a < 0 ? -1.0 : 1.0, sz = q.z < 0 ? -1.0 : 1.0;
+  Real dist, na, nz;
+  if (da > 0 || dz > 0) {
+    const Real oa = std::max(da, 0.0) * sa, oz = std::max(dz, 0.0) * sz;
+    dist = std::hypot(oa, oz);
+    na = oa / dist;
+    nz = oz / dist;
+  } else if (da > dz) {
+    dist = da, na = sa, nz = 0;
+  } else {
+    dist = dz, na = 0, nz = sz;
+  }
+  const Vec3 n_local = radial * na + Vec3{0, 0, nz};
+  return {dist, rot_ * n_local};
+}
+
+void SolidCylinder::bounds(Vec3& lo, Vec3& hi) const {
+  oriented_bounds(center_, {radius_, radius_, half_height_}, rot_, lo, hi);
+}
+
+void Geometry::add(std::unique_ptr<Solid> solid, Real friction, Real rolling_friction,
+                   int source) {
+  obstacles_.push_back({std::move(solid), friction, rolling_friction, source});
+}
+
+Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
+                               const MaterialConfig& material) {
+  Geometry g;
+  for (int k = 0; k < static_cast<int>(configs.size()); ++k) {
+    const GeometryConfig& c = configs[k];
+    const Real mu = c.friction.value_or(material.wall_friction);
+    const Real mu_r = material.wall_rolling_friction;
+    auto add = [&](std::unique_ptr<Solid> s) { g.add(std::move(s), mu, mu_r, k); };
+    const Mat3 rot = rotation_xyz_deg(c.rotation_deg);
+    switch (c.type) {
+      case GeometryType::Plane:
+        add(std::make_unique<HalfSpace>(c.point, c.normal / norm(c.normal)));
+        break;
+      case GeometryType::Sphere:
+        add(std::make_unique<SolidSphere>(c.center, c.radius));
+        break;
+      case GeometryType::Box:
+        if (!c.container) {
+          add(std::make_unique<SolidBox>(c.center, c.size * 0.5, rot));
+        } else {
+          // Walls of thickness t around the inner volume `size`: floor, four sides, maybe a lid.
+          const Real t = c.wall_thickness;
+          const Vec3 h = c.size * 0.5;
+          auto wall = [&](const Vec3& local_center, const Vec3& half) {
+            add(std::make_unique<SolidBox>(c.center + rot * local_center, half, rot));
+          };
+          wall({0, 0, -h.z - t / 2}, {h.x + t, h.y + t, t / 2});
+          if (!c.open_top) wall({0, 0, h.z + t / 2}, {h.x + t, h.y + t, t / 2});
+          wall({-h.x - t / 2, 0, 0}, {t / 2, h.y + t, h.z});
+          wall({h.x + t / 2, 0, 0}, {t / 2, h.y + t, h.z});
+          wall({0, -h.y - t / 2, 0}, {h.x, t / 2, h.z});
+          wall({0, h.y + t / 2, 0}, {h.x, t / 2, h.z});
+        }
+        break;
+      case GeometryType::Cylinder:
+        if (!c.container) {
+          add(std::make_unique<SolidCylinder>(c.center, c.radius, 0.0, c.height, rot));
+        } else {
+          // A tube of thickness t around the inner radius, a bottom disk, maybe a lid.
+          const Real t = c.wall_thickness;
+          const Vec3 axis = rot * Vec3{0, 0, 1};
+          add(std::make_unique<SolidCylinder>(c.center, c.radius + t, c.radius, c.height, rot));
+          add(std::make_unique<SolidCylinder>(c.center - axis * (c.height / 2 + t / 2),
+                                              c.radius + t, 0.0, t, rot));
+          if (!c.open_top)
+            add(std::make_unique<SolidCylinder>(c.center + axis * (c.height / 2 + t / 2),
+                                                c.radius + t, 0.0, t, rot));
+        }
+        break;
+    }
+  }
+  return g;
+}
+
+std::size_t Geometry::count_inside(const std::vector<Vec3>& x) const {
+  std::size_t n = 0;
+  for (const Vec3& p : x)
+    for (const Obstacle& o : obstacles_)
+      if (o.solid->closest(p).distance < 0) {
+        ++n;
+        break;
+      }
+  return n;
+}
+
+}  // namespace sandflow

@@ -1,0 +1,102 @@
+// Analytic geometry the grains collide with (DESIGN.md §6): every shape is a solid described by a
+// signed distance (positive outside) and its outward normal, so one contact routine serves all.
+// A container (a box or a cylinder that holds grains) is made of solid wall slabs.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/vec3.hpp"
+#include "scene/scene_config.hpp"
+
+namespace sandflow {
+
+struct SurfacePoint {
+  Real distance;  ///< signed distance from the solid (negative inside) [m]
+  Vec3 normal;    ///< outward unit normal of the solid at the closest point
+};
+
+/// A solid primitive.
+class Solid {
+ public:
+  virtual ~Solid() = default;
+  virtual SurfacePoint closest(const Vec3& p) const = 0;
+  /// Axis-aligned bounds of the solid (infinite for a half-space).
+  virtual void bounds(Vec3& lo, Vec3& hi) const = 0;
+};
+
+class HalfSpace final : public Solid {
+ public:
+  HalfSpace(const Vec3& point, const Vec3& normal) : point_(point), normal_(normal) {}
+  SurfacePoint closest(const Vec3& p) const override { return {dot(p - point_, normal_), normal_}; }
+  void bounds(Vec3& lo, Vec3& hi) const override;
+
+ private:
+  Vec3 point_, normal_;
+};
+
+/// An oriented solid box.
+class SolidBox final : public Solid {
+ public:
+  SolidBox(const Vec3& center, const Vec3& half, const Mat3& rotation);
+  SurfacePoint closest(const Vec3& p) const override;
+  void bounds(Vec3& lo, Vec3& hi) const override;
+
+ private:
+  Vec3 center_, half_;
+  Mat3 rot_, rot_t_;  ///< local -> world, world -> local
+};
+
+class SolidSphere final : public Solid {
+ public:
+  SolidSphere(const Vec3& center, Real radius) : center_(center), radius_(radius) {}
+  SurfacePoint closest(const Vec3& p) const override;
+  void bounds(Vec3& lo, Vec3& hi) const override;
+
+ private:
+  Vec3 center_;
+  Real radius_;
+};
+
+/// A finite solid cylinder, or a thick tube (inner_radius > 0), along its local z axis.
+class SolidCylinder final : public Solid {
+ public:
+  SolidCylinder(const Vec3& center, Real radius, Real inner_radius, Real height,
+                const Mat3& rotation);
+  SurfacePoint closest(const Vec3& p) const override;
+  void bounds(Vec3& lo, Vec3& hi) const override;
+
+ private:
+  Vec3 center_;
+  Real radius_, inner_radius_, half_height_;
+  Mat3 rot_, rot_t_;
+};
+
+/// A solid plus the contact properties of its surface.
+struct Obstacle {
+  std::unique_ptr<Solid> solid;
+  Real friction = 0.6;          ///< Coulomb friction with grains [-]
+  Real rolling_friction = 0.1;  ///< [-]
+  int source = 0;               ///< index of the [[geometry]] entry it came from
+};
+
+/// Every solid of a scene. Containers expand into several wall slabs.
+class Geometry {
+ public:
+  static Geometry from_config(const std::vector<GeometryConfig>& configs,
+                              const MaterialConfig& material);
+
+  void add(std::unique_ptr<Solid> solid, Real friction, Real rolling_friction, int source);
+
+  const std::vector<Obstacle>& obstacles() const { return obstacles_; }
+  std::size_t size() const { return obstacles_.size(); }
+
+  /// Number of grains whose centre lies inside a solid (should be 0).
+  std::size_t count_inside(const std::vector<Vec3>& x) const;
+
+ private:
+  std::vector<Obstacle> obstacles_;
+};
+
+}  // namespace sandflow

@@ -1,0 +1,510 @@
+#include "io/ply.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string_view>
+#include <vector>
+
+#include "core/error.hpp"
+
+namespace sandflow {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Writing
+
+constexpr std::size_t kRecordBytes = 7 * 4 + 4 + 1;  // 7 floats, a uint, a uchar
+constexpr std::size_t kChunkGrains = 1 << 16;        // bounded buffer for any frame size
+
+struct FileCloser {
+  void operator()(std::FILE* fp) const {
+    if (fp) std::fclose(fp);
+  }
+};
+using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
+
+std::string system_reason(int err) {
+  return err != 0 ? std::string(std::strerror(err)) : std::string("unknown I/O error");
+}
+
+template <class T>
+void put_le(unsigned char*& p, T v) {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  if constexpr (std::endian::native == std::endian::big) std::reverse(b, b + sizeof(T));
+  std::memcpy(p, b, sizeof(T));
+  p += sizeof(T);
+}
+
+void check_sizes(const FrameData& f) {
+  const std::size_t n = f.size();
+  auto ok = [n](std::size_t m, bool optional) { return m == n || (optional && m == 0); };
+  if (!ok(f.radius.size(), false) || !ok(f.velocity.size(), true) || !ok(f.id.size(), true) ||
+      !ok(f.state.size(), true)) {
+    throw std::invalid_argument("write_ply: FrameData arrays have different lengths");
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading
+
+enum class Type { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+
+std::size_t type_size(Type t) {
+  switch (t) {
+    case Type::Int8:
+    case Type::UInt8:
+      return 1;
+    case Type::Int16:
+    case Type::UInt16:
+      return 2;
+    case Type::Int32:
+    case Type::UInt32:
+    case Type::Float32:
+      return 4;
+    case Type::Float64:
+      return 8;
+  }
+  return 1;
+}
+
+bool parse_type(std::string_view s, Type* t) {
+  struct Name {
+    std::string_view a, b;
+    Type t;
+  };
+  static constexpr Name kNames[] = {
+      {"char", "int8", Type::Int8},        {"uchar", "uint8", Type::UInt8},
+      {"short", "int16", Type::Int16},     {"ushort", "uint16", Type::UInt16},
+      {"int", "int32", Type::Int32},       {"uint", "uint32", Type::UInt32},
+      {"float", "float32", Type::Float32}, {"double", "float64", Type::Float64},
+  };
+  for (const auto& n : kNames) {
+    if (s == n.a || s == n.b) {
+      *t = n.t;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool is_integer(Type t) {
+  return t != Type::Float32 && t != Type::Float64;
+}
+
+// Decodes one little-endian scalar; the caller has checked that the bytes exist.
+double decode_le(const unsigned char* p, Type t) {
+  unsigned char b[8];
+  const std::size_t n = type_size(t);
+  std::memcpy(b, p, n);
+  if constexpr (std::endian::native == std::endian::big) std::reverse(b, b + n);
+  auto as = [&b]<class T>(T) {
+    T v;
+    std::memcpy(&v, b, sizeof(T));
+    return static_cast<double>(v);
+  };
+  switch (t) {
+    case Type::Int8:
+      return as(std::int8_t{});
+    case Type::UInt8:
+      return as(std::uint8_t{});
+    case Type::Int16:
+      return as(std::int16_t{});
+    case Type::UInt16:
+      return as(std::uint16_t{});
+    case Type::Int32:
+      return as(std::int32_t{});
+    case Type::UInt32:
+      return as(std::uint32_t{});
+    case Type::Float32:
+      return as(float{});
+    case Type::Float64:
+      return as(double{});
+  }
+  return 0.0;
+}
+
+struct Property {
+  std::string name;
+  Type type = Type::Float32;  // item type for lists
+  bool is_list = false;
+  Type count_type = Type::UInt8;
+};
+
+struct Element {
+  std::string name;
+  std::uint64_t count = 0;
+  std::vector<Property> props;
+};
+
+enum class Format { Ascii, BinaryLE };
+
+struct Header {
+  Format format = Format::Ascii;
+  std::vector<Element> elements;
+  std::size_t body_offset = 0;  // first byte after "end_header\n"
+};
+
+// Where each grain field comes from inside a vertex record: a property index, or -1.
+enum Field { kX, kY, kZ, kRadius, kVx, kVy, kVz, kId, kState, kFieldCount };
+constexpr std::string_view kFieldNames[kFieldCount] = {"x",  "y",  "z",  "radius", "vx",
+                                                       "vy", "vz", "id", "state"};
+
+class Reader {
+ public:
+  Reader(std::string path, std::string data) : path_(std::move(path)), data_(std::move(data)) {}
+
+  FrameData read() {
+    const Header h = parse_header();
+    const unsigned char* p = bytes() + h.body_offset;
+    const unsigned char* end = bytes() + data_.size();
+    for (const Element& e : h.elements) {
+      if (e.name == "vertex") return read_vertices(h.format, e, p, end);
+      skip_element(h.format, e, p, end);
+    }
+    fail("no 'vertex' element");
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(path_ + ": " + what); }
+
+  const unsigned char* bytes() const {
+    return reinterpret_cast<const unsigned char*>(data_.data());
+  }
+
+  static std::vector<std::string_view> split(std::string_view line) {
+    std::vector<std::string_view> words;
+    std::size_t i = 0;
+    while (i < line.size()) {
+      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+      std::size_t j = i;
+      while (j < line.size() && line[j] != ' ' && line[j] != '\t') ++j;
+      if (j > i) words.push_back(line.substr(i, j - i));
+      i = j;
+    }
+    return words;
+  }
+
+  Header parse_header() {
+    Header h;
+    std::string_view text(data_);
+    if (text.substr(0, 3) != "ply" || text.size() < 4 || (text[3] != '\n' && text[3] != '\r')) {
+      fail("not a PLY file (it does not start with 'ply')");
+    }
+    std::size_t pos = 0;
+    int line_no = 0;
+    bool have_format = false;
+    while (true) {
+      const std::size_t nl = text.find('\n', pos);
+      if (nl == std::string_view::npos) fail("header has no 'end_header' line");
+      std::string_view line = text.substr(pos, nl - pos);
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      pos = nl + 1;
+      ++line_no;
+      const std::string where = "header line " + std::to_string(line_no) + ": ";
+      const auto w = split(line);
+      if (line_no == 1) continue;  // "ply", checked above
+      if (w.empty()) continue;
+      if (w[0] == "comment" || w[0] == "obj_info") continue;
+      if (w[0] == "end_header") {
+        if (!have_format) fail(where + "no 'format' line before 'end_header'");
+        h.body_offset = pos;
+        return h;
+      }
+      if (w[0] == "format") {
+        if (w.size() != 3 || w[2] != "1.0") fail(where + "expected 'format <kind> 1.0'");
+        if (w[1] == "ascii") {
+          h.format = Format::Ascii;
+        } else if (w[1] == "binary_little_endian") {
+          h.format = Format::BinaryLE;
+        } else if (w[1] == "binary_big_endian") {
+          fail(where + "binary_big_endian PLY is not supported (use binary_little_endian)");
+        } else {
+          fail(where + "unknown format '" + std::string(w[1]) + "'");
+        }
+        have_format = true;
+      } else if (w[0] == "element") {
+        Element e;
+        if (w.size() != 3) fail(where + "expected 'element <name> <count>'");
+        e.name = std::string(w[1]);
+        const auto r = std::from_chars(w[2].data(), w[2].data() + w[2].size(), e.count);
+        if (r.ec != std::errc() || r.ptr != w[2].data() + w[2].size()) {
+          fail(where + "element count '" + std::string(w[2]) + "' is not a non-negative integer");
+        }
+        h.elements.push_back(std::move(e));
+      } else if (w[0] == "property") {
+        if (h.elements.empty()) fail(where + "property before any element");
+        Property prop;
+        if (w.size() == 5 && w[1] == "list") {
+          prop.is_list = true;
+          if (!parse_type(w[2], &prop.count_type) || !is_integer(prop.count_type)) {
+            fail(where + "list count type '" + std::string(w[2]) + "' is not an integer type");
+          }
+          if (!parse_type(w[3], &prop.type)) {
+            fail(where + "unknown property type '" + std::string(w[3]) + "'");
+          }
+          prop.name = std::string(w[4]);
+        } else if (w.size() == 3) {
+          if (!parse_type(w[1], &prop.type)) {
+            fail(where + "unknown property type '" + std::string(w[1]) + "'");
+          }
+          prop.name = std::string(w[2]);
+        } else {
+          fail(where + "expected 'property <type> <name>' or 'property list <type> <type> <name>'");
+        }
+        for (const Property& q : h.elements.back().props) {
+          if (q.name == prop.name) fail(where + "duplicate property '" + prop.name + "'");
+        }
+        h.elements.back().props.push_back(std::move(prop));
+      } else {
+        fail(where + "unexpected '" + std::string(w[0]) + "'");
+      }
+    }
+  }
+
+  // Smallest number of bytes one record can take, used to reject counts that cannot fit.
+  static std::size_t min_record_bytes(Format format, const Element& e) {
+    std::size_t n = 0;
+    for (const Property& p : e.props) {
+      if (format == Format::Ascii) {
+        n += 2;  // a digit and a separator, also for a list's count
+      } else {
+        n += type_size(p.is_list ? p.count_type : p.type);
+      }
+    }
+    return n;
+  }
+
+  void check_count(Format format, const Element& e, const unsigned char* p,
+                   const unsigned char* end) const {
+    const std::size_t min_bytes = min_record_bytes(format, e);
+    if (min_bytes == 0) return;
+    // The last ascii token needs no trailing separator.
+    const std::size_t avail = static_cast<std::size_t>(end - p) + (format == Format::Ascii);
+    if (e.count > avail / min_bytes) {
+      fail("element '" + e.name + "' declares " + std::to_string(e.count) + " records but only " +
+           std::to_string(end - p) +
+           " bytes of data follow the header (truncated file or corrupt count)");
+    }
+  }
+
+  // Reads the next ascii number; fails naming the record when the data ends or is not a number.
+  double next_ascii(const unsigned char*& p, const unsigned char* end, const Element& e,
+                    std::uint64_t record) const {
+    while (p < end && std::isspace(*p)) ++p;
+    const unsigned char* start = p;
+    while (p < end && !std::isspace(*p)) ++p;
+    auto where = [&] { return "element '" + e.name + "' record " + std::to_string(record) + ": "; };
+    if (start == p) fail(where() + "unexpected end of data (truncated file)");
+    const char* b = reinterpret_cast<const char*>(start);
+    const char* t = reinterpret_cast<const char*>(p);
+    double v = 0;
+    const auto r = std::from_chars(b, t, v);
+    if (r.ec != std::errc() || r.ptr != t) {
+      fail(where() + "'" + std::string(b, t) + "' is not a number");
+    }
+    return v;
+  }
+
+  double next_binary(const unsigned char*& p, const unsigned char* end, Type t, const Element& e,
+                     std::uint64_t record) const {
+    const std::size_t n = type_size(t);
+    if (static_cast<std::size_t>(end - p) < n) {
+      fail("element '" + e.name + "' record " + std::to_string(record) +
+           ": unexpected end of data (truncated file)");
+    }
+    const double v = decode_le(p, t);
+    p += n;
+    return v;
+  }
+
+  std::uint64_t list_count(double v, const Element& e, std::uint64_t record) const {
+    if (!(v >= 0) || v != std::floor(v) || v > 4.0e9) {
+      fail("element '" + e.name + "' record " + std::to_string(record) + ": bad list length");
+    }
+    return static_cast<std::uint64_t>(v);
+  }
+
+  // Reads one record, storing the values of the wanted scalar properties into `out`
+  // (indexed like e.props; lists are skipped).
+  void read_record(Format format, const Element& e, std::uint64_t record, const unsigned char*& p,
+                   const unsigned char* end, double* out) const {
+    for (std::size_t k = 0; k < e.props.size(); ++k) {
+      const Property& prop = e.props[k];
+      if (format == Format::Ascii) {
+        if (prop.is_list) {
+          const std::uint64_t n = list_count(next_ascii(p, end, e, record), e, record);
+          for (std::uint64_t i = 0; i < n; ++i) next_ascii(p, end, e, record);
+        } else {
+          out[k] = next_ascii(p, end, e, record);
+        }
+      } else {
+        if (prop.is_list) {
+          const std::uint64_t n =
+              list_count(next_binary(p, end, prop.count_type, e, record), e, record);
+          const std::size_t item = type_size(prop.type);
+          if (n > static_cast<std::size_t>(end - p) / item) {
+            fail("element '" + e.name + "' record " + std::to_string(record) +
+                 ": list runs past the end of the file (truncated file)");
+          }
+          p += n * item;
+        } else {
+          out[k] = next_binary(p, end, prop.type, e, record);
+        }
+      }
+    }
+  }
+
+  void skip_element(Format format, const Element& e, const unsigned char*& p,
+                    const unsigned char* end) const {
+    if (e.props.empty()) return;
+    check_count(format, e, p, end);
+    std::vector<double> scratch(e.props.size());
+    for (std::uint64_t r = 0; r < e.count; ++r) read_record(format, e, r, p, end, scratch.data());
+  }
+
+  FrameData read_vertices(Format format, const Element& e, const unsigned char*& p,
+                          const unsigned char* end) const {
+    // Map the grain fields to property indices.
+    int field[kFieldCount];
+    for (int f = 0; f < kFieldCount; ++f) {
+      field[f] = -1;
+      for (std::size_t k = 0; k < e.props.size(); ++k) {
+        if (e.props[k].name == kFieldNames[f]) {
+          if (e.props[k].is_list) {
+            fail("vertex property '" + e.props[k].name + "' is a list, expected a number");
+          }
+          field[f] = static_cast<int>(k);
+        }
+      }
+    }
+    for (int f : {kX, kY, kZ}) {
+      if (field[f] < 0)
+        fail("vertex element has no '" + std::string(kFieldNames[f]) + "' property");
+    }
+    if (field[kRadius] < 0)
+      fail("vertex element has no 'radius' property (grain radii are needed)");
+    check_count(format, e, p, end);
+
+    FrameData f;
+    const std::size_t n = static_cast<std::size_t>(e.count);
+    f.position.resize(n);
+    f.radius.resize(n);
+    f.velocity.resize(n);
+    f.id.resize(n);
+    f.state.resize(n);
+    std::vector<double> v(e.props.size(), 0.0);
+    auto get = [&](int fi, double fallback) { return field[fi] >= 0 ? v[field[fi]] : fallback; };
+    for (std::size_t i = 0; i < n; ++i) {
+      read_record(format, e, i, p, end, v.data());
+      auto bad = [this, i](const std::string& what) {
+        fail("vertex " + std::to_string(i) + ": " + what);
+      };
+      f.position[i] = {get(kX, 0), get(kY, 0), get(kZ, 0)};
+      f.radius[i] = get(kRadius, 0);
+      f.velocity[i] = {get(kVx, 0), get(kVy, 0), get(kVz, 0)};
+      if (!is_finite(f.position[i]) || !is_finite(f.velocity[i])) {
+        bad("position or velocity is not finite");
+      }
+      if (!(f.radius[i] > 0) || !std::isfinite(f.radius[i])) {
+        bad("radius " + std::to_string(f.radius[i]) + " is not a positive number");
+      }
+      const double id = get(kId, static_cast<double>(i));
+      if (!(id >= 0) || id > std::numeric_limits<std::uint32_t>::max() || id != std::floor(id)) {
+        bad("id is not an unsigned 32-bit integer");
+      }
+      f.id[i] = static_cast<std::uint32_t>(id);
+      const double state = get(kState, 0);
+      if (state != 0 && state != 1 && state != 2) bad("state is not 0, 1 or 2");
+      f.state[i] = static_cast<std::uint8_t>(state);
+    }
+    return f;
+  }
+
+  std::string path_;
+  std::string data_;
+};
+
+std::string read_file(const std::string& path) {
+  errno = 0;
+  FilePtr fp(std::fopen(path.c_str(), "rb"));
+  if (!fp) throw InputError(path + ": cannot open: " + system_reason(errno));
+  std::string data;
+  char buf[1 << 16];
+  std::size_t got = 0;
+  while ((got = std::fread(buf, 1, sizeof buf, fp.get())) > 0) data.append(buf, got);
+  if (std::ferror(fp.get())) throw InputError(path + ": read error: " + system_reason(errno));
+  return data;
+}
+
+}  // namespace
+
+void write_ply(const std::string& path, const FrameData& f) {
+  check_sizes(f);
+  const std::size_t n = f.size();
+  const std::string header =
+      "ply\n"
+      "format binary_little_endian 1.0\n"
+      "comment sandflow frame: visible grains (state 0 ACTIVE, 1 INTERFACE)\n"
+      "element vertex " +
+      std::to_string(n) +
+      "\n"
+      "property float x\nproperty float y\nproperty float z\nproperty float radius\n"
+      "property float vx\nproperty float vy\nproperty float vz\n"
+      "property uint id\nproperty uchar state\n"
+      "end_header\n";
+
+  const std::string tmp = path + ".tmp";
+  auto fail = [&](const std::string& what, int err) -> void {
+    std::remove(tmp.c_str());
+    throw OutputError(path + ": " + what + ": " + system_reason(err));
+  };
+
+  errno = 0;
+  FilePtr fp(std::fopen(tmp.c_str(), "wb"));
+  if (!fp) fail("cannot create " + tmp, errno);
+  if (std::fwrite(header.data(), 1, header.size(), fp.get()) != header.size()) {
+    fail("write failed", errno);
+  }
+  std::vector<unsigned char> buf(std::min(n, kChunkGrains) * kRecordBytes);
+  for (std::size_t first = 0; first < n; first += kChunkGrains) {
+    const std::size_t last = std::min(n, first + kChunkGrains);
+    unsigned char* p = buf.data();
+    for (std::size_t i = first; i < last; ++i) {
+      const Vec3& x = f.position[i];
+      const Vec3 v = f.velocity.empty() ? Vec3{} : f.velocity[i];
+      put_le(p, static_cast<float>(x.x));
+      put_le(p, static_cast<float>(x.y));
+      put_le(p, static_cast<float>(x.z));
+      put_le(p, static_cast<float>(f.radius[i]));
+      put_le(p, static_cast<float>(v.x));
+      put_le(p, static_cast<float>(v.y));
+      put_le(p, static_cast<float>(v.z));
+      put_le(p, f.id.empty() ? static_cast<std::uint32_t>(i) : f.id[i]);
+      put_le(p, f.state.empty() ? std::uint8_t{0} : f.state[i]);
+    }
+    const std::size_t bytes = static_cast<std::size_t>(p - buf.data());
+    if (std::fwrite(buf.data(), 1, bytes, fp.get()) != bytes) fail("write failed", errno);
+  }
+  // fclose flushes: a full disk shows up here.
+  errno = 0;
+  if (std::fclose(fp.release()) != 0) fail("write failed", errno);
+  errno = 0;
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) fail("cannot rename " + tmp, errno);
+}
+
+FrameData read_ply(const std::string& path) {
+  return Reader(path, read_file(path)).read();
+}
+
+}  // namespace sandflow

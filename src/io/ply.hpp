@@ -1,0 +1,30 @@
+// Frames as PLY point clouds: one vertex per visible grain.
+//
+// Written as binary_little_endian PLY 1.0 with the vertex properties
+//   float x, y, z, radius, vx, vy, vz; uint id; uchar state
+// (33 bytes a grain), which ParaView, Blender and Houdini read as they are. The file is written
+// to `path + ".tmp"` and renamed over `path`, so a reader never sees half a frame.
+//
+// The reader is lenient about layout and strict about content: it accepts binary_little_endian
+// or ascii files, any property order, any numeric property types and extra properties or
+// elements, but requires x, y, z and radius, and checks every count against the bytes the file
+// actually holds before allocating, so a corrupt or hostile file raises InputError instead of
+// crashing. Missing optional properties default to: velocity 0, id = vertex index, state 0.
+#pragma once
+
+#include <string>
+
+#include "io/frame.hpp"
+
+namespace sandflow {
+
+/// Writes `f` to `path` atomically. Throws OutputError naming the path and the system's reason.
+/// The velocity, id and state arrays may be empty (written as 0, the index, 0); otherwise every
+/// array must have f.size() entries (std::invalid_argument if not: a bug in the caller).
+void write_ply(const std::string& path, const FrameData& f);
+
+/// Reads a PLY point cloud written by write_ply (or any PLY described above). Throws InputError
+/// naming the file and what is wrong with it.
+FrameData read_ply(const std::string& path);
+
+}  // namespace sandflow

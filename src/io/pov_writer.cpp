@@ -1,0 +1,524 @@
+#include "io/pov_writer.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <string_view>
+#include <type_traits>
+
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "core/error.hpp"
+
+namespace sandflow {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kSandTextures = 8;
+
+// ---------------------------------------------------------------------------------------------
+// Text helpers
+
+// Seven significant digits: a tenth of a micrometre on a metre-sized scene, and short lines.
+void put(std::string& s, double v) {
+  char buf[32];
+  if (!std::isfinite(v)) v = 0;  // never write text POV-Ray cannot parse
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 7);
+  s.append(buf, r.ptr);
+}
+
+template <class T>
+requires std::is_integral_v<T>
+void put(std::string& s, T v) {
+  s += std::to_string(v);
+}
+
+void put(std::string& s, std::string_view text) {
+  s.append(text);
+}
+
+void put(std::string& s, const Vec3& v) {
+  s += '<';
+  put(s, v.x);
+  s += ',';
+  put(s, v.y);
+  s += ',';
+  put(s, v.z);
+  s += '>';
+}
+
+template <class... Args>
+void line(std::string& s, const Args&... args) {
+  (put(s, args), ...);
+  s += '\n';
+}
+
+// POV-Ray `matrix`: the images of the local x, y, z axes, then the translation.
+std::string matrix(const Mat3& m, const Vec3& t) {
+  std::string s = "matrix <";
+  for (int col = 0; col < 3; ++col) {
+    for (int row = 0; row < 3; ++row) {
+      put(s, m.m[row][col]);
+      s += ',';
+    }
+  }
+  put(s, t.x);
+  s += ',';
+  put(s, t.y);
+  s += ',';
+  put(s, t.z);
+  s += '>';
+  return s;
+}
+
+Vec3 normalized(const Vec3& v) {
+  const Real n = norm(v);
+  return n > 0 ? v / n : Vec3{0, 0, 1};
+}
+
+// A rotation taking local z to `n` (local x, y span the plane).
+Mat3 frame_from_normal(const Vec3& n_in) {
+  const Vec3 n = normalized(n_in);
+  const Vec3 a = std::abs(n.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+  const Vec3 e1 = normalized(cross(a, n));
+  const Vec3 e2 = cross(n, e1);
+  Mat3 m;
+  for (int r = 0; r < 3; ++r) {
+    m.m[r][0] = e1[r];
+    m.m[r][1] = e2[r];
+    m.m[r][2] = n[r];
+  }
+  return m;
+}
+
+// A "nice" length (1, 2 or 5 times a power of ten) close to x.
+double nice_length(double x) {
+  if (!(x > 0) || !std::isfinite(x)) return 1.0;
+  const double p = std::pow(10.0, std::floor(std::log10(x)));
+  const double m = x / p;
+  return p * (m < 1.5 ? 1 : m < 3.5 ? 2 : m < 7.5 ? 5 : 10);
+}
+
+// Stable per-grain texture index: a 32-bit integer hash (lowbias32) of the id.
+int sand_texture(std::uint32_t id) {
+  std::uint32_t x = id;
+  x ^= x >> 16;
+  x *= 0x7feb352dU;
+  x ^= x >> 15;
+  x *= 0x846ca68bU;
+  x ^= x >> 16;
+  return static_cast<int>(x % kSandTextures);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene parts
+
+struct Bounds {
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};
+  bool empty = true;
+  void add(const Vec3& p, Real r) {
+    const Vec3 e{r, r, r};
+    if (empty) {
+      lo = p - e;
+      hi = p + e;
+      empty = false;
+    } else {
+      lo = min(lo, p - e);
+      hi = max(hi, p + e);
+    }
+  }
+  Vec3 centre() const { return (lo + hi) * 0.5; }
+  Real radius() const { return std::max(0.5 * norm(hi - lo), Real(1e-6)); }
+};
+
+// What the picture should show: the grains, or without grains the finite geometry.
+Bounds scene_bounds(const FrameData& f, const std::vector<GeometryConfig>& geometry) {
+  Bounds b;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (is_finite(f.position[i])) b.add(f.position[i], f.radius[i]);
+  }
+  if (!b.empty) return b;
+  for (const auto& g : geometry) {
+    if (g.render == RenderStyle::Hidden) continue;
+    switch (g.type) {
+      case GeometryType::Plane:
+        break;  // infinite: not framed
+      case GeometryType::Sphere:
+        b.add(g.center, g.radius);
+        break;
+      case GeometryType::Box:
+        b.add(g.center, 0.5 * norm(g.size) + g.wall_thickness);
+        break;
+      case GeometryType::Cylinder:
+        b.add(g.center, std::hypot(g.radius + g.wall_thickness, 0.5 * g.height + g.wall_thickness));
+        break;
+    }
+  }
+  if (b.empty) b.add({0, 0, 0}, 0.5);
+  return b;
+}
+
+struct Camera {
+  Vec3 location, look_at;
+};
+
+// What the auto camera must keep in view: the grains, or the corners of the bounds without them.
+struct Framed {
+  std::vector<Vec3> p;
+  std::vector<Real> r;
+};
+
+Framed framing_points(const FrameData& f, const Bounds& b) {
+  Framed out;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (!is_finite(f.position[i])) continue;
+    out.p.push_back(f.position[i]);
+    out.r.push_back(f.radius[i]);
+  }
+  if (out.p.empty()) {
+    for (int k = 0; k < 8; ++k) {
+      out.p.push_back({k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z});
+      out.r.push_back(0);
+    }
+  }
+  return out;
+}
+
+// Looks at the scene from a 3/4 elevated direction, just far enough for every framed point (with
+// its radius) to fit the field of view with a 10 % border, and re-aimed at the middle of what the
+// picture shows (the bounding box's centre leaves the empty corners above a heap on screen).
+Camera auto_camera(const Framed& pts, const Bounds& b, const PovOptions& opt) {
+  const Vec3 view = normalized({1.0, -1.4, 0.8});  // from the target towards the camera
+  const Vec3 fwd = -view;
+  const Vec3 right = normalized(cross(fwd, {0, 0, 1}));
+  const Vec3 up = cross(right, fwd);
+  const double aspect = static_cast<double>(opt.width) / std::max(opt.height, 1);
+  const double tan_h = 0.9 * std::tan(deg_to_rad(std::clamp(opt.fov_deg, 1.0, 170.0)) / 2);
+  const double tan_v = tan_h / aspect;
+  Vec3 target = b.centre();
+  double dist = 0;
+  for (int pass = 0; pass < 3; ++pass) {
+    // Distance: a point at depth dist + p.fwd must see |p.right| + r within tan_h (and up, tan_v).
+    dist = 1.05 * b.radius();  // at least outside the bounds
+    for (std::size_t i = 0; i < pts.p.size(); ++i) {
+      const Vec3 p = pts.p[i] - target;
+      dist = std::max(dist, (std::abs(dot(p, right)) + pts.r[i]) / tan_h - dot(p, fwd));
+      dist = std::max(dist, (std::abs(dot(p, up)) + pts.r[i]) / tan_v - dot(p, fwd));
+    }
+    if (pass == 2) break;
+    // Re-aim at the middle of the points' extent on screen.
+    double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300;
+    for (std::size_t i = 0; i < pts.p.size(); ++i) {
+      const Vec3 p = pts.p[i] - target;
+      const double depth = std::max(dist + dot(p, fwd), 1e-9 * dist);
+      const double u = dot(p, right) / depth, v = dot(p, up) / depth, e = pts.r[i] / depth;
+      u0 = std::min(u0, u - e);
+      u1 = std::max(u1, u + e);
+      v0 = std::min(v0, v - e);
+      v1 = std::max(v1, v + e);
+    }
+    target += right * (0.5 * (u0 + u1) * dist) + up * (0.5 * (v0 + v1) * dist);
+  }
+  return {target + view * dist, target};
+}
+
+void write_header(std::string& s, const Camera& cam, const Bounds& b, const PovOptions& opt,
+                  std::size_t grains) {
+  const double aspect = static_cast<double>(opt.width) / std::max(opt.height, 1);
+  const double r = b.radius();
+  const Vec3 c = b.centre();
+  line(s, "// sandflow frame: ", grains, " grains. POV-Ray 3.7.");
+  line(s, "// World: right-handed, z up (see src/io/pov_writer.hpp for the camera set-up).");
+  line(s, "#version 3.7;");
+  line(s, "global_settings { assumed_gamma 1.0 max_trace_level 10 }");
+  line(s, "");
+  line(s, "camera {");
+  line(s, "  perspective");
+  line(s, "  location ", cam.location);
+  line(s, "  right -x*", aspect, "  // negated: right-handed world, picture not mirrored");
+  line(s, "  up y");
+  line(s, "  sky z");
+  line(s, "  angle ", opt.fov_deg);
+  line(s, "  look_at ", cam.look_at);
+  line(s, "}");
+  line(s, "");
+  // Key light high on the camera's left, soft; fill light on its right, without shadows.
+  const double key_dist = 8 * r;
+  const Vec3 key = c + normalized({-0.25, -0.97, 1.2}) * key_dist;
+  const Vec3 fill = c + normalized({1.3, -0.3, 0.7}) * key_dist;
+  const double size = 0.2 * key_dist;
+  line(s, "light_source {");
+  line(s, "  ", key, " color rgb 1.0");
+  line(s, "  area_light <", size, ",0,0>, <0,", size,
+       ",0>, 3, 3 adaptive 1 jitter circular orient");
+  line(s, "}");
+  line(s, "light_source { ", fill, " color rgb 0.3 shadowless }");
+  line(s, "sky_sphere {");
+  line(s,
+       "  pigment { gradient z color_map { [0.0 srgb <0.93,0.94,0.96>] [0.5 srgb <0.86,0.9,0.96>]"
+       " [1.0 srgb <0.55,0.68,0.88>] } scale 2 translate -z }");
+  line(s, "}");
+  line(s, "");
+  // Sand: base colour with a small, stable variation per grain; matte, no reflection.
+  line(s,
+       "#declare SandFinish = finish { ambient 0.05 diffuse 0.85 specular 0.06 roughness 0.06 }");
+  line(s, "#declare Sand = array[", kSandTextures, "] {");
+  for (int k = 0; k < kSandTextures; ++k) {
+    const double light = 0.88 + 0.24 * k / (kSandTextures - 1);  // brightness 0.88 .. 1.12
+    const double warm = (k % 3 - 1) * 0.025;                     // slight hue shift
+    const Vec3 rgb{std::min(1.0, 0.76 * light + warm), std::min(1.0, 0.62 * light),
+                   std::min(1.0, 0.40 * light - warm)};
+    line(s, "  texture { pigment { srgb ", rgb, " } finish { SandFinish } }",
+         k + 1 < kSandTextures ? "," : "");
+  }
+  line(s, "}");
+  line(s, "#macro G(X,Y,Z,R,C) sphere { <X,Y,Z>, R texture { Sand[C] } } #end");
+  line(s, "");
+  line(s,
+       "#declare Solid = texture { pigment { srgb <0.62,0.63,0.65> }"
+       " finish { ambient 0.05 diffuse 0.8 specular 0.05 roughness 0.05 } }");
+  line(s,
+       "#declare Glass = texture { pigment { rgbf <0.96,0.98,1.0,0.9> }"
+       " finish { ambient 0 diffuse 0.05 specular 0.6 roughness 0.002 reflection 0.04 } }");
+  line(s, "#declare GlassInterior = interior { ior 1.45 }");
+  // Floor checker: squares of a round size about an eighth of the scene, centred in z on the
+  // plane so that the pattern's cell boundaries do not coincide with the surface.
+  const double square = nice_length(std::max(b.hi.x - b.lo.x, b.hi.y - b.lo.y) / 8);
+  line(s,
+       "#declare Floor = texture { pigment { checker srgb 0.60, srgb 0.64 translate 0.5*z scale ",
+       square, " } finish { ambient 0.05 diffuse 0.8 } }");
+  line(s, "");
+}
+
+std::string material(RenderStyle r) {
+  return r == RenderStyle::Glass ? "texture { Glass } interior { GlassInterior }"
+                                 : "texture { Solid }";
+}
+
+void write_geometry(std::string& s, const GeometryConfig& g, const Bounds& b) {
+  if (g.render == RenderStyle::Hidden) return;
+  const bool glass = g.render == RenderStyle::Glass;
+  const std::string mat = material(g.render);
+  if (!g.name.empty()) line(s, "// ", g.name);
+  switch (g.type) {
+    case GeometryType::Plane: {
+      // Local frame: z along the normal, origin at the point nearest the scene's centre.
+      const Vec3 n = normalized(g.normal);
+      const Vec3 origin = b.centre() - n * dot(b.centre() - g.point, n);
+      const std::string m = matrix(frame_from_normal(n), origin);
+      if (glass) {
+        const double half = 1.5 * b.radius(), t = 0.01 * b.radius();
+        line(s, "box { <", -half, ",", -half, ",", -t, ">, <", half, ",", half, ",0> ", mat, " ", m,
+             " }");
+      } else {
+        line(s, "plane { z, 0 texture { Floor } ", m, " }");
+      }
+      break;
+    }
+    case GeometryType::Sphere:
+      line(s, "sphere { ", g.center, ", ", g.radius, " ", mat, " }");
+      break;
+    case GeometryType::Box: {
+      const std::string m = matrix(rotation_xyz_deg(g.rotation_deg), g.center);
+      const Vec3 h = g.size * 0.5;
+      if (!g.container) {
+        line(s, "box { ", -h, ", ", h, " ", mat, " ", m, " }");
+        break;
+      }
+      // Walls around the inner size; an open top cuts the inner box through the lid.
+      const double t = g.wall_thickness;
+      const Vec3 out_lo{-h.x - t, -h.y - t, -h.z - t};
+      const Vec3 out_hi{h.x + t, h.y + t, g.open_top ? h.z : h.z + t};
+      const Vec3 in_hi{h.x, h.y, g.open_top ? h.z + t : h.z};
+      line(s, "difference { box { ", out_lo, ", ", out_hi, " } box { ", -h, ", ", in_hi, " } ", mat,
+           " ", m, " }");
+      break;
+    }
+    case GeometryType::Cylinder: {
+      const std::string m = matrix(rotation_xyz_deg(g.rotation_deg), g.center);
+      const double hz = 0.5 * g.height;
+      if (!g.container) {
+        line(s, "cylinder { <0,0,", -hz, ">, <0,0,", hz, ">, ", g.radius, " ", mat, " ", m, " }");
+        break;
+      }
+      // Tube and bottom (and lid unless open_top) around the inner radius and height.
+      const double t = g.wall_thickness;
+      const double out_top = g.open_top ? hz : hz + t;
+      const double in_top = g.open_top ? hz + t : hz;
+      line(s, "difference { cylinder { <0,0,", -hz - t, ">, <0,0,", out_top, ">, ", g.radius + t,
+           " } cylinder { <0,0,", -hz, ">, <0,0,", in_top, ">, ", g.radius, " } ", mat, " ", m,
+           " }");
+      break;
+    }
+  }
+}
+
+void write_grains(std::string& s, const FrameData& f) {
+  line(s, "// grains: G(x, y, z, radius, texture)");
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (!is_finite(f.position[i]) || !(f.radius[i] > 0)) continue;
+    const std::uint32_t id = f.id.empty() ? static_cast<std::uint32_t>(i) : f.id[i];
+    s += "G(";
+    put(s, f.position[i].x);
+    s += ',';
+    put(s, f.position[i].y);
+    s += ',';
+    put(s, f.position[i].z);
+    s += ',';
+    put(s, f.radius[i]);
+    s += ',';
+    s += static_cast<char>('0' + sand_texture(id));
+    s += ")\n";
+  }
+}
+
+std::string system_reason(int err) {
+  return err != 0 ? std::string(std::strerror(err)) : std::string("unknown I/O error");
+}
+
+void write_text_atomically(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  auto fail = [&](const std::string& what, int err) {
+    std::remove(tmp.c_str());
+    throw OutputError(path + ": " + what + ": " + system_reason(err));
+  };
+  errno = 0;
+  std::FILE* fp = std::fopen(tmp.c_str(), "wb");
+  if (!fp) fail("cannot create " + tmp, errno);
+  const bool wrote = std::fwrite(text.data(), 1, text.size(), fp) == text.size();
+  const int write_err = errno;
+  errno = 0;
+  const bool closed = std::fclose(fp) == 0;  // flushes: a full disk shows up here
+  if (!wrote) fail("write failed", write_err);
+  if (!closed) fail("write failed", errno);
+  errno = 0;
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) fail("cannot rename " + tmp, errno);
+}
+
+std::string tail_of(const std::string& path, std::size_t max_chars) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  if (text.size() > max_chars) text = "..." + text.substr(text.size() - max_chars);
+  return text;
+}
+
+}  // namespace
+
+void write_pov_scene(const std::string& path, const FrameData& f,
+                     const std::vector<GeometryConfig>& geometry, const PovOptions& opt) {
+  if (f.radius.size() != f.size() || (!f.id.empty() && f.id.size() != f.size())) {
+    throw std::invalid_argument("write_pov_scene: FrameData arrays have different lengths");
+  }
+  const Bounds b = scene_bounds(f, geometry);
+  const Camera cam = opt.auto_camera ? auto_camera(framing_points(f, b), b, opt)
+                                     : Camera{opt.camera_position, opt.camera_look_at};
+  std::string s;
+  s.reserve(2048 + 48 * f.size());
+  write_header(s, cam, b, opt, f.size());
+  for (const auto& g : geometry) write_geometry(s, g, b);
+  line(s, "");
+  write_grains(s, f);
+  write_text_atomically(path, s);
+}
+
+std::string find_povray() {
+  const char* path_env = std::getenv("PATH");
+  std::string_view dirs = path_env ? path_env : "/usr/local/bin:/usr/bin:/bin";
+  while (!dirs.empty()) {
+    const std::size_t colon = dirs.find(':');
+    std::string dir(dirs.substr(0, colon));
+    dirs = colon == std::string_view::npos ? std::string_view{} : dirs.substr(colon + 1);
+    if (dir.empty()) dir = ".";
+    const std::string candidate = dir + "/povray";
+    if (::access(candidate.c_str(), X_OK) == 0 && !fs::is_directory(candidate)) return candidate;
+  }
+  return "";
+}
+
+void render_pov(const std::string& pov_path, const std::string& png_path, int width, int height,
+                int threads) {
+  const std::string exe = find_povray();
+  if (exe.empty()) {
+    throw OutputError(png_path + ": cannot render: povray is not on PATH (install POV-Ray 3.7)");
+  }
+  std::error_code ec;
+  const fs::path pov_abs = fs::absolute(pov_path, ec);
+  const std::string log_path = fs::absolute(png_path + ".log", ec).string();
+  // POV-Ray writes to a temporary name; the PNG appears only when the render succeeded.
+  const std::string partial = fs::absolute(png_path + ".partial.png", ec).string();
+  fs::remove(partial, ec);
+
+  // Everything the child needs is prepared before fork: it may only call async-signal-safe
+  // functions (the parent can have OpenMP threads).
+  std::vector<std::string> args = {exe,
+                                   "+I" + pov_abs.string(),
+                                   "+O" + partial,
+                                   "+W" + std::to_string(width),
+                                   "+H" + std::to_string(height),
+                                   "+A0.3",
+                                   "+FN",
+                                   "-D",
+                                   "-P",
+                                   "Output_Alpha=off"};
+  if (threads > 0) args.push_back("+WT" + std::to_string(threads));
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  // POV-Ray's default I/O policy allows the working directory: run it in the scene's folder.
+  const std::string work_dir = pov_abs.parent_path().string();
+
+  errno = 0;
+  const int log_fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (log_fd < 0) throw OutputError(log_path + ": cannot create: " + system_reason(errno));
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    const int err = errno;
+    ::close(log_fd);
+    throw OutputError(png_path + ": cannot start povray: " + system_reason(err));
+  }
+  if (pid == 0) {
+    const int null_fd = ::open("/dev/null", O_RDONLY);
+    if (null_fd >= 0) ::dup2(null_fd, 0);
+    ::dup2(log_fd, 1);
+    ::dup2(log_fd, 2);
+    if (::chdir(work_dir.c_str()) != 0) ::_exit(126);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  ::close(log_fd);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+
+  std::string problem;
+  if (WIFSIGNALED(status)) {
+    problem = "povray was killed by signal " + std::to_string(WTERMSIG(status));
+  } else if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    problem = "povray failed with exit status " + std::to_string(WEXITSTATUS(status));
+  } else if (!fs::exists(partial, ec) || fs::file_size(partial, ec) == 0) {
+    problem = "povray wrote no image";
+  }
+  if (problem.empty()) {
+    fs::rename(partial, png_path, ec);
+    if (ec) problem = "cannot rename " + partial + ": " + ec.message();
+  }
+  if (!problem.empty()) {
+    fs::remove(partial, ec);
+    throw OutputError(png_path + ": " + problem + "; end of " + log_path + ":\n" +
+                      tail_of(log_path, 1500));
+  }
+}
+
+}  // namespace sandflow

@@ -1,0 +1,703 @@
+// Scene files (TOML) -> SceneConfig.
+//
+// The document is parsed whole, the --set overrides are grafted onto the parsed tree, and only
+// then is the tree read into the structs, so an override passes through exactly the checks a
+// value in the file does. Each grafted value is parsed with "--set KEY" as its source path: an
+// error can always say where its value came from, "PATH:LINE:COL" or "--set KEY".
+//
+// Every table is read by a TableReader. Each read() names one key, converts it and checks its
+// range; the keys a table reads are, by construction, the keys it accepts, so finish() reports
+// any other key (pbrt rejects unused parameters) and lists the accepted ones. A [[geometry]] or
+// [[emitter]] table reads only the keys of its type, so a key of another type is reported the
+// same way: "geometry[1].radius is not a key of a plane (keys: ...)".
+
+#include "scene/scene_loader.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <concepts>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <sstream>
+#include <string_view>
+#include <utility>
+
+#include "core/error.hpp"
+
+namespace sandflow {
+namespace {
+
+constexpr Real kInf = std::numeric_limits<Real>::infinity();
+
+// ---- Text for messages --------------------------------------------------------------------------
+
+std::string format_real(Real v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buf[32];
+  const auto res = std::to_chars(buf, buf + sizeof buf, v);  // shortest round-trip form
+  return std::string(buf, res.ptr);
+}
+
+std::string type_name(const toml::node& n) {
+  switch (n.type()) {
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a float";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::array:
+      return "an array";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::date:
+      return "a date";
+    case toml::node_type::time:
+      return "a time";
+    case toml::node_type::date_time:
+      return "a date-time";
+    case toml::node_type::none:
+      break;
+  }
+  return "nothing";
+}
+
+// "word" with quotes. Built by appending: GCC 12 warns falsely (-Wrestrict) on "\"" + s + "\"".
+std::string in_quotes(std::string_view s) {
+  std::string out;
+  out.reserve(s.size() + 2);
+  out += '"';
+  out += s;
+  out += '"';
+  return out;
+}
+
+// A scalar as the user wrote it (near enough): 1.4, 7, "dem", true.
+std::string value_text(const toml::node& n) {
+  if (const auto* i = n.as_integer()) return std::to_string(i->get());
+  if (const auto* f = n.as_floating_point()) return format_real(f->get());
+  if (const auto* s = n.as_string()) return in_quotes(s->get());
+  if (const auto* b = n.as_boolean()) return b->get() ? "true" : "false";
+  return type_name(n);
+}
+
+std::string join(const std::vector<std::string>& items, std::string_view sep) {
+  std::string out;
+  for (const auto& s : items) out += (out.empty() ? "" : std::string(sep)) + s;
+  return out;
+}
+
+// ---- Ranges -------------------------------------------------------------------------------------
+
+// An interval a value must lie in; it describes itself in messages ("is outside (0, 1]").
+struct Range {
+  Real lo = -kInf;
+  Real hi = kInf;
+  bool lo_open = false;
+  bool hi_open = false;
+
+  bool contains(Real v) const {
+    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+  }
+
+  // What is wrong with a value outside the range; integral ranges print their bounds exactly.
+  std::string violation(bool integral) const {
+    const auto bound = [integral](Real b) {
+      return integral && std::abs(b) < 9e18 ? std::to_string(static_cast<long long>(b))
+                                            : format_real(b);
+    };
+    if (hi == kInf) return std::string("is not ") + (lo_open ? "> " : ">= ") + bound(lo);
+    if (lo == -kInf) return std::string("is not ") + (hi_open ? "< " : "<= ") + bound(hi);
+    return "is outside " + std::string(lo_open ? "(" : "[") + bound(lo) + ", " + bound(hi) +
+           (hi_open ? ")" : "]");
+  }
+};
+
+constexpr Range kAny{};
+constexpr Range kPositive{0, kInf, true, false};
+constexpr Range kNonNegative{0, kInf, false, false};
+constexpr Range closed(Real lo, Real hi) {
+  return {lo, hi, false, false};
+}
+constexpr Range open_closed(Real lo, Real hi) {
+  return {lo, hi, true, false};
+}
+
+// The most grains one emitter may make: far above any scene we run, far below overflow.
+constexpr std::int64_t kMaxEmitterCount = 2'000'000'000;
+
+template <class E>
+using Choices = std::pair<std::string_view, E>;
+
+constexpr Choices<Mode> kModes[] = {{"surface", Mode::Surface}, {"dem", Mode::Dem}};
+constexpr Choices<GeometryType> kGeometryTypes[] = {{"plane", GeometryType::Plane},
+                                                    {"box", GeometryType::Box},
+                                                    {"cylinder", GeometryType::Cylinder},
+                                                    {"sphere", GeometryType::Sphere}};
+constexpr Choices<RenderStyle> kRenderStyles[] = {
+    {"solid", RenderStyle::Solid}, {"glass", RenderStyle::Glass}, {"hidden", RenderStyle::Hidden}};
+constexpr Choices<EmitterType> kEmitterTypes[] = {
+    {"pour", EmitterType::Pour}, {"block", EmitterType::Block}, {"lattice", EmitterType::Lattice}};
+constexpr Choices<PourShape> kPourShapes[] = {{"disk", PourShape::Disk}, {"rect", PourShape::Rect}};
+
+// ---- Places -------------------------------------------------------------------------------------
+
+// Where a node came from: "PATH:LINE:COL" in the scene file, or "--set KEY" for an override
+// (override values are parsed with that text as their source path).
+class Places {
+ public:
+  explicit Places(std::string file) : file_(std::move(file)) {}
+
+  std::string of(const toml::source_region& src) const {
+    if (is_override(src)) return *src.path;
+    if (src.begin.line == 0) return file_;
+    return file_ + ":" + std::to_string(src.begin.line) + ":" + std::to_string(src.begin.column);
+  }
+
+  // A key = value pair is placed at the key, unless an override supplied the value.
+  std::string of(const toml::key& key, const toml::node& value) const {
+    if (is_override(value.source()) || key.source().begin.line == 0) return of(value.source());
+    return of(key.source());
+  }
+
+ private:
+  bool is_override(const toml::source_region& src) const { return src.path && *src.path != file_; }
+
+  std::string file_;
+};
+
+[[noreturn]] void fail(const std::string& place, const std::string& what) {
+  throw InputError(place + ": " + what);
+}
+
+// ---- Reading one table --------------------------------------------------------------------------
+
+class TableReader {
+ public:
+  // `prefix` names the table in messages: "material", "geometry[2]", "" for the document root.
+  TableReader(const Places& places, const toml::table& table, std::string prefix)
+      : places_(places), table_(table), prefix_(std::move(prefix)) {}
+
+  std::string name(std::string_view key) const {
+    return prefix_.empty() ? std::string(key) : prefix_ + "." + std::string(key);
+  }
+
+  void read(std::string_view key, Real& out, Range range = kAny) {
+    if (const auto e = find(key)) out = number(*e->node, name(key), place(*e), range);
+  }
+
+  void read(std::string_view key, std::optional<Real>& out, Range range = kAny) {
+    if (const auto e = find(key)) out = number(*e->node, name(key), place(*e), range);
+  }
+
+  // Integers; a float with an integral value (count = 1e6) is taken too.
+  template <std::integral T>
+  requires(!std::same_as<T, bool>) void read(std::string_view key, T& out, Range range = kAny) {
+    const auto e = find(key);
+    if (!e) return;
+    const std::string n = name(key);
+    std::int64_t v = 0;
+    if (const auto* i = e->node->as_integer()) {
+      v = i->get();
+    } else if (const auto* f = e->node->as_floating_point()) {
+      const Real x = f->get();
+      if (!std::isfinite(x))
+        fail(place(*e), n + " = " + format_real(x) + " is not a finite number");
+      if (std::trunc(x) != x || std::abs(x) >= 9.2e18)
+        fail(place(*e), n + ": expected an integer, got " + format_real(x));
+      v = static_cast<std::int64_t>(x);
+    } else {
+      fail(place(*e), n + ": expected an integer, got " + type_name(*e->node));
+    }
+    if (!range.contains(static_cast<Real>(v)))
+      fail(place(*e), n + " = " + std::to_string(v) + " " + range.violation(true));
+    if (!std::in_range<T>(v))
+      fail(place(*e), n + " = " + std::to_string(v) + " is too large (at most " +
+                          std::to_string(std::numeric_limits<T>::max()) + ")");
+    out = static_cast<T>(v);
+  }
+
+  void read(std::string_view key, bool& out) {
+    const auto e = find(key);
+    if (!e) return;
+    const auto* b = e->node->as_boolean();
+    if (!b) fail(place(*e), name(key) + ": expected true or false, got " + type_name(*e->node));
+    out = b->get();
+  }
+
+  void read(std::string_view key, std::string& out) {
+    const auto e = find(key);
+    if (!e) return;
+    const auto* s = e->node->as_string();
+    if (!s) fail(place(*e), name(key) + ": expected a string, got " + type_name(*e->node));
+    out = s->get();
+  }
+
+  // A vector: an array of exactly 3 finite numbers. Only the first `checked` components are held
+  // to `range` (a pour rectangle has x, y extents and an unused z).
+  void read(std::string_view key, Vec3& out, Range range = kAny, int checked = 3) {
+    const auto e = find(key);
+    if (!e) return;
+    const std::string n = name(key);
+    const auto* a = e->node->as_array();
+    if (!a) fail(place(*e), n + ": expected an array of 3 numbers, got " + type_name(*e->node));
+    if (a->size() != 3)
+      fail(place(*e), n + ": expected an array of 3 numbers, got " + std::to_string(a->size()) +
+                          (a->size() == 1 ? " element" : " elements"));
+    for (int i = 0; i < 3; ++i) {
+      const toml::node& c = *a->get(static_cast<std::size_t>(i));
+      out[i] = number(c, n + "[" + std::to_string(i) + "]", places_.of(c.source()),
+                      i < checked ? range : kAny);
+    }
+  }
+
+  // One of a fixed set of words: mode = "surface" | "dem".
+  template <class E, std::size_t N>
+  void read(std::string_view key, E& out, const Choices<E> (&choices)[N]) {
+    const auto e = find(key);
+    if (!e) return;
+    std::vector<std::string> words;
+    for (const auto& [word, value] : choices) words.push_back(in_quotes(word));
+    const auto* s = e->node->as_string();
+    if (!s)
+      fail(place(*e),
+           name(key) + ": expected one of " + join(words, ", ") + ", got " + type_name(*e->node));
+    for (const auto& [word, value] : choices) {
+      if (s->get() == word) {
+        out = value;
+        return;
+      }
+    }
+    fail(place(*e),
+         name(key) + " = " + value_text(*e->node) + " is not one of " + join(words, ", "));
+  }
+
+  // A sub-table ([material]), or nullptr when the document has none.
+  const toml::table* table(std::string_view key) {
+    const auto e = find(key);
+    if (!e) return nullptr;
+    if (const auto* t = e->node->as_table()) return t;
+    fail(place(*e),
+         name(key) + ": expected a table [" + name(key) + "], got " + type_name(*e->node));
+  }
+
+  // An array of tables ([[emitter]]), or nullptr when the document has none.
+  const toml::array* array_of_tables(std::string_view key) {
+    const auto e = find(key);
+    if (!e) return nullptr;
+    const std::string n = name(key);
+    const auto* a = e->node->as_array();
+    if (!a)
+      fail(place(*e),
+           n + ": expected an array of tables [[" + n + "]], got " + type_name(*e->node));
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const toml::node& item = *a->get(i);
+      if (!item.is_table())
+        fail(places_.of(item.source()),
+             n + "[" + std::to_string(i) + "]: expected a table, got " + type_name(item));
+    }
+    return a;
+  }
+
+  // Fails at `key` if the table has it, else at the table itself.
+  [[noreturn]] void fail_at(std::string_view key, const std::string& what) const {
+    const auto it = table_.find(key);
+    if (it != table_.end()) fail(places_.of(it->first, it->second), what);
+    fail(places_.of(table_.source()), what);
+  }
+
+  void require(std::string_view key, std::string_view expected) const {
+    if (!table_.contains(key))
+      fail_at(key, name(key) + " is missing: expected " + std::string(expected));
+  }
+
+  // Every key of the table must have been read; `what` names the table ("[material]", "a plane").
+  // The earliest offending key in the file is reported.
+  void finish(std::string_view what) const {
+    const toml::key* worst = nullptr;
+    const toml::node* worst_value = nullptr;
+    const auto rank = [](const toml::key& k) {  // overrides carry no line: report them last
+      const auto& b = k.source().begin;
+      return std::pair(b.line == 0 ? std::numeric_limits<toml::source_index>::max() : b.line,
+                       b.column);
+    };
+    for (auto&& [k, v] : table_) {
+      if (std::find(known_.begin(), known_.end(), k.str()) != known_.end()) continue;
+      if (!worst || rank(k) < rank(*worst)) {
+        worst = &k;
+        worst_value = &v;
+      }
+    }
+    if (worst)
+      fail(places_.of(*worst, *worst_value), name(worst->str()) + " is not a key of " +
+                                                 std::string(what) +
+                                                 " (keys: " + join(known_, ", ") + ")");
+  }
+
+ private:
+  struct Entry {
+    const toml::key* key;
+    const toml::node* node;
+  };
+
+  // Looks a key up; asking for it also makes it a key this table accepts.
+  std::optional<Entry> find(std::string_view key) {
+    if (std::find(known_.begin(), known_.end(), key) == known_.end()) known_.emplace_back(key);
+    const auto it = table_.find(key);
+    if (it == table_.end()) return std::nullopt;
+    return Entry{&it->first, &it->second};
+  }
+
+  std::string place(const Entry& e) const { return places_.of(*e.key, *e.node); }
+
+  // A finite number (integers accepted) inside `range`.
+  static Real number(const toml::node& n, const std::string& name, const std::string& place,
+                     Range range) {
+    Real v = 0;
+    if (const auto* i = n.as_integer()) {
+      v = static_cast<Real>(i->get());
+    } else if (const auto* f = n.as_floating_point()) {
+      v = f->get();
+    } else {
+      fail(place, name + ": expected a number, got " + type_name(n));
+    }
+    if (!std::isfinite(v)) fail(place, name + " = " + format_real(v) + " is not a finite number");
+    if (!range.contains(v))
+      fail(place, name + " = " + value_text(n) + " " + range.violation(false));
+    return v;
+  }
+
+  const Places& places_;
+  const toml::table& table_;
+  std::string prefix_;
+  std::vector<std::string> known_;  ///< keys read so far, in the order the loader asks for them
+};
+
+// ---- The tables of a scene ----------------------------------------------------------------------
+
+void read_material(TableReader r, MaterialConfig& m) {
+  r.read("density", m.density, kPositive);
+  r.read("diameter", m.diameter, kPositive);
+  r.read("diameter_spread", m.diameter_spread, closed(0, 0.5));
+  r.read("k_n", m.k_n, kPositive);
+  r.read("k_t_ratio", m.k_t_ratio, closed(0, 1));
+  r.read("restitution", m.restitution, open_closed(0, 1));
+  r.read("tangential_damping_ratio", m.tangential_damping_ratio, closed(0, 1));
+  r.read("friction", m.friction, kNonNegative);
+  r.read("rolling_friction", m.rolling_friction, kNonNegative);
+  r.read("rolling_stiffness_ratio", m.rolling_stiffness_ratio, kNonNegative);
+  r.read("rolling_damping_ratio", m.rolling_damping_ratio, kNonNegative);
+  r.read("wall_friction", m.wall_friction, kNonNegative);
+  r.read("wall_rolling_friction", m.wall_rolling_friction, kNonNegative);
+  r.finish("[material]");
+}
+
+void read_simulation(TableReader r, SimulationConfig& s) {
+  r.read("mode", s.mode, kModes);
+  r.read("gravity", s.gravity);
+  r.read("dt", s.dt, kPositive);
+  r.read("dt_fraction", s.dt_fraction, open_closed(0, 0.2));
+  r.read("skin", s.skin, open_closed(0, 2));
+  r.read("sort_every", s.sort_every, kNonNegative);  // 0: never re-sort
+  r.read("seed", s.seed, kNonNegative);
+  r.read("threads", s.threads, closed(0, 4096));
+  r.finish("[simulation]");
+}
+
+void read_output(TableReader r, OutputConfig& o) {
+  r.read("fps", o.fps, kPositive);
+  r.read("duration", o.duration, kPositive);
+  r.read("settle_time", o.settle_time, kNonNegative);
+  r.finish("[output]");
+}
+
+GeometryConfig read_geometry(TableReader r, std::size_t index) {
+  GeometryConfig g;
+  g.name = "geometry " + std::to_string(index);
+  r.read("type", g.type, kGeometryTypes);
+  r.read("name", g.name);
+  r.read("render", g.render, kRenderStyles);
+  r.read("friction", g.friction, kNonNegative);
+
+  // Only the keys of this type are read; finish() refuses the others.
+  const auto read_container = [&] {
+    r.read("container", g.container);
+    r.read("open_top", g.open_top);
+    r.read("wall_thickness", g.wall_thickness, kPositive);
+  };
+  switch (g.type) {
+    case GeometryType::Plane: {
+      r.read("point", g.point);
+      r.read("normal", g.normal);
+      // Scale by the largest component first so that huge components cannot overflow the norm.
+      const Real big = std::max({std::abs(g.normal.x), std::abs(g.normal.y), std::abs(g.normal.z)});
+      if (big == 0)
+        r.fail_at("normal", r.name("normal") + " = [0, 0, 0]: expected a non-zero normal vector");
+      g.normal = g.normal / big;
+      g.normal = g.normal / norm(g.normal);
+      r.finish("a plane");
+      break;
+    }
+    case GeometryType::Box:
+      r.read("center", g.center);
+      r.read("size", g.size, kPositive);
+      r.read("rotation", g.rotation_deg);
+      read_container();
+      r.finish("a box");
+      break;
+    case GeometryType::Cylinder:
+      r.read("center", g.center);
+      r.read("rotation", g.rotation_deg);
+      r.read("radius", g.radius, kPositive);
+      r.read("height", g.height, kPositive);
+      read_container();
+      r.finish("a cylinder");
+      break;
+    case GeometryType::Sphere:
+      r.read("center", g.center);
+      r.read("radius", g.radius, kPositive);
+      r.finish("a sphere");
+      break;
+  }
+  return g;
+}
+
+EmitterConfig read_emitter(TableReader r, std::size_t index) {
+  EmitterConfig e;
+  e.name = "emitter " + std::to_string(index);
+  r.read("type", e.type, kEmitterTypes);
+  r.read("name", e.name);
+  r.require("count", "the number of grains to emit, an integer >= 1");
+  r.read("count", e.count, closed(1, static_cast<Real>(kMaxEmitterCount)));
+  r.read("start", e.start, kNonNegative);
+  r.read("velocity", e.velocity);
+  r.read("jitter", e.jitter, closed(0, 1));
+  r.read("spacing", e.spacing, Range{1, kInf});
+  r.read("center", e.center);
+
+  // Only the keys of this type (and pour shape) are read; finish() refuses the others.
+  switch (e.type) {
+    case EmitterType::Pour:
+      r.read("shape", e.shape, kPourShapes);
+      r.read("rate", e.rate, kPositive);
+      if (e.shape == PourShape::Disk) {
+        r.read("radius", e.radius, kPositive);
+        r.finish("a pour with shape = \"disk\"");
+      } else {
+        r.read("size", e.size, kPositive, 2);  // x, y extents; z is not used
+        r.finish("a pour with shape = \"rect\"");
+      }
+      break;
+    case EmitterType::Block:
+      r.read("size", e.size, kPositive);
+      r.finish("a block emitter");
+      break;
+    case EmitterType::Lattice:
+      r.read("size", e.size, kPositive);
+      r.finish("a lattice emitter");
+      break;
+  }
+  return e;
+}
+
+SceneConfig read_scene(const toml::table& root, const std::string& path) {
+  const Places places(path);
+  SceneConfig c;
+  c.path = path;
+  c.name = std::filesystem::path(path).stem().string();
+
+  TableReader doc(places, root, "");
+  if (const auto* t = doc.table("scene")) {
+    TableReader r(places, *t, "scene");
+    r.read("name", c.name);
+    r.read("description", c.description);
+    r.finish("[scene]");
+  }
+  if (const auto* t = doc.table("material")) read_material({places, *t, "material"}, c.material);
+  if (const auto* t = doc.table("simulation"))
+    read_simulation({places, *t, "simulation"}, c.simulation);
+  if (const auto* t = doc.table("output")) read_output({places, *t, "output"}, c.output);
+
+  if (const auto* a = doc.array_of_tables("geometry")) {
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const std::string prefix = "geometry[" + std::to_string(i) + "]";
+      c.geometry.push_back(read_geometry({places, *a->get(i)->as_table(), prefix}, i));
+    }
+  }
+  const auto* emitters = doc.array_of_tables("emitter");
+  if (!emitters || emitters->empty())
+    doc.fail_at("emitter", "emitter: a scene needs at least one [[emitter]] table, found none");
+  for (std::size_t i = 0; i < emitters->size(); ++i) {
+    const std::string prefix = "emitter[" + std::to_string(i) + "]";
+    c.emitters.push_back(read_emitter({places, *emitters->get(i)->as_table(), prefix}, i));
+  }
+
+  doc.finish("a scene file");
+  return c;
+}
+
+// ---- Overrides ----------------------------------------------------------------------------------
+
+// "emitter[0].rate" or "emitter.0.rate" -> {"emitter", "0", "rate"}.
+std::vector<std::string> split_key(const std::string& key, const std::string& where) {
+  const auto malformed = [&] {
+    fail(where, "malformed key " + in_quotes(key) +
+                    ": expected a dotted path such as material.friction or emitter[0].rate");
+  };
+  std::string dotted;
+  for (std::size_t i = 0; i < key.size(); ++i) {
+    if (key[i] == '[') {
+      const std::size_t close = key.find(']', i);
+      if (close == std::string::npos || close == i + 1) malformed();
+      const std::string index = key.substr(i + 1, close - i - 1);
+      if (!std::all_of(index.begin(), index.end(), [](char ch) { return ch >= '0' && ch <= '9'; }))
+        malformed();
+      dotted += "." + index;
+      i = close;
+      if (i + 1 < key.size() && key[i + 1] != '.' && key[i + 1] != '[') malformed();
+    } else if (key[i] == ']') {
+      malformed();
+    } else {
+      dotted += key[i];
+    }
+  }
+  std::vector<std::string> segments;
+  std::size_t begin = 0;
+  while (true) {
+    const std::size_t dot = dotted.find('.', begin);
+    segments.push_back(dotted.substr(begin, dot == std::string::npos ? dot : dot - begin));
+    if (segments.back().empty()) malformed();
+    if (dot == std::string::npos) break;
+    begin = dot + 1;
+  }
+  return segments;
+}
+
+std::optional<std::size_t> parse_index(const std::string& s) {
+  std::size_t i = 0;
+  const auto res = std::from_chars(s.data(), s.data() + s.size(), i);
+  if (res.ec != std::errc() || res.ptr != s.data() + s.size()) return std::nullopt;
+  return i;
+}
+
+// The override's value as a one-key document {v = VALUE}, parsed with "--set KEY" as its source
+// path. Text that is not a TOML value is taken as a bare string, so --set simulation.mode=dem
+// works.
+toml::table parse_override_value(const Override& o, const std::string& where) {
+  try {
+    toml::table t = toml::parse("v = " + o.value, std::string_view(where));
+    if (t.size() == 1 && t.contains("v")) return t;  // not "1\nw = 2" smuggling in more keys
+  } catch (const toml::parse_error&) {
+  }
+  std::ostringstream quoted;
+  quoted << toml::value<std::string>(o.value);
+  try {
+    return toml::parse("v = " + quoted.str(), std::string_view(where));
+  } catch (const toml::parse_error& err) {
+    fail(where,
+         "cannot read the value " + in_quotes(o.value) + ": " + std::string(err.description()));
+  }
+}
+
+// Grafts one override onto the parsed document. Tables on the way must exist (an index past the
+// last [[emitter]] is an error), except the plain top-level tables, which a file may leave out.
+void apply_override(toml::table& root, const Override& o) {
+  const std::string where = "--set " + o.key;
+  const std::vector<std::string> segments = split_key(o.key, where);
+
+  toml::node* at = &root;
+  std::string walked;  // the path so far, named as in messages: emitter[0]
+  for (std::size_t s = 0; s + 1 < segments.size(); ++s) {
+    const std::string& seg = segments[s];
+    if (auto* t = at->as_table()) {
+      toml::node* child = t->get(seg);
+      if (!child) {
+        const bool plain =
+            seg == "scene" || seg == "material" || seg == "simulation" || seg == "output";
+        if (t != &root || !plain)
+          fail(where, "the scene has no table " + (walked.empty() ? seg : walked + "." + seg));
+        child = &t->insert_or_assign(seg, toml::table{}).first->second;
+      }
+      walked = walked.empty() ? seg : walked + "." + seg;
+      at = child;
+    } else if (auto* a = at->as_array()) {
+      const auto i = parse_index(seg);
+      if (!i) fail(where, walked + " is an array: index it with a number, as in " + walked + ".0");
+      if (*i >= a->size())
+        fail(where, "the scene has no " + walked + "[" + seg + "] (it has " +
+                        std::to_string(a->size()) + ")");
+      walked += "[" + seg + "]";
+      at = a->get(*i);
+    } else {
+      fail(where, walked + " is " + type_name(*at) + ", not a table");
+    }
+  }
+
+  auto* target = at->as_table();
+  if (!target) {
+    if (at->is_array())
+      fail(where, "cannot set one element of " + walked + "; set the whole array instead");
+    fail(where, walked + " is " + type_name(*at) + ", not a table");
+  }
+  toml::table parsed = parse_override_value(o, where);
+  // Moving (not copying) the node keeps its source region, hence its "--set KEY" place.
+  parsed.get("v")->visit(
+      [&](auto& node) { target->insert_or_assign(segments.back(), std::move(node)); });
+}
+
+}  // namespace
+
+// ---- Public entry points ------------------------------------------------------------------------
+
+Override parse_override(const std::string& arg) {
+  const auto trim = [](std::string s) {
+    const auto first = s.find_first_not_of(" \t");
+    const auto last = s.find_last_not_of(" \t");
+    return first == std::string::npos ? std::string() : s.substr(first, last - first + 1);
+  };
+  const std::size_t eq = arg.find('=');
+  if (eq == std::string::npos)
+    throw InputError("--set " + arg + ": expected KEY=VALUE, as in --set material.friction=0.5");
+  Override o{trim(arg.substr(0, eq)), trim(arg.substr(eq + 1))};
+  if (o.key.empty())
+    throw InputError("--set " + arg +
+                     ": the key is empty; expected KEY=VALUE, as in --set material.friction=0.5");
+  return o;
+}
+
+SceneConfig load_scene_from_string(const std::string& text, const std::string& name,
+                                   const std::vector<Override>& overrides) {
+  toml::table root;
+  try {
+    root = toml::parse(text, std::string_view(name));
+  } catch (const toml::parse_error& err) {
+    const auto& at = err.source().begin;
+    throw InputError(name + ":" + std::to_string(at.line) + ":" + std::to_string(at.column) + ": " +
+                     std::string(err.description()));
+  }
+  for (const auto& o : overrides) apply_override(root, o);
+  return read_scene(root, name);
+}
+
+SceneConfig load_scene(const std::string& path, const std::vector<Override>& overrides) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(path + ": cannot open scene file (it is a directory)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open scene file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path + ": cannot read scene file");
+  return load_scene_from_string(text.str(), path, overrides);
+}
+
+}  // namespace sandflow

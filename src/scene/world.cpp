@@ -1,0 +1,191 @@
+#include "scene/world.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <fmt/format.h>
+
+#include "core/error.hpp"
+#include "core/hash.hpp"
+
+namespace sandflow {
+
+TimeStep choose_time_step(const SceneConfig& scene) {
+  const MaterialConfig& mat = scene.material;
+  const Real r_min = 0.5 * mat.diameter * (1 - mat.diameter_spread);
+  const Real m_min = mat.density * (4.0 / 3.0) * kPi * r_min * r_min * r_min;
+  TimeStep ts;
+  ts.t_c = contact_time(m_min / 2, mat.k_n);
+  // Symplectic Euler on one spring is stable below 2/omega = 0.64 t_c; a grain held by many
+  // contacts vibrates up to ~3x faster, so the bound keeps that factor: t_c / 5.
+  ts.stable_bound = ts.t_c / 5;
+  Real dt = scene.simulation.dt.value_or(scene.simulation.dt_fraction * ts.t_c);
+  if (dt > ts.stable_bound)
+    throw InputError(fmt::format(
+        "{}: simulation.dt = {:.4g} s is above the stable bound {:.4g} s (t_c / 5, with contact "
+        "time t_c = {:.4g} s for the smallest grains at k_n = {:.4g} N/m)",
+        scene.path, dt, ts.stable_bound, ts.t_c, mat.k_n));
+  const Real frame_dt = 1.0 / scene.output.fps;
+  ts.substeps = std::max(1, static_cast<int>(std::ceil(frame_dt / dt - 1e-9)));
+  ts.dt = frame_dt / ts.substeps;
+  return ts;
+}
+
+ContactParams contact_params(const MaterialConfig& m) {
+  ContactParams p;
+  p.k_n = m.k_n;
+  p.beta = damping_beta(m.restitution);
+  p.k_t = m.k_t_ratio * m.k_n;
+  p.c_t_ratio = m.tangential_damping_ratio;
+  p.mu = m.friction;
+  p.k_r = m.rolling_stiffness_ratio * p.k_t;
+  p.c_r_ratio = m.rolling_damping_ratio;
+  p.mu_r = m.rolling_friction;
+  return p;
+}
+
+void scale_grain_count(SceneConfig& scene, std::int64_t total) {
+  const std::int64_t old_total = scene.total_grains();
+  if (old_total <= 0 || scene.emitters.empty()) return;
+  // largest-remainder rounding, so the counts add up to exactly `total`
+  std::vector<std::pair<double, std::size_t>> rem;
+  std::int64_t sum = 0;
+  for (std::size_t k = 0; k < scene.emitters.size(); ++k) {
+    const double exact = static_cast<double>(scene.emitters[k].count) * static_cast<double>(total) /
+                         static_cast<double>(old_total);
+    scene.emitters[k].count = static_cast<std::int64_t>(std::floor(exact));
+    sum += scene.emitters[k].count;
+    rem.emplace_back(-(exact - std::floor(exact)), k);
+  }
+  std::sort(rem.begin(), rem.end());
+  for (std::size_t q = 0; sum < total; ++q, ++sum) ++scene.emitters[rem[q % rem.size()].second].count;
+}
+
+namespace {
+DemParams dem_params(const SceneConfig& scene) {
+  DemParams p;
+  p.contact = contact_params(scene.material);
+  p.skin = scene.simulation.skin * scene.material.diameter;
+  p.sort_every = scene.simulation.sort_every;
+  p.gravity = scene.simulation.gravity;
+  return p;
+}
+}  // namespace
+
+World::World(const SceneConfig& scene)
+    : scene_(scene),
+      ts_(choose_time_step(scene)),
+      geometry_(Geometry::from_config(scene.geometry, scene.material)),
+      dem_(dem_params(scene)),
+      rng_(scene.simulation.seed) {
+  for (std::size_t k = 0; k < scene.emitters.size(); ++k)
+    emitters_.emplace_back(scene.emitters[k], scene.material, scene.simulation.gravity,
+                           fmt::format("{}: emitter[{}]", scene.path, k));
+}
+
+int World::planned_frames() const {
+  if (scene_.output.frames) return *scene_.output.frames;
+  Real duration = 0;
+  if (scene_.output.duration) {
+    duration = *scene_.output.duration;
+  } else {
+    for (const Emitter& e : emitters_) duration = std::max(duration, e.end_time());
+    duration += scene_.output.settle_time;
+  }
+  return std::max(1, static_cast<int>(std::ceil(duration * scene_.output.fps - 1e-9)));
+}
+
+void World::emit() {
+  new_grains_.clear();
+  for (Emitter& e : emitters_) e.emit(time_, rng_, new_grains_);
+  if (new_grains_.empty()) return;
+  for (const NewGrain& g : new_grains_) grains_.add(next_id_++, g.x, g.v, g.r, scene_.material.density);
+  dem_.invalidate();
+}
+
+void World::step() {
+  {
+    ScopedStage s(profile_, Stage::Emit);
+    emit();
+  }
+  dem_.step(grains_, geometry_, ts_.dt, profile_);
+  ++step_;
+  time_ = static_cast<Real>(step_) * ts_.dt;
+}
+
+FrameStats World::advance_frame() {
+  Stopwatch wall;
+  dem_.counters() = {};
+  for (int s = 0; s < ts_.substeps; ++s) step();
+  ++frame_;
+
+  FrameStats st;
+  st.frame = frame_;
+  st.time = time_;
+  st.substeps = ts_.substeps;
+  st.dt = ts_.dt;
+  for (GrainState s : grains_.state) {
+    if (s == GrainState::Active) ++st.n_active;
+    else ++st.n_interface;
+  }
+  st.n_static = static_cast<std::int64_t>(static_.size());
+  st.n_total = st.n_active + st.n_interface + st.n_static;
+  st.contacts = dem_.counters().contacts;
+  st.wall_contacts = dem_.counters().wall_contacts;
+  st.max_overlap_rel = dem_.counters().max_overlap_rel;
+  st.rebuilds = dem_.counters().rebuilds;
+  st.kinetic_energy = kinetic_energy();
+  for (std::size_t i = 0; i < grains_.size(); ++i)
+    if (!is_finite(grains_.x[i]) || !is_finite(grains_.v[i]))
+      throw SimulationError(fmt::format(
+          "grain {} has a non-finite position or velocity at step {} (t = {:.6f} s); the time "
+          "step {:.3g} s may be too large for the contacts",
+          grains_.id[i], step_, time_, ts_.dt));
+  st.wall_seconds = wall.seconds();
+  return st;
+}
+
+Real World::kinetic_energy() const {
+  Real e = 0;
+  for (std::size_t i = 0; i < grains_.size(); ++i)
+    e += 0.5 * grains_.m[i] * norm2(grains_.v[i]) +
+         0.5 / grains_.inv_I[i] * norm2(grains_.w[i]);
+  return e;
+}
+
+FrameData World::visible_frame() const {
+  FrameData f;
+  const std::size_t n = grains_.size();
+  f.position = grains_.x;
+  f.radius = grains_.r;
+  f.velocity = grains_.v;
+  f.id = grains_.id;
+  f.state.resize(n);
+  for (std::size_t i = 0; i < n; ++i) f.state[i] = static_cast<std::uint8_t>(grains_.state[i]);
+  return f;
+}
+
+std::uint64_t World::state_hash() const {
+  // every grain, hot or static, in id order
+  struct Ref { GrainId id; bool hot; std::uint32_t slot; };
+  std::vector<Ref> refs;
+  refs.reserve(total_grains());
+  for (std::uint32_t i = 0; i < grains_.size(); ++i) refs.push_back({grains_.id[i], true, i});
+  for (std::uint32_t i = 0; i < static_.size(); ++i) refs.push_back({static_.id[i], false, i});
+  std::sort(refs.begin(), refs.end(), [](const Ref& a, const Ref& b) { return a.id < b.id; });
+  Hasher h;
+  for (const Ref& ref : refs) {
+    h.add(ref.id);
+    if (ref.hot) {
+      h.add(grains_.x[ref.slot]);
+      h.add(grains_.v[ref.slot]);
+      h.add(grains_.w[ref.slot]);
+    } else {
+      h.add(static_.x[ref.slot]);
+    }
+  }
+  return h.value();
+}
+
+}  // namespace sandflow

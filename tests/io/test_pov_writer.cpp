@@ -1,0 +1,254 @@
+#include "io/pov_writer.hpp"
+
+#include <gtest/gtest.h>
+#include <png.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "core/error.hpp"
+#include "core/rng.hpp"
+
+namespace sandflow {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Image {
+  int width = 0, height = 0;
+  std::vector<unsigned char> rgb;  // row-major, top row first
+  const unsigned char* at(int x, int y) const { return &rgb[3 * (std::size_t(y) * width + x)]; }
+};
+
+Image read_png(const std::string& path) {
+  png_image img{};
+  img.version = PNG_IMAGE_VERSION;
+  Image out;
+  if (!png_image_begin_read_from_file(&img, path.c_str())) return out;
+  img.format = PNG_FORMAT_RGB;
+  out.rgb.resize(PNG_IMAGE_SIZE(img));
+  if (!png_image_finish_read(&img, nullptr, out.rgb.data(), 0, nullptr)) {
+    png_image_free(&img);
+    out.rgb.clear();
+    return out;
+  }
+  out.width = static_cast<int>(img.width);
+  out.height = static_cast<int>(img.height);
+  return out;
+}
+
+// Sand pixels are warm (red well above blue); the floor is grey and the sky blue-ish.
+bool is_sand(const unsigned char* p) {
+  return p[0] > p[2] + 40;
+}
+
+class PovTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("sandflow_pov_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  fs::path dir_;
+};
+
+std::string read_text(const std::string& p) {
+  std::ifstream in(p);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// ~200 grains in a small mound on the floor z = 0.
+FrameData small_mound() {
+  FrameData f;
+  Rng rng(3);
+  auto u = [&rng] { return static_cast<double>(rng.next() >> 11) * 0x1.0p-53; };
+  const double r = 0.005;
+  for (int i = 0; i < 200; ++i) {
+    const double a = 2 * kPi * u(), rho = 0.06 * std::sqrt(u());
+    const double top = 0.04 * (1 - rho / 0.06);
+    f.position.push_back({0.3 + rho * std::cos(a), -0.2 + rho * std::sin(a), r + top * u()});
+    f.radius.push_back(r);
+    f.id.push_back(static_cast<std::uint32_t>(i));
+  }
+  return f;
+}
+
+GeometryConfig floor_plane() {
+  GeometryConfig g;
+  g.type = GeometryType::Plane;
+  g.name = "floor";
+  return g;
+}
+
+TEST_F(PovTest, SceneTextHasGrainsAndGeometry) {
+  const FrameData f = small_mound();
+  std::vector<GeometryConfig> geometry{floor_plane()};
+  GeometryConfig box;
+  box.type = GeometryType::Box;
+  box.name = "tray";
+  box.center = {0.3, -0.2, 0.05};
+  box.size = {0.2, 0.2, 0.1};
+  box.container = true;
+  box.render = RenderStyle::Glass;
+  geometry.push_back(box);
+  GeometryConfig hidden;
+  hidden.type = GeometryType::Sphere;
+  hidden.name = "invisible";
+  hidden.render = RenderStyle::Hidden;
+  geometry.push_back(hidden);
+
+  const std::string p = path("scene.pov");
+  write_pov_scene(p, f, geometry, PovOptions{});
+  EXPECT_FALSE(fs::exists(p + ".tmp"));
+  const std::string text = read_text(p);
+  EXPECT_NE(text.find("#version 3.7;"), std::string::npos);
+  EXPECT_NE(text.find("assumed_gamma 1.0"), std::string::npos);
+  EXPECT_NE(text.find("sky z"), std::string::npos);
+  EXPECT_NE(text.find("right -x*"), std::string::npos);
+  EXPECT_NE(text.find("#macro G(X,Y,Z,R,C)"), std::string::npos);
+  // One line per grain.
+  std::size_t grains = 0;
+  for (std::size_t at = text.find("\nG("); at != std::string::npos;
+       at = text.find("\nG(", at + 1)) {
+    ++grains;
+  }
+  EXPECT_EQ(grains, f.size());
+  // The glass container: walls cut from a box, unrotated, centred on its centre.
+  EXPECT_NE(text.find("// tray\ndifference { box"), std::string::npos);
+  EXPECT_NE(text.find("texture { Glass } interior { GlassInterior } matrix <1,0,0,0,1,0,0,0,1,0.3,"
+                      "-0.2,0.05>"),
+            std::string::npos);
+  EXPECT_EQ(text.find("invisible"), std::string::npos);
+
+  EXPECT_THROW(write_pov_scene(path("no/such/dir/scene.pov"), f, geometry, PovOptions{}),
+               OutputError);
+}
+
+TEST_F(PovTest, RotationMatchesRotationXyzDeg) {
+  GeometryConfig box;
+  box.type = GeometryType::Box;
+  box.name = "tilted";
+  box.rotation_deg = {10, 20, 30};
+  write_pov_scene(path("rot.pov"), FrameData{}, {box}, PovOptions{});
+  const std::string text = read_text(path("rot.pov"));
+  // The matrix lists the images of the local axes: the columns of rotation_xyz_deg.
+  const Mat3 m = rotation_xyz_deg(box.rotation_deg);
+  const std::size_t at = text.find("matrix <", text.find("// tilted"));
+  ASSERT_NE(at, std::string::npos);
+  std::string rest = text.substr(at + 8);
+  std::replace(rest.begin(), rest.end(), ',', ' ');
+  std::istringstream in(rest);
+  for (int col = 0; col < 3; ++col) {
+    for (int row = 0; row < 3; ++row) {
+      double v = 0;
+      in >> v;
+      EXPECT_NEAR(v, m.m[row][col], 1e-6) << "row " << row << " col " << col;
+    }
+  }
+}
+
+TEST_F(PovTest, RendersMoundOnFloor) {
+  if (find_povray().empty()) GTEST_SKIP() << "povray is not installed";
+  const FrameData f = small_mound();
+  PovOptions opt;
+  opt.width = 160;
+  opt.height = 120;
+  write_pov_scene(path("mound.pov"), f, {floor_plane()}, opt);
+  render_pov(path("mound.pov"), path("mound.png"), opt.width, opt.height, 2);
+  ASSERT_TRUE(fs::exists(path("mound.png")));
+  EXPECT_GT(fs::file_size(path("mound.png")), 0u);
+  EXPECT_FALSE(fs::exists(path("mound.png.partial.png")));
+  EXPECT_TRUE(fs::exists(path("mound.png.log")));
+
+  const Image img = read_png(path("mound.png"));
+  ASSERT_EQ(img.width, 160);
+  ASSERT_EQ(img.height, 120);
+  // The picture is not flat: the pixel values spread.
+  int lo = 255, hi = 0;
+  for (unsigned char c : img.rgb) {
+    lo = std::min<int>(lo, c);
+    hi = std::max<int>(hi, c);
+  }
+  EXPECT_GT(hi - lo, 60);
+  // The auto camera frames the grains: sand in the picture, clear of the borders, and wide.
+  int x0 = img.width, x1 = -1, y0 = img.height, y1 = -1, sand = 0;
+  for (int y = 0; y < img.height; ++y) {
+    for (int x = 0; x < img.width; ++x) {
+      if (!is_sand(img.at(x, y))) continue;
+      ++sand;
+      x0 = std::min(x0, x);
+      x1 = std::max(x1, x);
+      y0 = std::min(y0, y);
+      y1 = std::max(y1, y);
+    }
+  }
+  ASSERT_GT(sand, 0);
+  EXPECT_GT(x0, 0);
+  EXPECT_LT(x1, img.width - 1);
+  EXPECT_GT(y0, 0);
+  EXPECT_LT(y1, img.height - 1);
+  EXPECT_GT(x1 - x0, img.width / 3);
+}
+
+TEST_F(PovTest, PictureIsNotMirrored) {
+  if (find_povray().empty()) GTEST_SKIP() << "povray is not installed";
+  // Camera on -y looking along +y with z up: in a right-handed world +x is to the right.
+  // One grain right of and above the look-at point must land in the upper-right quadrant.
+  FrameData f;
+  f.position = {{0.8, 0, 1.5}};
+  f.radius = {0.3};
+  PovOptions opt;
+  opt.width = 160;
+  opt.height = 120;
+  opt.auto_camera = false;
+  opt.camera_position = {0, -6, 1};
+  opt.camera_look_at = {0, 0, 1};
+  write_pov_scene(path("probe.pov"), f, {}, opt);
+  render_pov(path("probe.pov"), path("probe.png"), opt.width, opt.height, 1);
+  const Image img = read_png(path("probe.png"));
+  ASSERT_EQ(img.width, 160);
+  double sx = 0, sy = 0;
+  int n = 0;
+  for (int y = 0; y < img.height; ++y) {
+    for (int x = 0; x < img.width; ++x) {
+      if (is_sand(img.at(x, y))) {
+        sx += x;
+        sy += y;
+        ++n;
+      }
+    }
+  }
+  ASSERT_GT(n, 20);
+  EXPECT_GT(sx / n, img.width / 2.0);   // right
+  EXPECT_LT(sy / n, img.height / 2.0);  // up (rows count from the top)
+}
+
+TEST_F(PovTest, RenderFailureIsOutputErrorWithLog) {
+  if (find_povray().empty()) GTEST_SKIP() << "povray is not installed";
+  {
+    std::ofstream out(path("broken.pov"));
+    out << "#version 3.7;\nsphere { <0,0,0>, \n";  // parse error
+  }
+  try {
+    render_pov(path("broken.pov"), path("broken.png"), 32, 24, 1);
+    FAIL() << "no error";
+  } catch (const OutputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(path("broken.png")), std::string::npos) << msg;
+    EXPECT_NE(msg.find("exit status"), std::string::npos) << msg;
+  }
+  EXPECT_FALSE(fs::exists(path("broken.png")));
+}
+
+}  // namespace
+}  // namespace sandflow

@@ -1,0 +1,327 @@
+// Scene loader: values and defaults of a valid scene, and the exact place (name:LINE:COL or
+// --set KEY) and key named by each kind of error. Scene texts are built line by line so that the
+// expected line and column can be read off the text.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "scene/scene_loader.hpp"
+
+namespace sandflow {
+namespace {
+
+// The smallest valid scene: one emitter with its required count.
+constexpr const char* kMinimal =
+    "[[emitter]]\n"
+    "count = 100\n";
+
+// The message of the InputError the scene raises, or "" when it loads.
+std::string error_of(const std::string& text, const std::vector<Override>& overrides = {}) {
+  try {
+    load_scene_from_string(text, "t.toml", overrides);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// The message must contain every piece (a place, a key, what was expected).
+void expect_error(const std::string& text, const std::vector<std::string>& pieces,
+                  const std::vector<Override>& overrides = {}) {
+  const std::string msg = error_of(text, overrides);
+  ASSERT_FALSE(msg.empty()) << "expected an InputError for:\n" << text;
+  for (const auto& piece : pieces)
+    EXPECT_NE(msg.find(piece), std::string::npos) << "message: " << msg << "\nmissing: " << piece;
+}
+
+TEST(SceneLoader, MinimalSceneTakesTheDefaults) {
+  const SceneConfig c = load_scene_from_string(kMinimal, "scenes/floor.toml");
+  EXPECT_EQ(c.path, "scenes/floor.toml");
+  EXPECT_EQ(c.name, "floor");  // the file stem when [scene] has no name
+  // Missing keys take the struct defaults (the documented defaults of docs/scenes.md).
+  const MaterialConfig m;
+  const SimulationConfig s;
+  EXPECT_EQ(c.material.density, m.density);
+  EXPECT_EQ(c.material.restitution, m.restitution);
+  EXPECT_EQ(c.material.friction, m.friction);
+  EXPECT_EQ(c.simulation.mode, s.mode);
+  EXPECT_EQ(c.simulation.gravity, Vec3(0, 0, -9.81));
+  EXPECT_EQ(c.simulation.dt_fraction, s.dt_fraction);
+  EXPECT_FALSE(c.simulation.dt.has_value());
+  EXPECT_EQ(c.output.fps, OutputConfig{}.fps);
+  EXPECT_FALSE(c.output.duration.has_value());
+  EXPECT_TRUE(c.geometry.empty());
+  ASSERT_EQ(c.emitters.size(), 1u);
+  EXPECT_EQ(c.emitters[0].name, "emitter 0");
+  EXPECT_EQ(c.emitters[0].type, EmitterType::Pour);
+  EXPECT_EQ(c.emitters[0].shape, PourShape::Disk);
+  EXPECT_EQ(c.emitters[0].count, 100);
+  EXPECT_EQ(c.emitters[0].rate, EmitterConfig{}.rate);
+  EXPECT_EQ(c.total_grains(), 100);
+}
+
+TEST(SceneLoader, FullSceneReadsEveryTable) {
+  const std::string text =
+      "[scene]\n"
+      "name = \"pour\"\n"
+      "description = \"a pour onto a floor\"\n"
+      "[material]\n"
+      "density = 2500\n"  // an integer where a float is expected
+      "diameter = 0.004\n"
+      "restitution = 0.5\n"
+      "friction = 0.7\n"
+      "[simulation]\n"
+      "mode = \"dem\"\n"
+      "gravity = [0, 0, -10]\n"
+      "dt = 1e-5\n"
+      "seed = 42\n"
+      "threads = 2\n"
+      "[output]\n"
+      "fps = 60\n"
+      "duration = 4.5\n"
+      "[[geometry]]\n"
+      "type = \"plane\"\n"
+      "normal = [0, 0, 2]\n"
+      "render = \"glass\"\n"
+      "[[geometry]]\n"
+      "type = \"box\"\n"
+      "name = \"bin\"\n"
+      "size = [1, 2, 0.5]\n"
+      "rotation = [0, 0, 45]\n"
+      "container = true\n"
+      "[[emitter]]\n"
+      "type = \"pour\"\n"
+      "shape = \"rect\"\n"
+      "count = 1e4\n"  // an integral float where an integer is expected
+      "size = [0.2, 0.1, 0]\n"
+      "rate = 500\n"
+      "[[emitter]]\n"
+      "type = \"block\"\n"
+      "count = 8\n"
+      "velocity = [3, 0, 0]\n";
+  const SceneConfig c = load_scene_from_string(text, "scenes/x.toml");
+  EXPECT_EQ(c.name, "pour");
+  EXPECT_EQ(c.description, "a pour onto a floor");
+  EXPECT_EQ(c.material.density, 2500.0);
+  EXPECT_EQ(c.material.diameter, 0.004);
+  EXPECT_EQ(c.material.friction, 0.7);
+  EXPECT_EQ(c.material.k_n, MaterialConfig{}.k_n);
+  EXPECT_EQ(c.simulation.mode, Mode::Dem);
+  EXPECT_EQ(c.simulation.gravity, Vec3(0, 0, -10));
+  ASSERT_TRUE(c.simulation.dt.has_value());
+  EXPECT_EQ(*c.simulation.dt, 1e-5);
+  EXPECT_EQ(c.simulation.seed, 42u);
+  EXPECT_EQ(c.simulation.threads, 2);
+  EXPECT_EQ(c.output.fps, 60.0);
+  ASSERT_TRUE(c.output.duration.has_value());
+  EXPECT_EQ(*c.output.duration, 4.5);
+
+  ASSERT_EQ(c.geometry.size(), 2u);
+  EXPECT_EQ(c.geometry[0].type, GeometryType::Plane);
+  EXPECT_EQ(c.geometry[0].name, "geometry 0");
+  EXPECT_EQ(c.geometry[0].normal, Vec3(0, 0, 1));  // normalised
+  EXPECT_EQ(c.geometry[0].render, RenderStyle::Glass);
+  EXPECT_EQ(c.geometry[1].type, GeometryType::Box);
+  EXPECT_EQ(c.geometry[1].name, "bin");
+  EXPECT_EQ(c.geometry[1].size, Vec3(1, 2, 0.5));
+  EXPECT_EQ(c.geometry[1].rotation_deg, Vec3(0, 0, 45));
+  EXPECT_TRUE(c.geometry[1].container);
+
+  ASSERT_EQ(c.emitters.size(), 2u);
+  EXPECT_EQ(c.emitters[0].shape, PourShape::Rect);
+  EXPECT_EQ(c.emitters[0].count, 10000);
+  EXPECT_EQ(c.emitters[0].rate, 500.0);
+  EXPECT_EQ(c.emitters[1].type, EmitterType::Block);
+  EXPECT_EQ(c.emitters[1].name, "emitter 1");
+  EXPECT_EQ(c.emitters[1].velocity, Vec3(3, 0, 0));
+  EXPECT_EQ(c.total_grains(), 10008);
+}
+
+TEST(SceneLoader, OutOfRangeValueGivesTheDocumentedMessage) {
+  const std::string text =
+      "[material]\n"
+      "  restitution = 1.4\n" +
+      std::string(kMinimal);
+  EXPECT_EQ(error_of(text), "t.toml:2:3: material.restitution = 1.4 is outside (0, 1]");
+}
+
+TEST(SceneLoader, OneSidedRangesSayWhatIsExpected) {
+  expect_error("[material]\ndensity = -1\n" + std::string(kMinimal),
+               {"t.toml:2:1: material.density = -1 is not > 0"});
+  expect_error("[simulation]\ndt_fraction = 0.5\n" + std::string(kMinimal),
+               {"t.toml:2:1: simulation.dt_fraction = 0.5 is outside (0, 0.2]"});
+  expect_error("[[emitter]]\ncount = 100\njitter = 1.5\n",
+               {"t.toml:3:1: emitter[0].jitter = 1.5 is outside [0, 1]"});
+}
+
+TEST(SceneLoader, UnknownKeyIsNamedWithItsPlace) {
+  const std::string text =
+      "[material]\n"
+      "density = 2500\n"
+      "densty = 2400\n" +
+      std::string(kMinimal);
+  expect_error(text,
+               {"t.toml:3:1: material.densty is not a key of [material]", "density, diameter"});
+}
+
+TEST(SceneLoader, UnknownTopLevelTableIsAnError) {
+  const std::string text = std::string(kMinimal) +
+                           "[materail]\n"
+                           "density = 2500\n";
+  expect_error(text, {"t.toml:3:2: materail is not a key of a scene file"});
+}
+
+TEST(SceneLoader, WrongTypeSaysWhatWasExpected) {
+  expect_error("[material]\n  friction = \"high\"\n" + std::string(kMinimal),
+               {"t.toml:2:3: material.friction: expected a number, got a string"});
+  expect_error("material = 5\n" + std::string(kMinimal),
+               {"t.toml:1:1: material: expected a table"});
+  expect_error("[[emitter]]\ncount = 2.5\n",
+               {"t.toml:2:1: emitter[0].count: expected an integer, got 2.5"});
+  expect_error("[simulation]\nmode = \"fast\"\n" + std::string(kMinimal),
+               {"t.toml:2:1: simulation.mode = \"fast\" is not one of \"surface\", \"dem\""});
+}
+
+TEST(SceneLoader, NonFiniteNumbersAreRefused) {
+  // Column 18 is the nan inside the array: the element is named, with its index.
+  expect_error("[simulation]\ngravity = [0, 0, nan]\n" + std::string(kMinimal),
+               {"t.toml:2:18: simulation.gravity[2] = nan is not a finite number"});
+  expect_error("[simulation]\ndt = inf\n" + std::string(kMinimal),
+               {"t.toml:2:1: simulation.dt = inf is not a finite number"});
+  expect_error("[[emitter]]\ncount = -inf\n",
+               {"t.toml:2:1: emitter[0].count = -inf is not a finite number"});
+}
+
+TEST(SceneLoader, SyntaxErrorGivesPlaceAndDescription) {
+  expect_error("[material]\ndensity = 2600\nfriction = = 0.5\n",
+               {"t.toml:3:12: ", "could not determine value type"});
+}
+
+TEST(SceneLoader, SceneWithoutEmitterIsRefused) {
+  expect_error("[material]\ndensity = 2600\n",
+               {"t.toml:1:1: emitter: a scene needs at least one [[emitter]]"});
+  expect_error("# no emitters\nemitter = []\n",
+               {"t.toml:2:1: emitter: a scene needs at least one [[emitter]]"});
+  expect_error("[[emitter]]\ntype = \"pour\"\n", {"t.toml:1:1: emitter[0].count is missing"});
+}
+
+TEST(SceneLoader, VectorsNeedExactlyThreeNumbers) {
+  expect_error("[simulation]\ngravity = [0, -9.81]\n" + std::string(kMinimal),
+               {"t.toml:2:1: simulation.gravity: expected an array of 3 numbers, got 2 elements"});
+  expect_error("[simulation]\ngravity = [0, \"0\", 1]\n" + std::string(kMinimal),
+               {"t.toml:2:15: simulation.gravity[1]: expected a number, got a string"});
+  expect_error("[simulation]\ngravity = -9.81\n" + std::string(kMinimal),
+               {"t.toml:2:1: simulation.gravity: expected an array of 3 numbers, got a float"});
+}
+
+TEST(SceneLoader, KeysOfAnotherTypeAreRefused) {
+  const std::string text = std::string(kMinimal) +
+                           "[[geometry]]\n"
+                           "type = \"box\"\n"
+                           "[[geometry]]\n"
+                           "type = \"plane\"\n"
+                           "  radius = 0.5\n";
+  expect_error(text, {"t.toml:7:3: geometry[1].radius is not a key of a plane", "point, normal"});
+  expect_error("[[emitter]]\ncount = 5\nshape = \"disk\"\nsize = [1, 1, 1]\n",
+               {"t.toml:4:1: emitter[0].size is not a key of a pour with shape = \"disk\""});
+  expect_error("[[emitter]]\ntype = \"block\"\ncount = 5\nrate = 10\n",
+               {"t.toml:4:1: emitter[0].rate is not a key of a block emitter"});
+}
+
+TEST(SceneLoader, AbsurdCountIsRefusedWithTheLimit) {
+  expect_error("[[emitter]]\ncount = 5000000000\n",
+               {"t.toml:2:1: emitter[0].count = 5000000000 is outside [1, 2000000000]"});
+  expect_error("[[emitter]]\ncount = 0\n", {"t.toml:2:1: emitter[0].count = 0 is outside [1, "});
+}
+
+TEST(SceneLoader, GeometryChecks) {
+  expect_error(std::string(kMinimal) + "[[geometry]]\nnormal = [0, 0, 0]\n",
+               {"t.toml:4:1: geometry[0].normal = [0, 0, 0]: expected a non-zero normal"});
+  expect_error(std::string(kMinimal) + "[[geometry]]\ntype = \"box\"\nsize = [1, -2, 1]\n",
+               {"t.toml:5:12: geometry[0].size[1] = -2 is not > 0"});
+  expect_error(std::string(kMinimal) + "[[geometry]]\ntype = \"cone\"\n",
+               {"t.toml:4:1: geometry[0].type = \"cone\" is not one of \"plane\", \"box\""});
+}
+
+TEST(SceneLoader, OverridesApplyBeforeValidation) {
+  const std::string text =
+      std::string(kMinimal) + "[material]\nfriction = 0.5\n[simulation]\nmode = \"dem\"\n";
+  const SceneConfig c =
+      load_scene_from_string(text, "t.toml",
+                             {{"material.friction", "0.9"},
+                              {"simulation.mode", "surface"},  // a bare word is taken as a string
+                              {"simulation.gravity", "[0, 0, -1]"},
+                              {"emitter[0].rate", "50"},
+                              {"emitter.0.count", "7"},
+                              {"output.fps", "60"}});  // [output] is not in the file: created
+  EXPECT_EQ(c.material.friction, 0.9);
+  EXPECT_EQ(c.simulation.mode, Mode::Surface);
+  EXPECT_EQ(c.simulation.gravity, Vec3(0, 0, -1));
+  EXPECT_EQ(c.emitters[0].rate, 50.0);
+  EXPECT_EQ(c.emitters[0].count, 7);
+  EXPECT_EQ(c.output.fps, 60.0);
+}
+
+TEST(SceneLoader, OverriddenValuesAreValidatedAndNamed) {
+  const std::string text = std::string(kMinimal) + "[material]\nrestitution = 0.5\n";
+  EXPECT_EQ(error_of(text, {{"material.restitution", "1.4"}}),
+            "--set material.restitution: material.restitution = 1.4 is outside (0, 1]");
+  expect_error(text, {"--set simulation.gravity: simulation.gravity[2] = nan is not a finite"},
+               {{"simulation.gravity", "[0, 0, nan]"}});
+  expect_error(text,
+               {"--set emitter[0].count: emitter[0].count: expected an integer, got a string"},
+               {{"emitter[0].count", "many"}});
+}
+
+TEST(SceneLoader, OverrideOfUnknownKeyOrMissingTableIsAnError) {
+  expect_error(kMinimal, {"--set material.frction: material.frction is not a key of [material]"},
+               {{"material.frction", "0.5"}});
+  expect_error(kMinimal, {"--set emitter.5.rate: ", "emitter[5]", "(it has 1)"},
+               {{"emitter.5.rate", "10"}});
+  expect_error(kMinimal, {"--set materail.friction: the scene has no table materail"},
+               {{"materail.friction", "0.5"}});
+  expect_error(kMinimal, {"--set geometry.0.radius: the scene has no table geometry"},
+               {{"geometry.0.radius", "1"}});
+  expect_error(kMinimal, {"--set emitter..rate: malformed key"}, {{"emitter..rate", "1"}});
+}
+
+TEST(SceneLoader, ParseOverrideSplitsAtTheFirstEquals) {
+  const Override o = parse_override("scene.description = a=b ");
+  EXPECT_EQ(o.key, "scene.description");
+  EXPECT_EQ(o.value, "a=b");
+  EXPECT_THROW(parse_override("abc"), InputError);
+  EXPECT_THROW(parse_override("=1"), InputError);
+}
+
+TEST(SceneLoader, LoadSceneReadsAFileAndNamesAMissingOne) {
+  const std::filesystem::path dir =
+      std::filesystem::path(testing::TempDir()) / "sandflow_scene_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "heap.toml").string();
+  {
+    std::ofstream out(path);
+    out << kMinimal << "[material]\nfriction = 0.3\n";
+  }
+  const SceneConfig c = load_scene(path, {{"material.friction", "0.4"}});
+  EXPECT_EQ(c.path, path);
+  EXPECT_EQ(c.name, "heap");
+  EXPECT_EQ(c.material.friction, 0.4);
+
+  const std::string missing = (dir / "nope.toml").string();
+  try {
+    load_scene(missing);
+    FAIL() << "a missing file must raise InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), missing + ": cannot open scene file");
+  }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace sandflow
