@@ -124,7 +124,15 @@ grep -q 'contact/atom' <<<"$lmp_styles" || die "$LMP has no compute contact/atom
 
 MPIRUN=(mpirun)
 [[ $(id -u) -eq 0 ]] && MPIRUN+=(--allow-run-as-root)
-MPIRUN+=(--oversubscribe)
+# Open MPI counts slots as physical cores; where it sees fewer than 2 it
+# refuses -np 2 unless told --oversubscribe (which also makes waiting ranks
+# yield the CPU, so use it only when needed).
+if ! "${MPIRUN[@]}" -np 2 true >/dev/null 2>&1; then
+  MPIRUN+=(--oversubscribe)
+  "${MPIRUN[@]}" -np 2 true >/dev/null 2>&1 \
+    || die "'${MPIRUN[*]} -np 2 true' fails: cannot start 2 MPI processes"
+  note "mpirun needs --oversubscribe here (fewer than 2 cores seen)"
+fi
 
 # -------------------------------------------------------------- sandflow setup
 if [[ ! -x "$BENCH_BED" ]]; then

@@ -72,25 +72,29 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry) {
   // wall candidates: obstacles within reach of each grain, history carried by grain id
   const Real skin = params_.skin;
   const std::size_t n_obs = geometry.size();
+  auto near = [&](std::size_t i, std::size_t k) {
+    return geometry.obstacles()[k].solid->closest(grains.x[i]).distance < grains.r[i] + skin;
+  };
   walls_.start.assign(n + 1, 0);
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i) {
     std::uint32_t c = 0;
-    for (std::size_t k = 0; k < n_obs; ++k)
-      c += geometry.obstacles()[k].solid->closest(grains.x[i]).distance < grains.r[i] + skin;
-    walls_.start[i + 1] = walls_.start[i] + c;
+    for (std::size_t k = 0; k < n_obs; ++k) c += near(i, k);
+    walls_.start[i + 1] = c;
   }
+  for (std::size_t i = 0; i < n; ++i) walls_.start[i + 1] += walls_.start[i];
   const std::size_t wslots = walls_.start[n];
   walls_.obstacle.resize(wslots);
   walls_.xi.assign(wslots, Vec3{});
   walls_.psi.assign(wslots, Vec3{});
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i) {
     std::uint32_t s = walls_.start[i];
     const GrainId id = grains.id[i];
     const std::uint32_t oi =
         old_walls_.start.empty() || id >= slot_of_id_.size() ? kNoSlot : slot_of_id_[id];
     for (std::uint32_t k = 0; k < n_obs; ++k) {
-      if (geometry.obstacles()[k].solid->closest(grains.x[i]).distance >= grains.r[i] + skin)
-        continue;
+      if (!near(i, k)) continue;
       walls_.obstacle[s] = k;
       if (oi != kNoSlot)
         for (std::uint32_t os = old_walls_.start[oi]; os < old_walls_.start[oi + 1]; ++os)

@@ -1,28 +1,58 @@
 #include "dem/neighbor_list.hpp"
 
 #include <algorithm>
-#include <bit>
+#include <omp.h>
 
 namespace sandflow {
 
-void CellGrid::build(const std::vector<Vec3>& x, Real cell) {
-  cell_ = cell;
-  inv_cell_ = 1.0 / cell;
+void CellGrid::build(const std::vector<Vec3>& x, Real min_cell) {
   const std::size_t n = x.size();
-  // about two buckets per grain keeps collisions rare
-  const std::size_t buckets = std::bit_ceil(std::max<std::size_t>(64, 2 * n));
-  mask_ = static_cast<std::uint32_t>(buckets - 1);
-
-  std::vector<std::uint32_t> b(n);
-  bucket_start_.assign(buckets + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    b[i] = bucket(coord(x[i].x), coord(x[i].y), coord(x[i].z));
-    ++bucket_start_[b[i] + 1];
+  const std::size_t max_cells = std::max<std::size_t>(4096, 4 * n);
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};
+  if (n > 0) {
+    lo = hi = x[0];
+    for (const Vec3& p : x) lo = min(lo, p), hi = max(hi, p);
   }
-  for (std::size_t k = 0; k < buckets; ++k) bucket_start_[k + 1] += bucket_start_[k];
+  auto cells_for = [&](const Vec3& l, const Vec3& h, Real c) {
+    double cells = 1;
+    for (int a = 0; a < 3; ++a) cells *= std::floor((h[a] - l[a]) / c) + 1;
+    return cells;
+  };
+  if (n > 100 && cells_for(lo, hi, min_cell) > static_cast<double>(max_cells)) {
+    // a few far-away grains: grid the central 99 % and clamp the rest into the border cells
+    std::vector<Real> axis(n);
+    for (int a = 0; a < 3; ++a) {
+      for (std::size_t i = 0; i < n; ++i) axis[i] = x[i][a];
+      const std::size_t k_lo = n / 200, k_hi = n - 1 - n / 200;
+      std::nth_element(axis.begin(), axis.begin() + k_lo, axis.end());
+      lo[a] = axis[k_lo];
+      std::nth_element(axis.begin(), axis.begin() + k_hi, axis.end());
+      hi[a] = axis[k_hi];
+    }
+  }
+  // coarser cells when even that box needs too many
+  cell_ = min_cell;
+  const Vec3 ext = hi - lo;
+  const double volume = (ext.x + min_cell) * (ext.y + min_cell) * (ext.z + min_cell);
+  if (cells_for(lo, hi, cell_) > static_cast<double>(max_cells))
+    cell_ = std::max(min_cell, std::cbrt(volume / static_cast<double>(max_cells)) * 1.01);
+  inv_cell_ = 1.0 / cell_;
+  lo_ = lo;
+  for (int a = 0; a < 3; ++a)
+    dims_[a] = std::max(1, static_cast<int>(std::floor(ext[a] * inv_cell_)) + 1);
+
+  // counting sort of the grains by cell
+  const std::size_t cells = static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2];
+  std::vector<std::uint32_t> c(n);
+  cell_start_.assign(cells + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    c[i] = static_cast<std::uint32_t>(index(coord(x[i].x, 0), coord(x[i].y, 1), coord(x[i].z, 2)));
+    ++cell_start_[c[i] + 1];
+  }
+  for (std::size_t k = 0; k < cells; ++k) cell_start_[k + 1] += cell_start_[k];
   items_.resize(n);
-  std::vector<std::uint32_t> fill(bucket_start_.begin(), bucket_start_.end() - 1);
-  for (std::size_t i = 0; i < n; ++i) items_[fill[b[i]]++] = static_cast<std::uint32_t>(i);
+  std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) items_[fill[c[i]]++] = static_cast<std::uint32_t>(i);
 }
 
 namespace {
@@ -55,53 +85,80 @@ void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& gr
     return norm2(x[i] - x[j]) < cut * cut;
   };
 
-  // pass 1: count, pass 2: fill, both in grain order so the list is the same for any thread count
+  // One pass: each thread lists a contiguous range of grains into its own buffer; the buffers
+  // are then joined in thread order, so the list is in grain order for any thread count.
   out.start.assign(n + 1, 0);
-#pragma omp parallel for schedule(dynamic, 256) if (n >= kParallelMinGrains)
-  for (std::size_t i = 0; i < n; ++i) {
-    std::uint32_t c = 0;
-    grid.for_each_near(x[i], [&](std::uint32_t j) { c += listed(i, j); });
-    out.start[i + 1] = c;
+  std::vector<std::vector<std::uint32_t>> buffers;
+#pragma omp parallel if (n >= kParallelMinGrains)
+  {
+#pragma omp single
+    buffers.resize(omp_get_num_threads());
+    std::vector<std::uint32_t>& buf = buffers[omp_get_thread_num()];
+    buf.clear();
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t first = buf.size();
+      grid.for_each_near(x[i], [&](std::uint32_t j) {
+        if (listed(i, j)) buf.push_back(j);
+      });
+      // ascending j: a canonical order, independent of how the grid visits cells
+      std::sort(buf.begin() + first, buf.end());
+      out.start[i + 1] = static_cast<std::uint32_t>(buf.size() - first);
+    }
   }
   for (std::size_t i = 0; i < n; ++i) out.start[i + 1] += out.start[i];
   const std::size_t slots = out.start[n];
   out.j.resize(slots);
-#pragma omp parallel for schedule(dynamic, 256) if (n >= kParallelMinGrains)
-  for (std::size_t i = 0; i < n; ++i) {
-    std::uint32_t s = out.start[i];
-    grid.for_each_near(x[i], [&](std::uint32_t j) {
-      if (listed(i, j)) out.j[s++] = j;
-    });
-    // ascending j: a canonical order, independent of how the grid visits cells
-    std::sort(out.j.begin() + out.start[i], out.j.begin() + out.start[i + 1]);
+  std::size_t offset = 0;
+  for (const auto& buf : buffers) {
+    std::copy(buf.begin(), buf.end(), out.j.begin() + offset);
+    offset += buf.size();
   }
 
-  // history, carried over by grain id (the tangential one changes sign when the pair flips)
-  out.xi.assign(slots, Vec3{});
-  out.psi.assign(rolling ? slots : 0, Vec3{});
-  const bool have_old = !old.start.empty();
+  // history, carried over by grain id (the tangential one changes sign when the pair flips);
+  // every slot is written, so the arrays need no clearing first
+  out.xi.resize(slots);
+  out.psi.resize(rolling ? slots : 0);
+  const std::size_t old_n = old.start.empty() ? 0 : old.start.size() - 1;
   auto old_slot = [&](GrainId id) {
     return id < old_slot_of_id.size() ? old_slot_of_id[id] : kNoSlot;
   };
+  // the common case: no grain moved to another slot since the last build (new ones appended)
+  bool same_slots = true;
+  for (std::size_t i = 0; i < std::min(n, old_n) && same_slots; ++i)
+    same_slots = old_slot(grains.id[i]) == i;
+  const bool old_rolling = !old.psi.empty();
 #pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i) {
-    if (!have_old) continue;
+    auto carry = [&](std::uint32_t s, std::uint32_t os, bool flipped) {
+      out.xi[s] = os == kNoSlot ? Vec3{} : (flipped ? -old.xi[os] : old.xi[os]);
+      if (rolling) out.psi[s] = os == kNoSlot || !old_rolling ? Vec3{} : old.psi[os];
+    };
+    if (same_slots) {
+      // both rows are sorted by j: walk them together
+      std::uint32_t os = i < old_n ? old.start[i] : 0, oe = i < old_n ? old.start[i + 1] : 0;
+      for (std::uint32_t s = out.start[i]; s < out.start[i + 1]; ++s) {
+        while (os < oe && old.j[os] < out.j[s]) ++os;
+        carry(s, os < oe && old.j[os] == out.j[s] ? os : kNoSlot, false);
+      }
+      continue;
+    }
     const std::uint32_t oi = old_slot(grains.id[i]);
-    if (oi == kNoSlot) continue;
     for (std::uint32_t s = out.start[i]; s < out.start[i + 1]; ++s) {
-      const std::uint32_t oj = old_slot(grains.id[out.j[s]]);
-      if (oj == kNoSlot) continue;
+      const std::uint32_t oj = oi == kNoSlot ? kNoSlot : old_slot(grains.id[out.j[s]]);
+      if (oj == kNoSlot) {
+        carry(s, kNoSlot, false);
+        continue;
+      }
       const bool flipped = oj < oi;
-      const std::uint32_t os = flipped ? find_old_slot(old, oj, oi) : find_old_slot(old, oi, oj);
-      if (os == kNoSlot) continue;
-      out.xi[s] = flipped ? -old.xi[os] : old.xi[os];
-      if (rolling && !old.psi.empty()) out.psi[s] = old.psi[os];
+      carry(s, flipped ? find_old_slot(old, oj, oi) : find_old_slot(old, oi, oj), flipped);
     }
   }
 
-  out.force.assign(slots, Vec3{});
-  out.torque_i.assign(slots, Vec3{});
-  out.torque_j.assign(slots, Vec3{});
+  // per-step results: overwritten by every force pass before they are read
+  out.force.resize(slots);
+  out.torque_i.resize(slots);
+  out.torque_j.resize(slots);
 
   // reverse index: for each grain, the slots where it is the second grain, in ascending order
   out.rev_start.assign(n + 1, 0);

@@ -1,5 +1,5 @@
-// Neighbour search (DESIGN.md §3): a uniform cell grid, hashed so that grains anywhere in space
-// cost nothing extra, builds Verlet half lists (pairs i < j closer than r_i + r_j + skin) that
+// Neighbour search (DESIGN.md §3): a uniform cell grid over the grains' extent builds Verlet half
+// lists (pairs i < j closer than r_i + r_j + skin) that
 // stay valid until some grain has moved more than half the skin. Contact history lives beside
 // the list, one entry per pair slot, and is carried across rebuilds by grain id.
 //
@@ -39,26 +39,36 @@ struct WallList {
   std::vector<Vec3> xi, psi;            ///< history per slot
 };
 
-/// The hashed cell grid over a set of grains.
+/// A uniform cell grid over a set of grains, cells in row-major (z, y, x) order. Its box is the
+/// grains' bounding box, or, when that would need too many cells (a few grains far away), the box
+/// holding the central 99 % of them: grains outside are clamped into the border cells, which keeps
+/// every pair within one cell of each other (clamping never separates neighbours) and only costs
+/// extra distance checks for the few outliers.
 class CellGrid {
  public:
-  /// Files grains by cell of side `cell` (>= the largest pair cutoff).
-  void build(const std::vector<Vec3>& x, Real cell);
+  /// Files grains by cell of side >= `min_cell` (the largest pair cutoff).
+  void build(const std::vector<Vec3>& x, Real min_cell);
 
-  /// Calls f(j) for every grain j in the 27 cells around p (each grain once).
+  /// Calls f(j) for every grain j in the 27 cells around p.
   template <class F>
   void for_each_near(const Vec3& p, F&& f) const;
 
   Real cell_size() const { return cell_; }
 
  private:
-  std::uint32_t bucket(std::int64_t cx, std::int64_t cy, std::int64_t cz) const;
-  std::int64_t coord(Real v) const { return static_cast<std::int64_t>(std::floor(v * inv_cell_)); }
+  int coord(Real v, int axis) const {
+    const Real c = std::floor((v - lo_[axis]) * inv_cell_);
+    return c < 0 ? 0 : (c >= dims_[axis] ? dims_[axis] - 1 : static_cast<int>(c));
+  }
+  std::size_t index(int cx, int cy, int cz) const {
+    return (static_cast<std::size_t>(cz) * dims_[1] + cy) * dims_[0] + cx;
+  }
 
+  Vec3 lo_;
   Real cell_ = 1, inv_cell_ = 1;
-  std::uint32_t mask_ = 0;
-  std::vector<std::uint32_t> bucket_start_;  ///< size buckets+1
-  std::vector<std::uint32_t> items_;         ///< grain indices, grouped by bucket
+  int dims_[3] = {1, 1, 1};
+  std::vector<std::uint32_t> cell_start_;  ///< cells+1 offsets into items_
+  std::vector<std::uint32_t> items_;       ///< grain indices, grouped by cell
 };
 
 /// Builds the half list of `grains` for the given skin, carrying history over from `old` (whose
@@ -80,27 +90,17 @@ constexpr std::size_t kParallelMinGrains = 4096;
 // ---------------------------------------------------------------------------------------------
 template <class F>
 void CellGrid::for_each_near(const Vec3& p, F&& f) const {
-  const std::int64_t cx = coord(p.x), cy = coord(p.y), cz = coord(p.z);
-  std::uint32_t seen[27];
-  int n_seen = 0;
-  for (std::int64_t dz = -1; dz <= 1; ++dz)
-    for (std::int64_t dy = -1; dy <= 1; ++dy)
-      for (std::int64_t dx = -1; dx <= 1; ++dx) {
-        const std::uint32_t b = bucket(cx + dx, cy + dy, cz + dz);
-        // two cells may share a bucket: visit each bucket once
-        bool dup = false;
-        for (int k = 0; k < n_seen; ++k) dup |= (seen[k] == b);
-        if (dup) continue;
-        seen[n_seen++] = b;
-        for (std::uint32_t k = bucket_start_[b]; k < bucket_start_[b + 1]; ++k) f(items_[k]);
-      }
-}
-
-inline std::uint32_t CellGrid::bucket(std::int64_t cx, std::int64_t cy, std::int64_t cz) const {
-  const auto h = static_cast<std::uint64_t>(cx) * 73856093ULL ^
-                 static_cast<std::uint64_t>(cy) * 19349663ULL ^
-                 static_cast<std::uint64_t>(cz) * 83492791ULL;
-  return static_cast<std::uint32_t>(h & mask_);
+  const int cx = coord(p.x, 0), cy = coord(p.y, 1), cz = coord(p.z, 2);
+  const int x0 = cx > 0 ? cx - 1 : 0, x1 = cx + 1 < dims_[0] ? cx + 1 : cx;
+  for (int z = cz - 1; z <= cz + 1; ++z) {
+    if (z < 0 || z >= dims_[2]) continue;
+    for (int y = cy - 1; y <= cy + 1; ++y) {
+      if (y < 0 || y >= dims_[1]) continue;
+      // the three cells along x are contiguous
+      const std::uint32_t end = cell_start_[index(x1, y, z) + 1];
+      for (std::uint32_t k = cell_start_[index(x0, y, z)]; k < end; ++k) f(items_[k]);
+    }
+  }
 }
 
 }  // namespace sandflow
