@@ -81,17 +81,57 @@ MU=0.5             # Coulomb friction, pairs and walls
 DT=1e-5            # time step [s]
 SKIN=0.0004        # neighbor skin = 0.2 d [m]
 
-# kt = 2/7 kn; beta = -ln e / sqrt(pi^2 + ln^2 e);
-# sandflow's dashpot c_n = 2 beta sqrt(m_eff kn), LAMMPS's m_eff gamma_n, so
-# gamma_n = 2 beta sqrt(kn / m_eff): m_eff = m/2 for two equal grains,
-# m_eff = m against a wall. gamma_t = gamma_n / 2 (sandflow: c_t = c_n / 2).
-read -r KT GN GT GNW GTW MASS BETA < <(awk -v d="$D" -v rho="$RHO" -v kn="$KN" -v e="$REST" 'BEGIN {
-  pi = atan2(0, -1); le = log(e)
-  m = rho * pi / 6 * d * d * d
-  beta = -le / sqrt(pi * pi + le * le)
-  gn = 2 * beta * sqrt(kn / (m / 2)); gnw = 2 * beta * sqrt(kn / m)
-  printf "%.12g %.12g %.12g %.12g %.12g %.12g %.12g\n", kn * 2 / 7, gn, gn / 2, gnw, gnw / 2, m, beta
+# sandflow's normal dashpot is c_n = 2 beta sqrt(m_eff kn), and its normal
+# force is clamped at zero. Its beta is not the textbook
+# -ln e / sqrt(pi^2 + ln^2 e) (that gives e only for the unclamped law: the
+# clamp lets grains leave faster) but the beta for which a head-on collision
+# under the clamped law has restitution e: damping_beta() in
+# src/dem/contact.cpp, which bisects over an RK4 integration of
+# delta'' = -(delta + 2 beta delta') while the force is positive.
+# sandflow_beta E: the same computation, step for step, in awk.
+sandflow_beta() {
+  awk -v e="$1" '
+    function acc(d, u, beta,   f) { f = d + 2 * beta * u; return f > 0 ? -f : 0 }
+    function restitution(beta,   h, d, u, k, k1d, k1u, k2d, k2u, k3d, k3u, k4d, k4u) {
+      h = 1e-4; d = 0; u = 1
+      for (k = 0; k < 10000000; k++) {
+        if (u < 0 && (d + 2 * beta * u <= 0 || d <= 0)) return -u
+        k1d = u;              k1u = acc(d, u, beta)
+        k2d = u + h / 2 * k1u; k2u = acc(d + h / 2 * k1d, u + h / 2 * k1u, beta)
+        k3d = u + h / 2 * k2u; k3u = acc(d + h / 2 * k2d, u + h / 2 * k2u, beta)
+        k4d = u + h * k3u;     k4u = acc(d + h * k3d, u + h * k3u, beta)
+        d += h / 6 * (k1d + 2 * k2d + 2 * k3d + k4d)
+        u += h / 6 * (k1u + 2 * k2u + 2 * k3u + k4u)
+      }
+      return 0
+    }
+    BEGIN {
+      if (e >= 1) { print 0; exit }
+      lo = 0; hi = 50
+      for (it = 0; it < 40; it++) {
+        mid = 0.5 * (lo + hi)
+        if (restitution(mid) > e) lo = mid; else hi = mid
+      }
+      printf "%.12g\n", 0.5 * (lo + hi)
+    }'
+}
+
+# lammps_damping BETA: sets GN GT GNW GTW, LAMMPS's damping rates [1/s].
+# LAMMPS writes the dashpot as m_eff gamma v, so gamma_n = 2 beta sqrt(kn / m_eff)
+# with m_eff = m/2 for two equal grains and m_eff = m against a wall (as in
+# sandflow); gamma_t = gamma_n / 2 (sandflow: c_t = c_n / 2).
+lammps_damping() {
+  read -r GN GT GNW GTW < <(awk -v m="$MASS" -v kn="$KN" -v beta="$1" 'BEGIN {
+    gn = 2 * beta * sqrt(kn / (m / 2)); gnw = 2 * beta * sqrt(kn / m)
+    printf "%.12g %.12g %.12g %.12g\n", gn, gn / 2, gnw, gnw / 2
+  }')
+}
+
+read -r KT MASS < <(awk -v d="$D" -v rho="$RHO" -v kn="$KN" 'BEGIN {
+  printf "%.12g %.12g\n", kn * 2 / 7, rho * atan2(0, -1) / 6 * d * d * d
 }')
+BETA=$(sandflow_beta "$REST")
+BETA_FROM="computed here as sandflow's damping_beta() does"
 
 # ------------------------------------------------------------- LAMMPS setup
 SUDO=()
@@ -184,7 +224,9 @@ run_lammps() {
   local np=$1
   local log="$CACHE/lammps_${LABEL}_np${np}.log"
   local cmd=()
-  if [[ $np -eq 1 ]]; then cmd=("$LMP"); else cmd=("${MPIRUN[@]}" -np "$np" "$LMP"); fi
+  # 1 process through mpirun too, so both runs get the same launcher and
+  # core binding
+  cmd=("${MPIRUN[@]}" -np "$np" "$LMP")
   cmd+=(-in "$LMP_INPUT" -log "$log" -screen none
         -var data "$ROOT/$DATA" -var kn "$KN" -var kt "$KT"
         -var gn "$GN" -var gt "$GT" -var gnw "$GNW" -var gtw "$GTW"
@@ -213,14 +255,24 @@ run_lammps() {
 # ------------------------------------------------------------------ the runs
 # Timings are only meaningful on an otherwise idle machine (2 cores here):
 # a compile running alongside can slow the 2-process LAMMPS run several-fold.
-if [[ -r /proc/loadavg ]]; then
-  load=$(cut -d' ' -f1 /proc/loadavg)
-  if awk -v l="$load" 'BEGIN {exit !(l > 0.5)}'; then
-    note "WARNING: load average is $load: other work is running, timings will be unreliable"
+# busy_percent: share of all CPU time spent busy over the next 2 seconds
+busy_percent() {
+  local a b
+  a=$(head -n1 /proc/stat); sleep 2; b=$(head -n1 /proc/stat)
+  awk -v a="$a" -v b="$b" 'BEGIN {
+    na = split(a, x); split(b, y); tot = 0
+    for (i = 2; i <= na; i++) tot += y[i] - x[i]
+    idle = (y[5] - x[5]) + (y[6] - x[6])
+    printf "%d\n", (tot > 0 ? 100 * (tot - idle) / tot : 0)
+  }'
+}
+if [[ -r /proc/stat ]]; then
+  busy=$(busy_percent)
+  if (( busy > 10 )); then
+    note "WARNING: the CPUs are ${busy}% busy before the benchmark starts: other work is running, timings will be unreliable"
   fi
 fi
 note "bed: $GRAINS grains, d=$D m, rho=$RHO kg/m^3, kn=$KN N/m, kt=$KT N/m, e=$REST, mu=$MU, dt=$DT s; timed steps: $STEPS"
-note "LAMMPS damping: gamma_n=$GN gamma_t=$GT (pairs), $GNW $GTW (walls) [1/s]; beta=$BETA, m=$MASS kg"
 [[ -f "$ROOT/$BED" ]] || note "no cached bed $BED: bench_bed builds and settles it first (minutes)"
 
 # The first sandflow run (2 threads: fastest if the bed must be settled) also
@@ -232,6 +284,21 @@ natoms=$(awk '$2 == "atoms" {print $1; exit}' "$ROOT/$DATA")
 [[ "$natoms" == "$GRAINS" ]] || die "$DATA has '${natoms:-?}' atoms, expected $GRAINS"
 run_sandflow 1
 SF1=("$SF_SECONDS" "$SF_GSS" "$SF_CPG")
+
+# If bench_bed states the beta it used (a "beta=X" word on any line), that is
+# the one LAMMPS gets.
+sf_beta=$(grep -ohE '(^|[[:space:]])beta=[-+0-9.eE]+' "$CACHE/sandflow_${LABEL}_t2.log" \
+            "$CACHE/sandflow_${LABEL}_t1.log" | tail -n1 | sed 's/.*beta=//' || true)
+if [[ -n "$sf_beta" ]]; then
+  if ! awk -v a="$sf_beta" -v b="$BETA" 'BEGIN {exit !((a - b) ^ 2 <= (1e-6 * b) ^ 2)}'; then
+    note "WARNING: bench_bed says beta=$sf_beta, this script computed $BETA: using bench_bed's"
+  fi
+  BETA=$sf_beta
+  BETA_FROM="as reported by bench_bed"
+fi
+lammps_damping "$BETA"
+note "sandflow beta=$BETA ($BETA_FROM), m=$MASS kg"
+note "LAMMPS damping rates [1/s]: pairs gamma_n=$GN gamma_t=$GT, walls gamma_n=$GNW gamma_t=$GTW"
 
 run_lammps 1
 LM1=("$LM_SECONDS" "$LM_GSS" "$LM_CPG")

@@ -54,20 +54,29 @@ struct ContactHistory {
   Vec3 psi;  ///< accumulated rolling displacement [m]
 };
 
+/// Damping coefficient of the normal dashpot: c_n = 2 sqrt(m_eff k_n) beta [kg/s].
+inline Real normal_damping(const ContactParams& p, Real m_eff) {
+  return 2.0 * std::sqrt(m_eff * p.k_n) * p.beta;
+}
+
 struct ContactGeometry {
   Vec3 n;          ///< unit normal, from j to i
   Real delta;      ///< overlap > 0 [m]
   Real arm_i;      ///< distance from i's centre to the contact point [m]
   Real arm_j;      ///< distance from j's centre to the contact point (0 for a wall) [m]
-  Real m_eff;      ///< effective mass [kg]
+  Real c_n;        ///< normal damping coefficient, normal_damping(p, m_eff) [kg/s]
   Real r_eff;      ///< effective rolling radius [m]
 };
 
+/// The result, kept compact for the pair kernel: the torques follow from q and t_roll.
 struct ContactForce {
   Vec3 force_i;    ///< force on i (on j: the opposite) [N]
-  Vec3 torque_i;   ///< [N m]
-  Vec3 torque_j;   ///< [N m]
+  Vec3 q;          ///< n x F_t: the tangential torque on a body is -arm * q [N]
+  Vec3 t_roll;     ///< rolling torque on i (on j: the opposite) [N m]
   Real f_n;        ///< normal force magnitude (>= 0) [N]
+
+  Vec3 torque_i(const ContactGeometry& g) const { return q * (-g.arm_i) + t_roll; }
+  Vec3 torque_j(const ContactGeometry& g) const { return q * (-g.arm_j) - t_roll; }
 };
 
 /// Rotates a history vector into the plane normal to n, keeping its length.
@@ -93,8 +102,9 @@ inline Vec3 capped_spring(Vec3& s, const Vec3& rate, Real k, Real c, Real cap, R
   return f;
 }
 
-/// The full law. v_rel = v_i - v_j (centres); w_i, w_j angular velocities. With rolling = false the
-/// rolling part is skipped (a compile-time switch: the benchmark bed has no rolling resistance).
+/// The full law. v_rel = v_i - v_j (centres); w_i, w_j angular velocities. With kRolling = false
+/// the rolling part is skipped (a compile-time switch: without rolling resistance it costs
+/// nothing).
 template <bool kRolling>
 inline ContactForce contact_force(const ContactParams& p, const ContactGeometry& g,
                                   const Vec3& v_rel, const Vec3& w_i, const Vec3& w_j,
@@ -106,31 +116,25 @@ inline ContactForce contact_force(const ContactParams& p, const ContactGeometry&
   const Vec3 v_t = v_c - n * v_n;
 
   // normal: spring-dashpot, never pulling
-  const Real c_n = 2.0 * std::sqrt(g.m_eff * p.k_n) * p.beta;
-  Real f_n = p.k_n * g.delta - c_n * v_n;
+  Real f_n = p.k_n * g.delta - g.c_n * v_n;
   if (f_n < 0) f_n = 0;
 
   // tangential: history spring with Coulomb cap
-  const Real c_t = p.c_t_ratio * c_n;
+  const Real c_t = p.c_t_ratio * g.c_n;
   h.xi = rotate_into_plane(h.xi, n);
   const Vec3 f_t = capped_spring(h.xi, v_t, p.k_t, c_t, p.mu * f_n, dt);
 
   ContactForce out;
   out.f_n = f_n;
   out.force_i = n * f_n + f_t;
-  const Vec3 nxft = cross(n, f_t);
-  out.torque_i = nxft * (-g.arm_i);
-  out.torque_j = nxft * (-g.arm_j);
-
+  out.q = cross(n, f_t);
   if constexpr (kRolling) {
     // rolling: relative rolling velocity of the surfaces, spring-dashpot capped at mu_r R F_n
     const Vec3 v_r = cross(w_i - w_j, n) * g.r_eff;
     h.psi = rotate_into_plane(h.psi, n);
     const Real c_r = p.c_r_ratio * c_t;
     const Vec3 f_r = capped_spring(h.psi, v_r, p.k_r, c_r, p.mu_r * f_n, dt);
-    const Vec3 t_r = cross(n, f_r) * g.r_eff;
-    out.torque_i += t_r;
-    out.torque_j -= t_r;
+    out.t_roll = cross(n, f_r) * g.r_eff;
   }
   return out;
 }

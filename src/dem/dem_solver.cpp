@@ -68,6 +68,13 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry) {
   std::swap(pairs_, old_pairs_);
   std::swap(walls_, old_walls_);
   build_pair_list(grains, params_.skin, rolling_, grid_, old_pairs_, slot_of_id_, pairs_);
+  // the normal damping of a pair depends on its masses only: computed once per list
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::uint32_t s = pairs_.start[i]; s < pairs_.start[i + 1]; ++s) {
+      const std::uint32_t j = pairs_.j[s];
+      pairs_.c_n[s] = normal_damping(cp, grains.m[i] * grains.m[j] / (grains.m[i] + grains.m[j]));
+    }
 
   // wall candidates: obstacles within reach of each grain, history carried by grain id
   const Real skin = params_.skin;
@@ -124,7 +131,6 @@ void DemSolver::pair_forces(const Grains& grains, Real dt) {
   const Vec3* v = grains.v.data();
   const Vec3* w = grains.w.data();
   const Real* r = grains.r.data();
-  const Real* m = grains.m.data();
   const GrainState* st = grains.state.data();
   std::int64_t contacts = 0;
   Real max_ov = counters_.max_overlap_rel;
@@ -132,40 +138,43 @@ void DemSolver::pair_forces(const Grains& grains, Real dt) {
 #pragma omp parallel for schedule(static) reduction(+ : contacts) reduction(max : max_ov) \
     if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 xi = x[i];
-    const Real ri = r[i];
+    const Vec3 x_i = x[i];
+    const Real r_i = r[i];
+    const bool active_i = st[i] == GrainState::Active;
     for (std::uint32_t s = pl.start[i]; s < pl.start[i + 1]; ++s) {
       const std::uint32_t j = pl.j[s];
-      const Vec3 d = xi - x[j];
+      const Vec3 d = x_i - x[j];
       const Real dist2 = norm2(d);
-      const Real rsum = ri + r[j];
-      const bool frozen = st[i] != GrainState::Active && st[j] != GrainState::Active;
-      if (dist2 >= rsum * rsum || frozen) {
-        // apart: the contact (and its memory) is gone
-        pl.xi[s] = {};
-        if constexpr (kRolling) pl.psi[s] = {};
-        pl.force[s] = {};
-        pl.torque_i[s] = {};
-        pl.torque_j[s] = {};
+      const Real rsum = r_i + r[j];
+      if (dist2 >= rsum * rsum || (!active_i && st[j] != GrainState::Active)) {
+        // apart: the contact and its memory are gone (written only when it just ended)
+        if (pl.touch[s]) {
+          pl.touch[s] = 0;
+          pl.xi[s] = {};
+          if constexpr (kRolling) pl.psi[s] = {};
+        }
         continue;
       }
       const Real dist = std::sqrt(dist2);
       ContactGeometry g;
-      g.n = d / dist;
+      g.n = d * (1.0 / dist);
       g.delta = rsum - dist;
-      g.arm_i = ri;
+      g.arm_i = r_i;
       g.arm_j = r[j];
-      g.m_eff = m[i] * m[j] / (m[i] + m[j]);
-      g.r_eff = ri * r[j] / rsum;
+      g.c_n = pl.c_n[s];
+      g.r_eff = r_i * r[j] / rsum;
       ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
       const ContactForce cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, dt);
+      pl.touch[s] = 1;
       pl.xi[s] = h.xi;
-      if constexpr (kRolling) pl.psi[s] = h.psi;
       pl.force[s] = cf.force_i;
-      pl.torque_i[s] = cf.torque_i;
-      pl.torque_j[s] = cf.torque_j;
+      pl.q[s] = cf.q;
+      if constexpr (kRolling) {
+        pl.psi[s] = h.psi;
+        pl.t_roll[s] = cf.t_roll;
+      }
       ++contacts;
-      max_ov = std::max(max_ov, g.delta / (2 * std::min(ri, r[j])));
+      max_ov = std::max(max_ov, g.delta / (2 * std::min(r_i, r[j])));
     }
   }
   counters_.contacts = contacts;
@@ -185,38 +194,44 @@ Real DemSolver::integrate(Grains& grains, const Geometry& geometry, Real dt) {
     reduction(+ : wall_contacts) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i) {
     if (grains.state[i] != GrainState::Active) continue;
-    // gather the pair forces in a fixed order: own slots, then reverse slots
-    Vec3 f{}, t{};
+    // gather the pair results in a fixed order: own slots, then reverse slots
+    Vec3 f{}, q{}, t{};
     for (std::uint32_t s = pl.start[i]; s < pl.start[i + 1]; ++s) {
+      if (!pl.touch[s]) continue;
       f += pl.force[s];
-      t += pl.torque_i[s];
+      q += pl.q[s];
+      if constexpr (kRolling) t += pl.t_roll[s];
     }
     for (std::uint32_t k = pl.rev_start[i]; k < pl.rev_start[i + 1]; ++k) {
       const std::uint32_t s = pl.rev_slot[k];
+      if (!pl.touch[s]) continue;
       f -= pl.force[s];
-      t += pl.torque_j[s];
+      q += pl.q[s];
+      if constexpr (kRolling) t -= pl.t_roll[s];
     }
+    const Real r_i = grains.r[i];
+    t += q * (-r_i);
     // walls: same law, the obstacle as an immovable body with no radius
-    const Real ri = grains.r[i];
     for (std::uint32_t s = walls_.start[i]; s < walls_.start[i + 1]; ++s) {
-      const Obstacle& o = geometry.obstacles()[walls_.obstacle[s]];
-      const SurfacePoint sp = o.solid->closest(grains.x[i]);
-      const Real delta = ri - sp.distance;
+      const std::uint32_t k = walls_.obstacle[s];
+      const SurfacePoint sp = geometry.obstacles()[k].solid->closest(grains.x[i]);
+      const Real delta = r_i - sp.distance;
       if (delta <= 0) {
         walls_.xi[s] = {};
         walls_.psi[s] = {};
         continue;
       }
-      ContactGeometry cg{sp.normal, delta, ri, 0.0, grains.m[i], ri};
+      const ContactParams& wp = wall_params_[k];
+      const ContactGeometry cg{sp.normal, delta, r_i, 0.0, normal_damping(wp, grains.m[i]), r_i};
       ContactHistory h{walls_.xi[s], walls_.psi[s]};
-      const ContactForce cf = contact_force<kRolling>(wall_params_[walls_.obstacle[s]], cg,
-                                                      grains.v[i], grains.w[i], Vec3{}, h, dt);
+      const ContactForce cf =
+          contact_force<kRolling>(wp, cg, grains.v[i], grains.w[i], Vec3{}, h, dt);
       walls_.xi[s] = h.xi;
       walls_.psi[s] = h.psi;
       f += cf.force_i;
-      t += cf.torque_i;
+      t += cf.torque_i(cg);
       ++wall_contacts;
-      max_ov = std::max(max_ov, delta / (2 * ri));
+      max_ov = std::max(max_ov, delta / (2 * r_i));
     }
     // symplectic Euler: velocities from the forces, then positions from the new velocities
     grains.v[i] += (f * grains.inv_m[i] + g) * dt;

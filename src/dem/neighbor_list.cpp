@@ -119,6 +119,7 @@ void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& gr
   // every slot is written, so the arrays need no clearing first
   out.xi.resize(slots);
   out.psi.resize(rolling ? slots : 0);
+  out.touch.resize(slots);
   const std::size_t old_n = old.start.empty() ? 0 : old.start.size() - 1;
   auto old_slot = [&](GrainId id) {
     return id < old_slot_of_id.size() ? old_slot_of_id[id] : kNoSlot;
@@ -133,6 +134,8 @@ void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& gr
     auto carry = [&](std::uint32_t s, std::uint32_t os, bool flipped) {
       out.xi[s] = os == kNoSlot ? Vec3{} : (flipped ? -old.xi[os] : old.xi[os]);
       if (rolling) out.psi[s] = os == kNoSlot || !old_rolling ? Vec3{} : old.psi[os];
+      // a pair with history is marked touching, so the next force pass clears it if it is not
+      out.touch[s] = os != kNoSlot && old.touch[os];
     };
     if (same_slots) {
       // both rows are sorted by j: walk them together
@@ -157,8 +160,9 @@ void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& gr
 
   // per-step results: overwritten by every force pass before they are read
   out.force.resize(slots);
-  out.torque_i.resize(slots);
-  out.torque_j.resize(slots);
+  out.q.resize(slots);
+  out.t_roll.resize(rolling ? slots : 0);
+  out.c_n.resize(slots);
 
   // reverse index: for each grain, the slots where it is the second grain, in ascending order
   out.rev_start.assign(n + 1, 0);

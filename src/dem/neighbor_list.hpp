@@ -22,10 +22,13 @@ namespace sandflow {
 struct PairList {
   std::vector<std::uint32_t> start;      ///< n+1 offsets: slots of grain i are [start[i], start[i+1])
   std::vector<std::uint32_t> j;          ///< the other grain of each slot (j > i)
+  std::vector<std::uint8_t> touch;       ///< 1 while the pair touches (its results are valid)
+  std::vector<Real> c_n;                 ///< normal damping of the pair, fixed by its masses [kg/s]
   std::vector<Vec3> xi;                  ///< tangential history per slot [m]
   std::vector<Vec3> psi;                 ///< rolling history per slot (empty without rolling) [m]
-  std::vector<Vec3> force;               ///< force on i of each slot this step [N]
-  std::vector<Vec3> torque_i, torque_j;  ///< [N m]
+  std::vector<Vec3> force;               ///< this step: force on i [N]
+  std::vector<Vec3> q;                   ///< this step: n x F_t (torque = -arm * q) [N]
+  std::vector<Vec3> t_roll;              ///< this step: rolling torque on i (empty without) [N m]
   std::vector<std::uint32_t> rev_start;  ///< n+1 offsets into rev_slot
   std::vector<std::uint32_t> rev_slot;   ///< slots where grain i is the second grain, ascending
 
