@@ -204,8 +204,8 @@ int main(int argc, char** argv) {
   for (int s = 0; s < steps; ++s) dem.step(bed.grains, geometry, kDt, profile);
   const double seconds = clock.seconds();
   const auto grains = static_cast<double>(bed.grains.size());
-  std::printf("stages: neighbours %.3f s, forces %.3f s, integrate %.3f s, rebuilds %lld\n",
-              profile[Stage::Neighbours], profile[Stage::Forces], profile[Stage::Integrate],
+  std::printf("stages: neighbours %.3f s, forces and integration %.3f s, rebuilds %lld\n",
+              profile[Stage::Neighbours], profile[Stage::Forces],
               static_cast<long long>(dem.counters().rebuilds));
   std::printf("engine=sandflow threads=%d grains=%lld steps=%d seconds=%.4f grain_steps_per_s=%.6g "
               "contacts_per_grain=%.4f\n",

@@ -18,14 +18,14 @@ class Stopwatch {
   Clock::time_point start_;
 };
 
-enum class Stage { Emit, Neighbours, Forces, Integrate, Output, kCount };
+/// Forces covers the contact forces and the integration, done in one sweep (dem_solver.cpp).
+enum class Stage { Emit, Neighbours, Forces, Output, kCount };
 
 inline std::string_view stage_name(Stage s) {
   switch (s) {
     case Stage::Emit: return "emit";
     case Stage::Neighbours: return "neighbours";
     case Stage::Forces: return "forces";
-    case Stage::Integrate: return "integrate";
     case Stage::Output: return "output";
     default: return "?";
   }

@@ -4,7 +4,17 @@
 #include <cmath>
 #include <numeric>
 
+#include <omp.h>
+
 namespace sandflow {
+
+namespace {
+inline void store(Vec3& dst, const Vec3& v) {
+  dst.x = v.x;
+  dst.y = v.y;
+  dst.z = v.z;
+}
+}  // namespace
 
 DemSolver::DemSolver(const DemParams& params)
     : params_(params), rolling_(params.contact.mu_r > 0) {}
@@ -14,14 +24,9 @@ void DemSolver::step(Grains& grains, const Geometry& geometry, Real dt, Profile&
     ScopedStage s(profile, Stage::Neighbours);
     rebuild(grains, geometry);
   }
-  {
-    ScopedStage s(profile, Stage::Forces);
-    if (rolling_) pair_forces<true>(grains, dt);
-    else pair_forces<false>(grains, dt);
-  }
-  ScopedStage s(profile, Stage::Integrate);
+  ScopedStage s(profile, Stage::Forces);
   const Real max_disp2 =
-      rolling_ ? integrate<true>(grains, geometry, dt) : integrate<false>(grains, geometry, dt);
+      rolling_ ? sweep<true>(grains, geometry, dt) : sweep<false>(grains, geometry, dt);
   // Lists stay valid while no two grains can have closed the skin between them.
   if (4 * max_disp2 > params_.skin * params_.skin) need_rebuild_ = true;
 }
@@ -122,47 +127,55 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry) {
   need_rebuild_ = false;
 }
 
+// The force pass and the integration are one sweep. Each pair (i, j), i < j, is computed once into
+// its slot from the state at the start of the step. Sweeping i upwards, every slot that touches
+// i has been computed once i's own slots are done (the others belong to grains below i), and
+// nobody reads i's state again this step, so i is integrated on the spot, while its data are
+// still in cache. With T threads each takes a contiguous range of grains; the pairs that reach
+// into a later range are computed first, before anyone moves. A grain sums its slots in slot
+// order whatever T is, so the result is bit-identical for any thread count.
 template <bool kRolling>
-void DemSolver::pair_forces(const Grains& grains, Real dt) {
+Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   const std::size_t n = grains.size();
   const ContactParams& cp = params_.contact;
   PairList& pl = pairs_;
-  const Vec3* x = grains.x.data();
-  const Vec3* v = grains.v.data();
-  const Vec3* w = grains.w.data();
+  Vec3* x = grains.x.data();
+  Vec3* v = grains.v.data();
+  Vec3* w = grains.w.data();
   const Real* r = grains.r.data();
   const GrainState* st = grains.state.data();
-  std::int64_t contacts = 0;
-  Real max_ov = counters_.max_overlap_rel;
+  const Vec3 gravity = params_.gravity;
+  std::int64_t contacts = 0, wall_contacts = 0;
+  Real max_ov = counters_.max_overlap_rel, max_disp2 = 0;
 
-#pragma omp parallel for schedule(static) reduction(+ : contacts) reduction(max : max_ov) \
-    if (n >= kParallelMinGrains)
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 x_i = x[i];
-    const Real r_i = r[i];
-    const bool active_i = st[i] == GrainState::Active;
-    for (std::uint32_t s = pl.start[i]; s < pl.start[i + 1]; ++s) {
+#pragma omp parallel if (n >= kParallelMinGrains) \
+    reduction(+ : contacts, wall_contacts) reduction(max : max_ov, max_disp2)
+  {
+    // defined inside the parallel region, so they update this thread's reduction copies
+    // one pair slot: the contact law, or the end of a contact
+    auto compute_pair = [&](std::size_t i, std::uint32_t s) {
       const std::uint32_t j = pl.j[s];
-      const Vec3 d = x_i - x[j];
+      const Vec3 d = x[i] - x[j];
       const Real dist2 = norm2(d);
-      const Real rsum = r_i + r[j];
-      if (dist2 >= rsum * rsum || (!active_i && st[j] != GrainState::Active)) {
+      const Real rsum = r[i] + r[j];
+      if (dist2 >= rsum * rsum ||
+          (st[i] != GrainState::Active && st[j] != GrainState::Active)) {
         // apart: the contact and its memory are gone (written only when it just ended)
         if (pl.touch[s]) {
           pl.touch[s] = 0;
           pl.xi[s] = {};
           if constexpr (kRolling) pl.psi[s] = {};
         }
-        continue;
+        return;
       }
       const Real dist = std::sqrt(dist2);
       ContactGeometry g;
       g.n = d * (1.0 / dist);
       g.delta = rsum - dist;
-      g.arm_i = r_i;
+      g.arm_i = r[i];
       g.arm_j = r[j];
       g.c_n = pl.c_n[s];
-      g.r_eff = r_i * r[j] / rsum;
+      g.r_eff = r[i] * r[j] / rsum;
       ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
       const ContactForce cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, dt);
       pl.touch[s] = 1;
@@ -174,71 +187,76 @@ void DemSolver::pair_forces(const Grains& grains, Real dt) {
         pl.t_roll[s] = cf.t_roll;
       }
       ++contacts;
-      max_ov = std::max(max_ov, g.delta / (2 * std::min(r_i, r[j])));
+      max_ov = std::max(max_ov, g.delta / (2 * std::min(r[i], r[j])));
+    };
+
+    // one grain, once all its slots are computed: gather, walls, symplectic Euler
+    auto integrate_grain = [&](std::size_t i) {
+      if (st[i] != GrainState::Active) return;
+      Vec3 f{}, q{}, t{};
+      for (std::uint32_t s = pl.start[i]; s < pl.start[i + 1]; ++s) {
+        if (!pl.touch[s]) continue;
+        f += pl.force[s];
+        q += pl.q[s];
+        if constexpr (kRolling) t += pl.t_roll[s];
+      }
+      for (std::uint32_t k = pl.rev_start[i]; k < pl.rev_start[i + 1]; ++k) {
+        const std::uint32_t s = pl.rev_slot[k];
+        if (!pl.touch[s]) continue;
+        f -= pl.force[s];
+        q += pl.q[s];
+        if constexpr (kRolling) t -= pl.t_roll[s];
+      }
+      const Real r_i = r[i];
+      t += q * (-r_i);
+      // walls: the same law, the obstacle an immovable body with no radius
+      for (std::uint32_t s = walls_.start[i]; s < walls_.start[i + 1]; ++s) {
+        const std::uint32_t k = walls_.obstacle[s];
+        const SurfacePoint sp = geometry.obstacles()[k].solid->closest(x[i]);
+        const Real delta = r_i - sp.distance;
+        if (delta <= 0) {
+          walls_.xi[s] = {};
+          walls_.psi[s] = {};
+          continue;
+        }
+        const ContactParams& wp = wall_params_[k];
+        const ContactGeometry cg{sp.normal, delta, r_i, 0.0, normal_damping(wp, grains.m[i]), r_i};
+        ContactHistory h{walls_.xi[s], walls_.psi[s]};
+        const ContactForce cf = contact_force<kRolling>(wp, cg, v[i], w[i], Vec3{}, h, dt);
+        walls_.xi[s] = h.xi;
+        walls_.psi[s] = h.psi;
+        f += cf.force_i;
+        t += cf.torque_i(cg);
+        ++wall_contacts;
+        max_ov = std::max(max_ov, delta / (2 * r_i));
+      }
+      v[i] += (f * grains.inv_m[i] + gravity) * dt;
+      w[i] += t * (grains.inv_I[i] * dt);
+      x[i] += v[i] * dt;
+      max_disp2 = std::max(max_disp2, norm2(x[i] - x_at_build_[i]));
+    };
+
+    const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t lo = n * t / threads, hi = n * (t + 1) / threads;
+    // first slot of each grain of the range that reaches past it (the rows are sorted by j)
+    std::vector<std::uint32_t> split(hi - lo);
+    for (std::size_t i = lo; i < hi; ++i) {
+      std::uint32_t s = pl.start[i + 1];
+      while (s > pl.start[i] && pl.j[s - 1] >= hi) --s;
+      split[i - lo] = s;
+    }
+    // 1. pairs that reach into a later range, before any grain moves
+    for (std::size_t i = lo; i < hi; ++i)
+      for (std::uint32_t s = split[i - lo]; s < pl.start[i + 1]; ++s) compute_pair(i, s);
+#pragma omp barrier
+    // 2. the sweep: the rest of i's pairs, then i moves
+    for (std::size_t i = lo; i < hi; ++i) {
+      for (std::uint32_t s = pl.start[i]; s < split[i - lo]; ++s) compute_pair(i, s);
+      integrate_grain(i);
     }
   }
   counters_.contacts = contacts;
-  counters_.max_overlap_rel = max_ov;
-}
-
-template <bool kRolling>
-Real DemSolver::integrate(Grains& grains, const Geometry& geometry, Real dt) {
-  const std::size_t n = grains.size();
-  const PairList& pl = pairs_;
-  const Vec3 g = params_.gravity;
-  Real max_disp2 = 0;
-  Real max_ov = counters_.max_overlap_rel;
-  std::int64_t wall_contacts = 0;
-
-#pragma omp parallel for schedule(static) reduction(max : max_disp2, max_ov) \
-    reduction(+ : wall_contacts) if (n >= kParallelMinGrains)
-  for (std::size_t i = 0; i < n; ++i) {
-    if (grains.state[i] != GrainState::Active) continue;
-    // gather the pair results in a fixed order: own slots, then reverse slots
-    Vec3 f{}, q{}, t{};
-    for (std::uint32_t s = pl.start[i]; s < pl.start[i + 1]; ++s) {
-      if (!pl.touch[s]) continue;
-      f += pl.force[s];
-      q += pl.q[s];
-      if constexpr (kRolling) t += pl.t_roll[s];
-    }
-    for (std::uint32_t k = pl.rev_start[i]; k < pl.rev_start[i + 1]; ++k) {
-      const std::uint32_t s = pl.rev_slot[k];
-      if (!pl.touch[s]) continue;
-      f -= pl.force[s];
-      q += pl.q[s];
-      if constexpr (kRolling) t -= pl.t_roll[s];
-    }
-    const Real r_i = grains.r[i];
-    t += q * (-r_i);
-    // walls: same law, the obstacle as an immovable body with no radius
-    for (std::uint32_t s = walls_.start[i]; s < walls_.start[i + 1]; ++s) {
-      const std::uint32_t k = walls_.obstacle[s];
-      const SurfacePoint sp = geometry.obstacles()[k].solid->closest(grains.x[i]);
-      const Real delta = r_i - sp.distance;
-      if (delta <= 0) {
-        walls_.xi[s] = {};
-        walls_.psi[s] = {};
-        continue;
-      }
-      const ContactParams& wp = wall_params_[k];
-      const ContactGeometry cg{sp.normal, delta, r_i, 0.0, normal_damping(wp, grains.m[i]), r_i};
-      ContactHistory h{walls_.xi[s], walls_.psi[s]};
-      const ContactForce cf =
-          contact_force<kRolling>(wp, cg, grains.v[i], grains.w[i], Vec3{}, h, dt);
-      walls_.xi[s] = h.xi;
-      walls_.psi[s] = h.psi;
-      f += cf.force_i;
-      t += cf.torque_i(cg);
-      ++wall_contacts;
-      max_ov = std::max(max_ov, delta / (2 * r_i));
-    }
-    // symplectic Euler: velocities from the forces, then positions from the new velocities
-    grains.v[i] += (f * grains.inv_m[i] + g) * dt;
-    grains.w[i] += t * (grains.inv_I[i] * dt);
-    grains.x[i] += grains.v[i] * dt;
-    max_disp2 = std::max(max_disp2, norm2(grains.x[i] - x_at_build_[i]));
-  }
   counters_.wall_contacts = wall_contacts;
   counters_.max_overlap_rel = max_ov;
   return max_disp2;

@@ -37,6 +37,7 @@ class DemSolver {
 
   /// Call after grains were added, removed or changed state: the next step rebuilds the lists.
   void invalidate() { need_rebuild_ = true; }
+  bool needs_rebuild() const { return need_rebuild_; }
 
   const DemParams& params() const { return params_; }
   const PairList& pairs() const { return pairs_; }
@@ -45,10 +46,10 @@ class DemSolver {
  private:
   void rebuild(Grains& grains, const Geometry& geometry);
   void sort_by_cell(Grains& grains);
+  /// Forces and integration in one sweep; returns the largest squared displacement since the
+  /// last rebuild.
   template <bool kRolling>
-  void pair_forces(const Grains& grains, Real dt);
-  template <bool kRolling>
-  Real integrate(Grains& grains, const Geometry& geometry, Real dt);
+  Real sweep(Grains& grains, const Geometry& geometry, Real dt);
 
   DemParams params_;
   bool rolling_;

@@ -64,6 +64,7 @@ class World {
   const Grains& grains() const { return grains_; }
   const StaticStore& static_grains() const { return static_; }
   const Geometry& geometry() const { return geometry_; }
+  const DemSolver& dem() const { return dem_; }
   const Profile& profile() const { return profile_; }
   Real time() const { return time_; }
   int frame() const { return frame_; }
