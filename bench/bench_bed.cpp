@@ -79,10 +79,12 @@ Bed make_bed(std::int64_t n, int settle_frames) {
   e.center = {bed.side / 2, bed.side / 2, e.size.z / 2};
   scene.emitters = {e};
   World world(scene);
+  // settle until the grains are nearly still (mean speed ~ 4 mm/s) or the frames run out
   for (int f = 0; f < settle_frames; ++f) {
     const FrameStats st = world.advance_frame();
     std::fprintf(stderr, "settling: t = %.2f s, kinetic energy %.3e J, contacts/grain %.2f\n",
                  st.time, st.kinetic_energy, 2.0 * st.contacts / static_cast<double>(st.n_total));
+    if (f >= 10 && st.kinetic_energy < 1e-10 * static_cast<double>(st.n_total)) break;
   }
   bed.grains = world.grains();
   return bed;
@@ -156,7 +158,7 @@ void write_lammps(const std::string& path, const Bed& b) {
 
 int main(int argc, char** argv) {
   std::int64_t n = 100000;
-  int threads = 1, steps = 2000, settle_frames = 15;
+  int threads = 1, steps = 2000, settle_frames = 60;
   std::string bed_path, lammps_path;
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
@@ -207,6 +209,8 @@ int main(int argc, char** argv) {
   std::printf("stages: neighbours %.3f s, forces and integration %.3f s, rebuilds %lld\n",
               profile[Stage::Neighbours], profile[Stage::Forces],
               static_cast<long long>(dem.counters().rebuilds));
+  std::printf("damping beta=%.12g (restitution %.2f under the clamped law)\n", params.contact.beta,
+              kE);
   std::printf("engine=sandflow threads=%d grains=%lld steps=%d seconds=%.4f grain_steps_per_s=%.6g "
               "contacts_per_grain=%.4f\n",
               threads, static_cast<long long>(bed.grains.size()), steps, seconds,

@@ -85,36 +85,9 @@ SKIN=0.0004        # neighbor skin = 0.2 d [m]
 # force is clamped at zero. Its beta is not the textbook
 # -ln e / sqrt(pi^2 + ln^2 e) (that gives e only for the unclamped law: the
 # clamp lets grains leave faster) but the beta for which a head-on collision
-# under the clamped law has restitution e: damping_beta() in
-# src/dem/contact.cpp, which bisects over an RK4 integration of
-# delta'' = -(delta + 2 beta delta') while the force is positive.
-# sandflow_beta E: the same computation, step for step, in awk.
-sandflow_beta() {
-  awk -v e="$1" '
-    function acc(d, u, beta,   f) { f = d + 2 * beta * u; return f > 0 ? -f : 0 }
-    function restitution(beta,   h, d, u, k, k1d, k1u, k2d, k2u, k3d, k3u, k4d, k4u) {
-      h = 1e-4; d = 0; u = 1
-      for (k = 0; k < 10000000; k++) {
-        if (u < 0 && (d + 2 * beta * u <= 0 || d <= 0)) return -u
-        k1d = u;              k1u = acc(d, u, beta)
-        k2d = u + h / 2 * k1u; k2u = acc(d + h / 2 * k1d, u + h / 2 * k1u, beta)
-        k3d = u + h / 2 * k2u; k3u = acc(d + h / 2 * k2d, u + h / 2 * k2u, beta)
-        k4d = u + h * k3u;     k4u = acc(d + h * k3d, u + h * k3u, beta)
-        d += h / 6 * (k1d + 2 * k2d + 2 * k3d + k4d)
-        u += h / 6 * (k1u + 2 * k2u + 2 * k3u + k4u)
-      }
-      return 0
-    }
-    BEGIN {
-      if (e >= 1) { print 0; exit }
-      lo = 0; hi = 50
-      for (it = 0; it < 40; it++) {
-        mid = 0.5 * (lo + hi)
-        if (restitution(mid) > e) lo = mid; else hi = mid
-      }
-      printf "%.12g\n", 0.5 * (lo + hi)
-    }'
-}
+# under the clamped law has restitution e (damping_beta() in
+# src/dem/contact.cpp). bench_bed prints the beta it used ("beta=X"), and that
+# is the one LAMMPS gets, so the two can never drift apart.
 
 # lammps_damping BETA: sets GN GT GNW GTW, LAMMPS's damping rates [1/s].
 # LAMMPS writes the dashpot as m_eff gamma v, so gamma_n = 2 beta sqrt(kn / m_eff)
@@ -130,8 +103,6 @@ lammps_damping() {
 read -r KT MASS < <(awk -v d="$D" -v rho="$RHO" -v kn="$KN" 'BEGIN {
   printf "%.12g %.12g\n", kn * 2 / 7, rho * atan2(0, -1) / 6 * d * d * d
 }')
-BETA=$(sandflow_beta "$REST")
-BETA_FROM="computed here as sandflow's damping_beta() does"
 
 # ------------------------------------------------------------- LAMMPS setup
 SUDO=()
@@ -285,17 +256,11 @@ natoms=$(awk '$2 == "atoms" {print $1; exit}' "$ROOT/$DATA")
 run_sandflow 1
 SF1=("$SF_SECONDS" "$SF_GSS" "$SF_CPG")
 
-# If bench_bed states the beta it used (a "beta=X" word on any line), that is
-# the one LAMMPS gets.
-sf_beta=$(grep -ohE '(^|[[:space:]])beta=[-+0-9.eE]+' "$CACHE/sandflow_${LABEL}_t2.log" \
-            "$CACHE/sandflow_${LABEL}_t1.log" | tail -n1 | sed 's/.*beta=//' || true)
-if [[ -n "$sf_beta" ]]; then
-  if ! awk -v a="$sf_beta" -v b="$BETA" 'BEGIN {exit !((a - b) ^ 2 <= (1e-6 * b) ^ 2)}'; then
-    note "WARNING: bench_bed says beta=$sf_beta, this script computed $BETA: using bench_bed's"
-  fi
-  BETA=$sf_beta
-  BETA_FROM="as reported by bench_bed"
-fi
+# The beta bench_bed used (a "beta=X" word on its output) is the one LAMMPS gets.
+BETA=$(grep -ohE '(^|[[:space:]])beta=[-+0-9.eE]+' "$CACHE/sandflow_${LABEL}_t1.log" \
+         | tail -n1 | sed 's/.*beta=//' || true)
+[[ -n "$BETA" ]] || die "bench_bed did not report the beta it used (beta=X)"
+BETA_FROM="as reported by bench_bed"
 lammps_damping "$BETA"
 note "sandflow beta=$BETA ($BETA_FROM), m=$MASS kg"
 note "LAMMPS damping rates [1/s]: pairs gamma_n=$GN gamma_t=$GT, walls gamma_n=$GNW gamma_t=$GTW"
