@@ -77,12 +77,18 @@ SurfacePoint SolidCylinder::closest(const Vec3& p) const {
   const Vec3 q = rot_t_ * (p - center_);
   const Real rho = std::hypot(q.x, q.y);
   const Vec3 radial = rho > 0 ? Vec3{q.x / rho, q.y / rho, 0} : Vec3{1, 0, 0};
-  const Real mid = 0.5 * (radius_ + inner_radius_);
-  const Real half_width = 0.5 * (radius_ - inner_radius_);
-  const Real a = rho - mid;  // radial coordinate relative to the middle of the wall
-  const Real da = std::abs(a) - half_width;
+  // radial distance outside the wall: a solid has only its outer side, a tube both
+  Real da, sa;
+  if (inner_radius_ <= 0) {
+    da = rho - radius_;
+    sa = 1.0;
+  } else {
+    const Real a = rho - 0.5 * (radius_ + inner_radius_);  // from the middle of the wall
+    da = std::abs(a) - 0.5 * (radius_ - inner_radius_);
+    sa = a < 0 ? -1.0 : 1.0;
+  }
   const Real dz = std::abs(q.z) - half_height_;
-  const Real sa = a < 0 ? -1.0 : 1.0, sz = q.z < 0 ? -1.0 : 1.0;
+  const Real sz = q.z < 0 ? -1.0 : 1.0;
   Real dist, na, nz;
   if (da > 0 || dz > 0) {
     const Real oa = std::max(da, 0.0) * sa, oz = std::max(dz, 0.0) * sz;
