@@ -209,6 +209,8 @@ int main(int argc, char** argv) {
   std::printf("stages: neighbours %.3f s, forces and integration %.3f s, rebuilds %lld\n",
               profile[Stage::Neighbours], profile[Stage::Forces],
               static_cast<long long>(dem.counters().rebuilds));
+  std::printf("listed pairs per grain %.2f (half list, skin 0.2 d)\n",
+              static_cast<double>(dem.pairs().pairs()) / grains);
   std::printf("damping beta=%.12g (restitution %.2f under the clamped law)\n", params.contact.beta,
               kE);
   std::printf("engine=sandflow threads=%d grains=%lld steps=%d seconds=%.4f grain_steps_per_s=%.6g "

@@ -161,10 +161,13 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
       if (dist2 >= rsum * rsum ||
           (st[i] != GrainState::Active && st[j] != GrainState::Active)) {
         // apart: the contact and its memory are gone (written only when it just ended)
+        // (a slot that does not touch holds zero results, so the gather can add it blindly)
         if (pl.touch[s]) {
           pl.touch[s] = 0;
           pl.xi[s] = {};
-          if constexpr (kRolling) pl.psi[s] = {};
+          pl.force[s] = {};
+          pl.q[s] = {};
+          if constexpr (kRolling) pl.psi[s] = pl.t_roll[s] = {};
         }
         return;
       }
@@ -195,14 +198,12 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
       if (st[i] != GrainState::Active) return;
       Vec3 f{}, q{}, t{};
       for (std::uint32_t s = pl.start[i]; s < pl.start[i + 1]; ++s) {
-        if (!pl.touch[s]) continue;
         f += pl.force[s];
         q += pl.q[s];
         if constexpr (kRolling) t += pl.t_roll[s];
       }
       for (std::uint32_t k = pl.rev_start[i]; k < pl.rev_start[i + 1]; ++k) {
         const std::uint32_t s = pl.rev_slot[k];
-        if (!pl.touch[s]) continue;
         f -= pl.force[s];
         q += pl.q[s];
         if constexpr (kRolling) t -= pl.t_roll[s];

@@ -158,10 +158,11 @@ void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& gr
     }
   }
 
-  // per-step results: overwritten by every force pass before they are read
-  out.force.resize(slots);
-  out.q.resize(slots);
-  out.t_roll.resize(rolling ? slots : 0);
+  // per-step results: zero until the pair touches (every touching slot is recomputed before
+  // anything reads it, so nothing needs carrying over)
+  out.force.assign(slots, Vec3{});
+  out.q.assign(slots, Vec3{});
+  out.t_roll.assign(rolling ? slots : 0, Vec3{});
   out.c_n.resize(slots);
 
   // reverse index: for each grain, the slots where it is the second grain, in ascending order

@@ -22,7 +22,7 @@ namespace sandflow {
 struct PairList {
   std::vector<std::uint32_t> start;      ///< n+1 offsets: slots of grain i are [start[i], start[i+1])
   std::vector<std::uint32_t> j;          ///< the other grain of each slot (j > i)
-  std::vector<std::uint8_t> touch;       ///< 1 while the pair touches (its results are valid)
+  std::vector<std::uint8_t> touch;       ///< 1 while the pair touches; else its results are 0
   std::vector<Real> c_n;                 ///< normal damping of the pair, fixed by its masses [kg/s]
   std::vector<Vec3> xi;                  ///< tangential history per slot [m]
   std::vector<Vec3> psi;                 ///< rolling history per slot (empty without rolling) [m]
