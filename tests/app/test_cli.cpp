@@ -50,7 +50,12 @@ struct Sandbox {
 
 // Runs the command; returns its exit status, with stdout+stderr in `output`.
 int sandflow(const std::string& args, std::string* output = nullptr) {
-  const std::string log = (fs::temp_directory_path() / "sandflow_cli_last.log").string();
+  // one log per test: ctest runs tests in parallel processes
+  const std::string log =
+      (fs::temp_directory_path() /
+       ("sandflow_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+        ".log"))
+          .string();
   const int rc = std::system((std::string(SANDFLOW_BINARY) + " " + args + " > " + log + " 2>&1").c_str());
   if (output) {
     std::stringstream ss;
