@@ -190,7 +190,9 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
         pl.t_roll[s] = cf.t_roll;
       }
       ++contacts;
-      max_ov = std::max(max_ov, g.delta / (2 * std::min(r[i], r[j])));
+      // relative overlap; the division only when it may be a new largest one
+      const Real d_small = 2 * std::min(r[i], r[j]);
+      if (g.delta > max_ov * d_small) max_ov = g.delta / d_small;
     };
 
     // one grain, once all its slots are computed: gather, walls, symplectic Euler
