@@ -124,16 +124,24 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry) {
   slot_of_id_.assign(n ? max_id + 1 : 0, kNoSlot);
   for (std::size_t i = 0; i < n; ++i) slot_of_id_[grains.id[i]] = static_cast<std::uint32_t>(i);
   x_at_build_ = grains.x;
+  // accumulators are zero between steps; only their size follows the grains
+  acc_f_.resize(n);
+  acc_q_.resize(n);
+  acc_t_.resize(rolling_ ? n : 0);
   need_rebuild_ = false;
 }
 
-// The force pass and the integration are one sweep. Each pair (i, j), i < j, is computed once into
-// its slot from the state at the start of the step. Sweeping i upwards, every slot that touches
-// i has been computed once i's own slots are done (the others belong to grains below i), and
-// nobody reads i's state again this step, so i is integrated on the spot, while its data are
-// still in cache. With T threads each takes a contiguous range of grains; the pairs that reach
-// into a later range are computed first, before anyone moves. A grain sums its slots in slot
-// order whatever T is, so the result is bit-identical for any thread count.
+// The force pass and the integration are one sweep over the grains in storage order. Each pair
+// (i, j), i < j, is computed once, from the state at the start of the step, when the sweep reaches
+// i: its force goes to i's own sum and, reversed, to j's accumulator. Once i's own pairs are done,
+// every pair that touches i has been computed (the others belong to grains below i) and nobody
+// reads i's state again this step, so i is integrated on the spot, while its data are in cache.
+//
+// With T threads each takes a contiguous range of grains. The pairs that reach into a later range
+// are computed first, by one thread in grain order, before anyone moves; their results wait in
+// their slots until their grain's turn. Every grain therefore adds the same terms in the same
+// order as a single thread would — its accumulator in ascending order of the other grain, its own
+// pairs in slot order — and the state is bit-identical for any thread count.
 template <bool kRolling>
 Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   const std::size_t n = grains.size();
@@ -145,15 +153,21 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   const Real* r = grains.r.data();
   const GrainState* st = grains.state.data();
   const Vec3 gravity = params_.gravity;
+  Vec3* acc_f = acc_f_.data();
+  Vec3* acc_q = acc_q_.data();
+  Vec3* acc_t = acc_t_.data();
   std::int64_t contacts = 0, wall_contacts = 0;
   Real max_ov = counters_.max_overlap_rel, max_disp2 = 0;
+  std::vector<std::uint32_t>& split = split_;
+  split.resize(n);
 
 #pragma omp parallel if (n >= kParallelMinGrains) \
     reduction(+ : contacts, wall_contacts) reduction(max : max_ov, max_disp2)
   {
     // defined inside the parallel region, so they update this thread's reduction copies
-    // one pair slot: the contact law, or the end of a contact
-    auto compute_pair = [&](std::size_t i, std::uint32_t s) {
+
+    // One pair slot: the contact law (true, with the results in cf) or the end of a contact.
+    auto compute_pair = [&](std::size_t i, std::uint32_t s, ContactForce& cf) {
       const std::uint32_t j = pl.j[s];
       const Vec3 d = x[i] - x[j];
       const Real dist2 = norm2(d);
@@ -161,15 +175,12 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
       if (dist2 >= rsum * rsum ||
           (st[i] != GrainState::Active && st[j] != GrainState::Active)) {
         // apart: the contact and its memory are gone (written only when it just ended)
-        // (a slot that does not touch holds zero results, so the gather can add it blindly)
         if (pl.touch[s]) {
           pl.touch[s] = 0;
           pl.xi[s] = {};
-          pl.force[s] = {};
-          pl.q[s] = {};
-          if constexpr (kRolling) pl.psi[s] = pl.t_roll[s] = {};
+          if constexpr (kRolling) pl.psi[s] = {};
         }
-        return;
+        return false;
       }
       const Real dist = std::sqrt(dist2);
       ContactGeometry g;
@@ -180,38 +191,71 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
       g.c_n = pl.c_n[s];
       g.r_eff = r[i] * r[j] / rsum;
       ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
-      const ContactForce cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, dt);
+      cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, dt);
       pl.touch[s] = 1;
-      pl.xi[s] = h.xi;
-      pl.force[s] = cf.force_i;
-      pl.q[s] = cf.q;
-      if constexpr (kRolling) {
-        pl.psi[s] = h.psi;
-        pl.t_roll[s] = cf.t_roll;
-      }
+      store(pl.xi[s], h.xi);
+      if constexpr (kRolling) store(pl.psi[s], h.psi);
       ++contacts;
       // relative overlap; the division only when it may be a new largest one
       const Real d_small = 2 * std::min(r[i], r[j]);
       if (g.delta > max_ov * d_small) max_ov = g.delta / d_small;
+      return true;
+    };
+    // the reversed pair result, into the other grain's accumulator
+    auto scatter = [&](std::uint32_t j, const ContactForce& cf) {
+      acc_f[j] -= cf.force_i;
+      acc_q[j] += cf.q;
+      if constexpr (kRolling) acc_t[j] -= cf.t_roll;
     };
 
-    // one grain, once all its slots are computed: gather, walls, symplectic Euler
-    auto integrate_grain = [&](std::size_t i) {
-      if (st[i] != GrainState::Active) return;
-      Vec3 f{}, q{}, t{};
-      for (std::uint32_t s = pl.start[i]; s < pl.start[i + 1]; ++s) {
+    // 1. pairs that reach into a later thread's range, in grain order, before any grain moves
+    const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
+#pragma omp single
+    for (std::size_t t = 0; t < threads; ++t) {
+      const std::size_t lo = n * t / threads, hi = n * (t + 1) / threads;
+      for (std::size_t i = lo; i < hi; ++i) {
+        std::uint32_t first = pl.start[i + 1];  // rows are sorted by j
+        while (first > pl.start[i] && pl.j[first - 1] >= hi) --first;
+        split[i] = first;
+        for (std::uint32_t s = first; s < pl.start[i + 1]; ++s) {
+          ContactForce cf;
+          if (!compute_pair(i, s, cf)) continue;
+          store(pl.force[s], cf.force_i);
+          store(pl.q[s], cf.q);
+          if constexpr (kRolling) store(pl.t_roll[s], cf.t_roll);
+          scatter(pl.j[s], cf);
+        }
+      }
+    }
+
+    // 2. the sweep: i's remaining pairs, its waiting ones, then i moves
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t lo = n * t / threads, hi = n * (t + 1) / threads;
+    for (std::size_t i = lo; i < hi; ++i) {
+      Vec3 f{}, q{}, tr{};
+      for (std::uint32_t s = pl.start[i]; s < split[i]; ++s) {
+        ContactForce cf;
+        if (!compute_pair(i, s, cf)) continue;
+        f += cf.force_i;
+        q += cf.q;
+        if constexpr (kRolling) tr += cf.t_roll;
+        scatter(pl.j[s], cf);
+      }
+      for (std::uint32_t s = split[i]; s < pl.start[i + 1]; ++s) {
+        if (!pl.touch[s]) continue;
         f += pl.force[s];
         q += pl.q[s];
-        if constexpr (kRolling) t += pl.t_roll[s];
+        if constexpr (kRolling) tr += pl.t_roll[s];
       }
-      for (std::uint32_t k = pl.rev_start[i]; k < pl.rev_start[i + 1]; ++k) {
-        const std::uint32_t s = pl.rev_slot[k];
-        f -= pl.force[s];
-        q += pl.q[s];
-        if constexpr (kRolling) t -= pl.t_roll[s];
-      }
+      f += acc_f[i];
+      q += acc_q[i];
+      if constexpr (kRolling) tr += acc_t[i];
+      acc_f[i] = acc_q[i] = {};
+      if constexpr (kRolling) acc_t[i] = {};
+      if (st[i] != GrainState::Active) continue;
+
       const Real r_i = r[i];
-      t += q * (-r_i);
+      Vec3 torque = tr + q * (-r_i);
       // walls: the same law, the obstacle an immovable body with no radius
       for (std::uint32_t s = walls_.start[i]; s < walls_.start[i + 1]; ++s) {
         const std::uint32_t k = walls_.obstacle[s];
@@ -229,34 +273,15 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
         walls_.xi[s] = h.xi;
         walls_.psi[s] = h.psi;
         f += cf.force_i;
-        t += cf.torque_i(cg);
+        torque += cf.torque_i(cg);
         ++wall_contacts;
         max_ov = std::max(max_ov, delta / (2 * r_i));
       }
+      // symplectic Euler: velocities from the forces, then positions from the new velocities
       v[i] += (f * grains.inv_m[i] + gravity) * dt;
-      w[i] += t * (grains.inv_I[i] * dt);
+      w[i] += torque * (grains.inv_I[i] * dt);
       x[i] += v[i] * dt;
       max_disp2 = std::max(max_disp2, norm2(x[i] - x_at_build_[i]));
-    };
-
-    const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
-    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
-    const std::size_t lo = n * t / threads, hi = n * (t + 1) / threads;
-    // first slot of each grain of the range that reaches past it (the rows are sorted by j)
-    std::vector<std::uint32_t> split(hi - lo);
-    for (std::size_t i = lo; i < hi; ++i) {
-      std::uint32_t s = pl.start[i + 1];
-      while (s > pl.start[i] && pl.j[s - 1] >= hi) --s;
-      split[i - lo] = s;
-    }
-    // 1. pairs that reach into a later range, before any grain moves
-    for (std::size_t i = lo; i < hi; ++i)
-      for (std::uint32_t s = split[i - lo]; s < pl.start[i + 1]; ++s) compute_pair(i, s);
-#pragma omp barrier
-    // 2. the sweep: the rest of i's pairs, then i moves
-    for (std::size_t i = lo; i < hi; ++i) {
-      for (std::uint32_t s = pl.start[i]; s < split[i - lo]; ++s) compute_pair(i, s);
-      integrate_grain(i);
     }
   }
   counters_.contacts = contacts;

@@ -59,6 +59,8 @@ class DemSolver {
   WallList walls_, old_walls_;
   std::vector<std::uint32_t> slot_of_id_;  ///< grain id -> slot at the last rebuild
   std::vector<Vec3> x_at_build_;
+  std::vector<Vec3> acc_f_, acc_q_, acc_t_;  ///< per grain: reversed pair results of this step
+  std::vector<std::uint32_t> split_;         ///< per grain: first slot reaching a later thread
   bool need_rebuild_ = true;
   std::int64_t rebuild_count_ = 0;
   DemCounters counters_;

@@ -158,21 +158,11 @@ void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& gr
     }
   }
 
-  // per-step results: zero until the pair touches (every touching slot is recomputed before
-  // anything reads it, so nothing needs carrying over)
-  out.force.assign(slots, Vec3{});
-  out.q.assign(slots, Vec3{});
-  out.t_roll.assign(rolling ? slots : 0, Vec3{});
+  // per-step results: written before they are read, by the pass that computes the pair
+  out.force.resize(slots);
+  out.q.resize(slots);
+  out.t_roll.resize(rolling ? slots : 0);
   out.c_n.resize(slots);
-
-  // reverse index: for each grain, the slots where it is the second grain, in ascending order
-  out.rev_start.assign(n + 1, 0);
-  for (std::size_t s = 0; s < slots; ++s) ++out.rev_start[out.j[s] + 1];
-  for (std::size_t i = 0; i < n; ++i) out.rev_start[i + 1] += out.rev_start[i];
-  out.rev_slot.resize(slots);
-  std::vector<std::uint32_t> fill(out.rev_start.begin(), out.rev_start.end() - 1);
-  for (std::size_t s = 0; s < slots; ++s)
-    out.rev_slot[fill[out.j[s]]++] = static_cast<std::uint32_t>(s);
 }
 
 std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const Grains& grains,

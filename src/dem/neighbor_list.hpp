@@ -3,9 +3,8 @@
 // stay valid until some grain has moved more than half the skin. Contact history lives beside
 // the list, one entry per pair slot, and is carried across rebuilds by grain id.
 //
-// Forces are parallel without atomics: each pair slot receives its force from one thread, and
-// each grain then gathers its slots in a fixed order (its own list, then the reverse index of the
-// pairs where it is the second grain), so 1 and N threads give bit-identical results.
+// How the forces of the pairs reach both grains without atomics, identically for any thread
+// count, is told in dem_solver.cpp (DemSolver::sweep).
 #pragma once
 
 #include <cmath>
@@ -22,15 +21,14 @@ namespace sandflow {
 struct PairList {
   std::vector<std::uint32_t> start;      ///< n+1 offsets: slots of grain i are [start[i], start[i+1])
   std::vector<std::uint32_t> j;          ///< the other grain of each slot (j > i)
-  std::vector<std::uint8_t> touch;       ///< 1 while the pair touches; else its results are 0
+  std::vector<std::uint8_t> touch;       ///< 1 while the pair touches
   std::vector<Real> c_n;                 ///< normal damping of the pair, fixed by its masses [kg/s]
   std::vector<Vec3> xi;                  ///< tangential history per slot [m]
   std::vector<Vec3> psi;                 ///< rolling history per slot (empty without rolling) [m]
-  std::vector<Vec3> force;               ///< this step: force on i [N]
-  std::vector<Vec3> q;                   ///< this step: n x F_t (torque = -arm * q) [N]
-  std::vector<Vec3> t_roll;              ///< this step: rolling torque on i (empty without) [N m]
-  std::vector<std::uint32_t> rev_start;  ///< n+1 offsets into rev_slot
-  std::vector<std::uint32_t> rev_slot;   ///< slots where grain i is the second grain, ascending
+  // results of this step, kept only for the pairs that reach across threads (DemSolver::sweep)
+  std::vector<Vec3> force;               ///< force on i [N]
+  std::vector<Vec3> q;                   ///< n x F_t (torque = -arm * q) [N]
+  std::vector<Vec3> t_roll;              ///< rolling torque on i (empty without rolling) [N m]
 
   std::size_t pairs() const { return j.size(); }
 };
