@@ -8,14 +8,6 @@
 
 namespace sandflow {
 
-namespace {
-inline void store(Vec3& dst, const Vec3& v) {
-  dst.x = v.x;
-  dst.y = v.y;
-  dst.z = v.z;
-}
-}  // namespace
-
 DemSolver::DemSolver(const DemParams& params)
     : params_(params), rolling_(params.contact.mu_r > 0) {}
 
@@ -193,8 +185,8 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
       ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
       cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, dt);
       pl.touch[s] = 1;
-      store(pl.xi[s], h.xi);
-      if constexpr (kRolling) store(pl.psi[s], h.psi);
+      pl.xi[s] = h.xi;
+      if constexpr (kRolling) pl.psi[s] = h.psi;
       ++contacts;
       // relative overlap; the division only when it may be a new largest one
       const Real d_small = 2 * std::min(r[i], r[j]);
@@ -220,9 +212,9 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
         for (std::uint32_t s = first; s < pl.start[i + 1]; ++s) {
           ContactForce cf;
           if (!compute_pair(i, s, cf)) continue;
-          store(pl.force[s], cf.force_i);
-          store(pl.q[s], cf.q);
-          if constexpr (kRolling) store(pl.t_roll[s], cf.t_roll);
+          pl.force[s] = cf.force_i;
+          pl.q[s] = cf.q;
+          if constexpr (kRolling) pl.t_roll[s] = cf.t_roll;
           scatter(pl.j[s], cf);
         }
       }
