@@ -19,14 +19,13 @@ class Stopwatch {
 };
 
 /// Forces covers the contact forces and the integration, done in one sweep (dem_solver.cpp).
-enum class Stage { Emit, Neighbours, Forces, Output, kCount };
+enum class Stage { Emit, Neighbours, Forces, kCount };
 
 inline std::string_view stage_name(Stage s) {
   switch (s) {
     case Stage::Emit: return "emit";
     case Stage::Neighbours: return "neighbours";
     case Stage::Forces: return "forces";
-    case Stage::Output: return "output";
     default: return "?";
   }
 }
