@@ -3,6 +3,7 @@
 // World is built from it. Defaults here are the documented defaults of docs/scenes.md.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -30,8 +31,33 @@ struct MaterialConfig {
   Real wall_rolling_friction = 0.1; ///< rolling resistance between grains and geometry [-]
 };
 
+/// Deriving k_n from the load a contact carries (DESIGN.md §3), separately for each mode. Used
+/// when `from_load` is set; material.k_n is then ignored.
+struct StiffnessConfig {
+  bool from_load = false;
+  Real max_overlap = 0.01;          ///< largest static overlap wanted, fraction of a diameter [-]
+  Real impact_overlap = 0.1;        ///< largest overlap wanted in an impact, fraction of d [-]
+  std::optional<Real> impact_speed; ///< fastest impact [m/s]; unset: from the emitters
+  std::optional<Real> dem_depth;    ///< deepest loaded grain in DEM mode [m]; unset: heap height
+  std::optional<Real> surface_depth;///< deepest loaded grain in surface mode [m]; unset: R_min+T+2d
+};
+
+/// The height field and the particle interface (DESIGN.md §4, §5). Unset values take defaults
+/// derived from the material (surface/surface_params.hpp); angles in radians.
+struct SurfaceConfig {
+  std::optional<Real> cell_size;            ///< column width [m]; default: mean diameter
+  std::optional<Real> exchange_rate;        ///< gamma [1/s]; default 5 sqrt(g / d)
+  Real repose_angle = deg_to_rad(32.0);     ///< theta_0 [rad]
+  std::optional<Real> max_angle;            ///< theta_max [rad]; default theta_0 + 6 deg
+  std::optional<Real> rolling_min;          ///< R_min [m]; default one mean diameter
+  std::optional<Real> interface_thickness;  ///< T [m]; default one mean diameter
+  std::optional<Real> update_interval;      ///< time between height-field updates [s]
+  std::optional<Real> trap_speed;           ///< grains slower than this may be trapped [m/s]
+  std::optional<std::array<Real, 4>> extent;  ///< [x0, y0, x1, y1] of the grid [m]; unset: auto
+};
+
 struct SimulationConfig {
-  Mode mode = Mode::Dem;            ///< surface mode arrives with the height field (issue 3)
+  Mode mode = Mode::Surface;        ///< surface: height field + DEM; dem: plain DEM
   Vec3 gravity{0, 0, -9.81};        ///< [m/s^2]
   std::optional<Real> dt;           ///< fixed time step [s]; unset: dt_fraction * t_c
   Real dt_fraction = 0.05;          ///< dt = dt_fraction * t_c when dt is unset (t_c/20)
@@ -96,6 +122,8 @@ struct SceneConfig {
   std::string description;
   MaterialConfig material;
   SimulationConfig simulation;
+  StiffnessConfig stiffness;
+  SurfaceConfig surface;
   OutputConfig output;
   std::vector<GeometryConfig> geometry;
   std::vector<EmitterConfig> emitters;

@@ -16,6 +16,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <concepts>
@@ -130,6 +131,9 @@ constexpr Range closed(Real lo, Real hi) {
 }
 constexpr Range open_closed(Real lo, Real hi) {
   return {lo, hi, true, false};
+}
+constexpr Range open(Real lo, Real hi) {
+  return {lo, hi, true, true};
 }
 
 // The most grains one emitter may make: far above any scene we run, far below overflow.
@@ -247,17 +251,14 @@ class TableReader {
   void read(std::string_view key, Vec3& out, Range range = kAny, int checked = 3) {
     const auto e = find(key);
     if (!e) return;
-    const std::string n = name(key);
-    const auto* a = e->node->as_array();
-    if (!a) fail(place(*e), n + ": expected an array of 3 numbers, got " + type_name(*e->node));
-    if (a->size() != 3)
-      fail(place(*e), n + ": expected an array of 3 numbers, got " + std::to_string(a->size()) +
-                          (a->size() == 1 ? " element" : " elements"));
-    for (int i = 0; i < 3; ++i) {
-      const toml::node& c = *a->get(static_cast<std::size_t>(i));
-      out[i] = number(c, n + "[" + std::to_string(i) + "]", places_.of(c.source()),
-                      i < checked ? range : kAny);
-    }
+    const auto v = numbers<3>(*e, name(key), range, checked);
+    for (int i = 0; i < 3; ++i) out[i] = v[static_cast<std::size_t>(i)];
+  }
+
+  // A fixed number of finite numbers, [x0, y0, x1, y1]; unset when the table lacks the key.
+  template <std::size_t N>
+  void read(std::string_view key, std::optional<std::array<Real, N>>& out, Range range = kAny) {
+    if (const auto e = find(key)) out = numbers<N>(*e, name(key), range, static_cast<int>(N));
   }
 
   // One of a fixed set of words: mode = "surface" | "dem".
@@ -359,6 +360,25 @@ class TableReader {
 
   std::string place(const Entry& e) const { return places_.of(*e.key, *e.node); }
 
+  // An array of exactly N finite numbers; only the first `checked` are held to `range`.
+  template <std::size_t N>
+  std::array<Real, N> numbers(const Entry& e, const std::string& n, Range range,
+                              int checked) const {
+    const std::string expected = "expected an array of " + std::to_string(N) + " numbers, got ";
+    const auto* a = e.node->as_array();
+    if (!a) fail(place(e), n + ": " + expected + type_name(*e.node));
+    if (a->size() != N)
+      fail(place(e), n + ": " + expected + std::to_string(a->size()) +
+                         (a->size() == 1 ? " element" : " elements"));
+    std::array<Real, N> out{};
+    for (std::size_t i = 0; i < N; ++i) {
+      const toml::node& c = *a->get(i);
+      out[i] = number(c, n + "[" + std::to_string(i) + "]", places_.of(c.source()),
+                      static_cast<int>(i) < checked ? range : kAny);
+    }
+    return out;
+  }
+
   // A finite number (integers accepted) inside `range`.
   static Real number(const toml::node& n, const std::string& name, const std::string& place,
                      Range range) {
@@ -411,6 +431,54 @@ void read_simulation(TableReader r, SimulationConfig& s) {
   r.read("seed", s.seed, kNonNegative);
   r.read("threads", s.threads, closed(0, 4096));
   r.finish("[simulation]");
+}
+
+void read_stiffness(TableReader r, StiffnessConfig& k) {
+  r.read("from_load", k.from_load);
+  r.read("max_overlap", k.max_overlap, open_closed(0, 0.5));
+  r.read("impact_overlap", k.impact_overlap, open_closed(0, 0.5));
+  r.read("impact_speed", k.impact_speed, kNonNegative);
+  r.read("dem_depth", k.dem_depth, kPositive);
+  r.read("surface_depth", k.surface_depth, kPositive);
+  r.finish("[stiffness]");
+}
+
+// Angles are written in degrees and stored in radians.
+void read_surface(TableReader r, SurfaceConfig& s) {
+  r.read("cell_size", s.cell_size, kPositive);
+  r.read("exchange_rate", s.exchange_rate, kPositive);
+  std::optional<Real> repose_deg;
+  std::optional<Real> max_deg;
+  r.read("repose_angle", repose_deg, open(0, 90));
+  r.read("max_angle", max_deg, open(0, 90));
+  r.read("rolling_min", s.rolling_min, kNonNegative);
+  r.read("interface_thickness", s.interface_thickness, kPositive);
+  r.read("update_interval", s.update_interval, kPositive);
+  r.read("trap_speed", s.trap_speed, kNonNegative);
+  r.read("extent", s.extent);
+  r.finish("[surface]");
+
+  if (repose_deg) s.repose_angle = deg_to_rad(*repose_deg);
+  if (max_deg) {
+    s.max_angle = deg_to_rad(*max_deg);
+    if (*s.max_angle < s.repose_angle) {
+      // The default repose angle is printed in degrees, rounded off its round trip via radians.
+      const std::string repose_text =
+          repose_deg
+              ? format_real(*repose_deg)
+              : format_real(std::round(rad_to_deg(s.repose_angle) * 1e9) / 1e9) + " (the default)";
+      r.fail_at("max_angle", r.name("max_angle") + " = " + format_real(*max_deg) +
+                                 " is less than " + r.name("repose_angle") + " = " + repose_text +
+                                 " (degrees): expected max_angle >= repose_angle");
+    }
+  }
+  if (s.extent) {
+    const auto& [x0, y0, x1, y1] = *s.extent;
+    if (!(x1 > x0) || !(y1 > y0))
+      r.fail_at("extent", r.name("extent") + " = [" + format_real(x0) + ", " + format_real(y0) +
+                              ", " + format_real(x1) + ", " + format_real(y1) +
+                              "]: expected [x0, y0, x1, y1] with x1 > x0 and y1 > y0");
+  }
 }
 
 void read_output(TableReader r, OutputConfig& o) {
@@ -525,6 +593,9 @@ SceneConfig read_scene(const toml::table& root, const std::string& path) {
   if (const auto* t = doc.table("material")) read_material({places, *t, "material"}, c.material);
   if (const auto* t = doc.table("simulation"))
     read_simulation({places, *t, "simulation"}, c.simulation);
+  if (const auto* t = doc.table("stiffness"))
+    read_stiffness({places, *t, "stiffness"}, c.stiffness);
+  if (const auto* t = doc.table("surface")) read_surface({places, *t, "surface"}, c.surface);
   if (const auto* t = doc.table("output")) read_output({places, *t, "output"}, c.output);
 
   if (const auto* a = doc.array_of_tables("geometry")) {
@@ -621,8 +692,8 @@ void apply_override(toml::table& root, const Override& o) {
     if (auto* t = at->as_table()) {
       toml::node* child = t->get(seg);
       if (!child) {
-        const bool plain =
-            seg == "scene" || seg == "material" || seg == "simulation" || seg == "output";
+        const bool plain = seg == "scene" || seg == "material" || seg == "simulation" ||
+                           seg == "stiffness" || seg == "surface" || seg == "output";
         if (t != &root || !plain)
           fail(where, "the scene has no table " + (walked.empty() ? seg : walked + "." + seg));
         child = &t->insert_or_assign(seg, toml::table{}).first->second;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -289,6 +290,159 @@ TEST(SceneLoader, OverrideOfUnknownKeyOrMissingTableIsAnError) {
   expect_error(kMinimal, {"--set geometry.0.radius: the scene has no table geometry"},
                {{"geometry.0.radius", "1"}});
   expect_error(kMinimal, {"--set emitter..rate: malformed key"}, {{"emitter..rate", "1"}});
+}
+
+TEST(SceneLoader, DefaultModeIsSurface) {
+  EXPECT_EQ(SimulationConfig{}.mode, Mode::Surface);
+  EXPECT_EQ(load_scene_from_string(kMinimal, "t.toml").simulation.mode, Mode::Surface);
+}
+
+TEST(SceneLoader, StiffnessAndSurfaceAreUnsetByDefault) {
+  const SceneConfig c = load_scene_from_string(kMinimal, "t.toml");
+  EXPECT_FALSE(c.stiffness.from_load);
+  EXPECT_EQ(c.stiffness.max_overlap, 0.01);
+  EXPECT_EQ(c.stiffness.impact_overlap, 0.1);
+  EXPECT_FALSE(c.stiffness.impact_speed.has_value());
+  EXPECT_FALSE(c.stiffness.dem_depth.has_value());
+  EXPECT_FALSE(c.stiffness.surface_depth.has_value());
+  EXPECT_DOUBLE_EQ(c.surface.repose_angle, deg_to_rad(32.0));
+  EXPECT_FALSE(c.surface.cell_size.has_value());
+  EXPECT_FALSE(c.surface.max_angle.has_value());
+  EXPECT_FALSE(c.surface.extent.has_value());
+}
+
+TEST(SceneLoader, StiffnessTableIsRead) {
+  const std::string text =
+      "[stiffness]\n"
+      "from_load = true\n"
+      "max_overlap = 0.02\n"
+      "impact_overlap = 0.5\n"  // the upper bound is allowed
+      "impact_speed = 0\n"      // so is 0
+      "dem_depth = 0.3\n"
+      "surface_depth = 0.04\n" +
+      std::string(kMinimal);
+  const SceneConfig c = load_scene_from_string(text, "t.toml");
+  EXPECT_TRUE(c.stiffness.from_load);
+  EXPECT_EQ(c.stiffness.max_overlap, 0.02);
+  EXPECT_EQ(c.stiffness.impact_overlap, 0.5);
+  ASSERT_TRUE(c.stiffness.impact_speed.has_value());
+  EXPECT_EQ(*c.stiffness.impact_speed, 0.0);
+  ASSERT_TRUE(c.stiffness.dem_depth.has_value());
+  EXPECT_EQ(*c.stiffness.dem_depth, 0.3);
+  ASSERT_TRUE(c.stiffness.surface_depth.has_value());
+  EXPECT_EQ(*c.stiffness.surface_depth, 0.04);
+}
+
+TEST(SceneLoader, SurfaceTableIsReadWithAnglesInRadians) {
+  const std::string text =
+      "[surface]\n"
+      "cell_size = 0.012\n"
+      "exchange_rate = 25\n"
+      "repose_angle = 30\n"
+      "max_angle = 30\n"  // equal to the repose angle is allowed
+      "rolling_min = 0\n"
+      "interface_thickness = 0.015\n"
+      "update_interval = 0.004\n"
+      "trap_speed = 0.05\n"
+      "extent = [-1, -0.5, 1, 2]\n" +
+      std::string(kMinimal);
+  const SceneConfig c = load_scene_from_string(text, "t.toml");
+  const SurfaceConfig& s = c.surface;
+  ASSERT_TRUE(s.cell_size && s.exchange_rate && s.max_angle && s.rolling_min &&
+              s.interface_thickness && s.update_interval && s.trap_speed && s.extent);
+  EXPECT_EQ(*s.cell_size, 0.012);
+  EXPECT_EQ(*s.exchange_rate, 25.0);
+  EXPECT_DOUBLE_EQ(s.repose_angle, kPi / 6);
+  EXPECT_DOUBLE_EQ(*s.max_angle, kPi / 6);
+  EXPECT_EQ(*s.rolling_min, 0.0);
+  EXPECT_EQ(*s.interface_thickness, 0.015);
+  EXPECT_EQ(*s.update_interval, 0.004);
+  EXPECT_EQ(*s.trap_speed, 0.05);
+  EXPECT_EQ(*s.extent, (std::array<Real, 4>{-1, -0.5, 1, 2}));
+}
+
+TEST(SceneLoader, BadStiffnessValuesNameTheKey) {
+  const std::string k = std::string(kMinimal) + "[stiffness]\n";  // keys go on line 4
+  expect_error(k + "from_load = 1\n",
+               {"t.toml:4:1: stiffness.from_load: expected true or false, got an integer"});
+  expect_error(k + "max_overlap = 0\n",
+               {"t.toml:4:1: stiffness.max_overlap = 0 is outside (0, 0.5]"});
+  expect_error(k + "max_overlap = 0.6\n", {"stiffness.max_overlap = 0.6 is outside (0, 0.5]"});
+  expect_error(k + "impact_overlap = 0.51\n",
+               {"t.toml:4:1: stiffness.impact_overlap = 0.51 is outside (0, 0.5]"});
+  expect_error(k + "impact_speed = -1\n", {"t.toml:4:1: stiffness.impact_speed = -1 is not >= 0"});
+  expect_error(k + "dem_depth = 0\n", {"t.toml:4:1: stiffness.dem_depth = 0 is not > 0"});
+  expect_error(k + "surface_depth = -0.1\n",
+               {"t.toml:4:1: stiffness.surface_depth = -0.1 is not > 0"});
+  expect_error(k + "max_overlaps = 0.1\n",
+               {"t.toml:4:1: stiffness.max_overlaps is not a key of [stiffness]", "max_overlap"});
+}
+
+TEST(SceneLoader, BadSurfaceValuesNameTheKey) {
+  const std::string s = std::string(kMinimal) + "[surface]\n";  // keys go on line 4
+  expect_error(s + "cell_size = 0\n", {"t.toml:4:1: surface.cell_size = 0 is not > 0"});
+  expect_error(s + "exchange_rate = -2\n", {"t.toml:4:1: surface.exchange_rate = -2 is not > 0"});
+  expect_error(s + "repose_angle = 0\n",
+               {"t.toml:4:1: surface.repose_angle = 0 is outside (0, 90)"});
+  expect_error(s + "repose_angle = 90\n", {"surface.repose_angle = 90 is outside (0, 90)"});
+  expect_error(s + "max_angle = 95\n", {"t.toml:4:1: surface.max_angle = 95 is outside (0, 90)"});
+  expect_error(s + "rolling_min = -0.01\n",
+               {"t.toml:4:1: surface.rolling_min = -0.01 is not >= 0"});
+  expect_error(s + "interface_thickness = 0\n",
+               {"t.toml:4:1: surface.interface_thickness = 0 is not > 0"});
+  expect_error(s + "update_interval = 0\n", {"t.toml:4:1: surface.update_interval = 0 is not > 0"});
+  expect_error(s + "trap_speed = -1\n", {"t.toml:4:1: surface.trap_speed = -1 is not >= 0"});
+  expect_error(s + "trap_speed = inf\n", {"surface.trap_speed = inf is not a finite number"});
+}
+
+TEST(SceneLoader, UnknownSurfaceKeyIsNamed) {
+  expect_error(
+      std::string(kMinimal) + "[surface]\ncell_size = 0.01\n  cellsize = 0.01\n",
+      {"t.toml:5:3: surface.cellsize is not a key of [surface]", "cell_size, exchange_rate"});
+}
+
+TEST(SceneLoader, MaxAngleBelowReposeAngleIsRefused) {
+  expect_error(std::string(kMinimal) + "[surface]\nrepose_angle = 35\nmax_angle = 30\n",
+               {"t.toml:5:1: surface.max_angle = 30 is less than surface.repose_angle = 35"});
+  // Against the default repose angle, 32 degrees.
+  expect_error(std::string(kMinimal) + "[surface]\nmax_angle = 31.5\n",
+               {"t.toml:4:1: surface.max_angle = 31.5 is less than surface.repose_angle = 32 "
+                "(the default)"});
+}
+
+TEST(SceneLoader, ExtentNeedsFourNumbersInOrder) {
+  const std::string s = std::string(kMinimal) + "[surface]\n";
+  expect_error(s + "extent = [0, 0, 1]\n",
+               {"t.toml:4:1: surface.extent: expected an array of 4 numbers, got 3 elements"});
+  expect_error(
+      s + "extent = [1, 0, 1, 1]\n",
+      {"t.toml:4:1: surface.extent = [1, 0, 1, 1]: expected [x0, y0, x1, y1] with x1 > x0"});
+  expect_error(s + "extent = [0, 2, 1, 1]\n", {"t.toml:4:1: surface.extent = [0, 2, 1, 1]"});
+  expect_error(s + "extent = [0, 0, nan, 1]\n",
+               {"t.toml:4:17: surface.extent[2] = nan is not a finite number"});
+  expect_error(s + "extent = 1\n",
+               {"t.toml:4:1: surface.extent: expected an array of 4 numbers, got an integer"});
+}
+
+TEST(SceneLoader, OverridesReachStiffnessAndSurface) {
+  // Neither table is in the file: an override creates it, and its value is checked as usual.
+  const SceneConfig c = load_scene_from_string(kMinimal, "t.toml",
+                                               {{"surface.repose_angle", "30"},
+                                                {"surface.max_angle", "36"},
+                                                {"surface.extent", "[0, 0, 2, 1]"},
+                                                {"stiffness.from_load", "true"}});
+  EXPECT_DOUBLE_EQ(c.surface.repose_angle, deg_to_rad(30.0));
+  ASSERT_TRUE(c.surface.max_angle.has_value());
+  EXPECT_DOUBLE_EQ(*c.surface.max_angle, deg_to_rad(36.0));
+  EXPECT_EQ(c.surface.extent, (std::array<Real, 4>{0, 0, 2, 1}));
+  EXPECT_TRUE(c.stiffness.from_load);
+  expect_error(kMinimal,
+               {"--set surface.repose_angle: surface.repose_angle = 95 is outside (0, 90)"},
+               {{"surface.repose_angle", "95"}});
+  expect_error(std::string(kMinimal) + "[surface]\nrepose_angle = 35\n",
+               {"--set surface.max_angle: surface.max_angle = 30 is less than "
+                "surface.repose_angle = 35"},
+               {{"surface.max_angle", "30"}});
 }
 
 TEST(SceneLoader, ParseOverrideSplitsAtTheFirstEquals) {
