@@ -43,8 +43,8 @@ if [ "$what" = test ]; then
 elif [ "$what" = demo ]; then
   out=out/floor-demo
   grains=${SANDFLOW_DEMO_GRAINS:-20000}
-  echo "==> simulating scenes/floor.toml with $grains grains (plain DEM) -> $out"
-  "./$build/sandflow" run scenes/floor.toml --mode dem --grains "$grains" --out "$out" --force
+  echo "==> simulating scenes/floor.toml with $grains grains (surface flow: height field + DEM) -> $out"
+  "./$build/sandflow" run scenes/floor.toml --grains "$grains" --out "$out" --force
   echo "==> rendering the last frame with POV-Ray"
   png=$("./$build/sandflow" render "$out" --width 1280 --height 720)
   echo "==> done: picture $png, summary $out/summary.json, statistics $out/stats.csv"

@@ -19,13 +19,17 @@ class Progress {
   Progress(std::string label, int total_frames)
       : label_(std::move(label)), total_(total_frames), tty_(isatty(STDERR_FILENO) != 0) {}
 
-  void update(int frame, std::int64_t grains) {
+  /// `simulated`: grains in the DEM (active + interface), shown when below `grains`.
+  void update(int frame, std::int64_t grains, std::int64_t simulated = -1) {
     const double elapsed = clock_.seconds();
     const double per_frame = elapsed / std::max(1, frame);
     const double eta = per_frame * (total_ - frame);
     const std::string line =
-        fmt::format("{} frame {}/{}  grains {}  {:.1f} frames/min  ETA {}", label_, frame, total_,
-                    grains, 60.0 / std::max(per_frame, 1e-9), format_duration(eta));
+        fmt::format("{} frame {}/{}  grains {}{}  {:.1f} frames/min  ETA {}", label_, frame, total_,
+                    grains,
+                    simulated >= 0 && simulated < grains ? fmt::format(" ({} simulated)", simulated)
+                                                         : std::string(),
+                    60.0 / std::max(per_frame, 1e-9), format_duration(eta));
     if (tty_) {
       std::fprintf(stderr, "\r%s\033[K", line.c_str());
       if (frame == total_) std::fputc('\n', stderr);

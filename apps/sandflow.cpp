@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/heap.hpp"
+#include "analysis/surface_diff.hpp"
 #include "core/error.hpp"
 #include "io/ply.hpp"
 #include "io/pov_writer.hpp"
@@ -25,6 +26,7 @@
 #include "progress.hpp"
 #include "scene/scene_loader.hpp"
 #include "scene/world.hpp"
+#include "surface/surface_params.hpp"
 
 namespace fs = std::filesystem;
 using namespace sandflow;
@@ -51,10 +53,6 @@ SceneConfig load_for_run(const RunOptions& o) {
   for (const auto& s : o.sets) overrides.push_back(parse_override(s));
   if (!o.mode.empty()) overrides.push_back({"simulation.mode", fmt::format("\"{}\"", o.mode)});
   SceneConfig scene = load_scene(o.scene, overrides);
-  if (scene.simulation.mode == Mode::Surface)
-    throw InputError(
-        "--mode surface is not available yet: the height-field method arrives with the surface-flow "
-        "issue; use --mode dem");
   if (o.grains > 0) scale_grain_count(scene, o.grains);
   if (o.frames > 0) scene.output.frames = o.frames;
   if (o.threads > 0) scene.simulation.threads = o.threads;
@@ -72,34 +70,48 @@ nlohmann::json heap_json(const HeapFit& fit) {
           {"reason", fit.reason}};
 }
 
-int run_command(const RunOptions& o) {
-  SceneConfig scene = load_for_run(o);
+nlohmann::json stiffness_json(const Stiffness& s) {
+  nlohmann::json j = {{"k_n", s.k_n}, {"from_load", s.from_load}};
+  if (s.from_load) {
+    j["depth"] = s.depth;
+    j["impact_speed"] = s.impact_speed;
+    j["k_static"] = s.k_static;
+    j["k_impact"] = s.k_impact;
+  }
+  return j;
+}
+
+int thread_count(const SceneConfig& scene) {
+  return scene.simulation.threads > 0 ? scene.simulation.threads : omp_get_num_procs();
+}
+
+/// What a finished run leaves for the caller: its summary and its final grains.
+struct RunResult {
+  nlohmann::json summary;
+  std::vector<FrameStats> frames;
+  std::vector<Vec3> x;  ///< every grain's centre at the end
+  std::vector<Real> r;
+  double wall_seconds = 0;
+  HeapFit heap;
+};
+
+/// Runs a scene into `out` (prepared by the caller), writing stats.csv, frames and summary.json.
+RunResult run_scene(const SceneConfig& scene, const std::string& out) {
   World world(scene);
   const int frames = world.planned_frames();
   const TimeStep& ts = world.time_step();
-  const int threads = scene.simulation.threads > 0 ? scene.simulation.threads : omp_get_num_procs();
+  const int threads = thread_count(scene);
   omp_set_num_threads(threads);
-
-  if (o.check) {
-    fmt::print("{}: ok — {} grains, {} frames at {} fps, dt = {:.3g} s ({} substeps/frame, t_c = "
-               "{:.3g} s)\n",
-               scene.path, scene.total_grains(), frames, scene.output.fps, ts.dt, ts.substeps,
-               ts.t_c);
-    return 0;
-  }
-
-  const std::string out = o.out.empty() ? fmt::format("out/{}-{}", scene.name,
-                                                      mode_name(scene.simulation.mode))
-                                        : o.out;
-  prepare_output_dir(out, o.force);
-  fmt::print(stderr, "sandflow {}: {} ({} grains, mode {}), {} frames, dt = {:.3g} s, {} threads -> {}\n",
+  fmt::print(stderr, "sandflow {}: {} ({} grains, mode {}), {} frames, k_n = {:.4g} N/m, dt = {:.3g} s, {} threads -> {}\n",
              SANDFLOW_VERSION, scene.path, scene.total_grains(), mode_name(scene.simulation.mode),
-             frames, ts.dt, threads, out);
+             frames, world.scene().material.k_n, ts.dt, threads, out);
 
+  RunResult res;
   StatsWriter stats(fs::path(out) / "stats.csv");
-  Progress progress(scene.name, frames);
-  double simulated_sum = 0, seconds_sum = 0;
+  Progress progress(fmt::format("{} [{}]", scene.name, mode_name(scene.simulation.mode)), frames);
+  double simulated_sum = 0;
   Real max_overlap = 0;
+  TransitionCounts transitions;
   for (int f = 0; f < frames; ++f) {
     FrameStats st = world.advance_frame();
     Stopwatch io;
@@ -107,15 +119,19 @@ int run_command(const RunOptions& o) {
     st.wall_seconds += io.seconds();
     stats.write(st);
     simulated_sum += static_cast<double>(st.n_active + st.n_interface);
-    seconds_sum += st.wall_seconds;
+    res.wall_seconds += st.wall_seconds;
     max_overlap = std::max(max_overlap, st.max_overlap_rel);
-    progress.update(st.frame, st.n_total);
+    transitions += st.transitions;
+    res.frames.push_back(st);
+    progress.update(st.frame, st.n_total, st.n_active + st.n_interface);
   }
 
-  // the heap of the final frame, and what ended up where it must not be
-  const FrameData last = world.visible_frame();
-  const HeapFit fit = measure_heap(last.position, last.radius);
-  const auto inside = world.geometry().count_inside(world.grains().x);
+  // the heap of the final state, and what ended up where it must not be
+  world.all_grains(res.x, res.r);
+  res.heap = measure_heap(res.x, res.r);
+  const HeapFit& fit = res.heap;
+  const auto inside = world.geometry().count_inside(res.x);
+  const FrameStats& last = res.frames.back();
   nlohmann::json summary = {
       {"sandflow_version", SANDFLOW_VERSION},
       {"scene", scene.name},
@@ -125,12 +141,17 @@ int run_command(const RunOptions& o) {
       {"fps", scene.output.fps},
       {"n_total", world.total_grains()},
       {"n_simulated_mean", simulated_sum / frames},
-      {"seconds_per_frame", seconds_sum / frames},
-      {"wall_seconds", seconds_sum},
+      {"n_simulated_final", last.n_active + last.n_interface},
+      {"n_active_final", last.n_active},
+      {"n_interface_final", last.n_interface},
+      {"n_static_final", last.n_static},
+      {"seconds_per_frame", res.wall_seconds / frames},
+      {"wall_seconds", res.wall_seconds},
       {"dt_mean", ts.dt},
       {"substeps_per_frame", ts.substeps},
       {"t_c", ts.t_c},
-      {"k_n", scene.material.k_n},
+      {"k_n", world.scene().material.k_n},
+      {"stiffness", stiffness_json(world.stiffness())},
       {"threads", threads},
       {"max_overlap_rel", max_overlap},
       {"repose_angle_deg", fit.ok ? nlohmann::json(fit.repose_angle_deg) : nlohmann::json()},
@@ -138,33 +159,201 @@ int run_command(const RunOptions& o) {
       {"grains_inside_geometry", inside},
       {"state_hash", fmt::format("{:016x}", world.state_hash())},
   };
+  if (const SurfaceFlow* sf = world.surface()) {
+    const HeightField& hf = sf->height_field();
+    Real r_sum = 0, r_max = 0;
+    const std::size_t sand = hf.sand_columns();
+    for (std::size_t c = 0; c < hf.columns(); ++c)
+      if (hf.surface()[c] > hf.terrain()[c]) {
+        r_sum += hf.rolling()[c];
+        r_max = std::max(r_max, hf.rolling()[c]);
+      }
+    summary["height_field"] = {
+        {"cells", hf.columns()},
+        {"nx", hf.nx()},
+        {"ny", hf.ny()},
+        {"cell_size", hf.cell()},
+        {"sand_cells", sand},
+        {"rolling_mean", sand ? r_sum / static_cast<Real>(sand) : 0.0},
+        {"rolling_max", r_max},
+        {"static_volume", hf.static_volume()},
+        {"update_interval", sf->params().update_interval},
+        {"repose_angle_deg", rad_to_deg(hf.params().theta0)},
+        {"max_angle_deg", rad_to_deg(hf.params().theta_max)},
+        {"exchange_rate", hf.params().gamma},
+        {"rolling_min", hf.params().rolling_min},
+        {"interface_thickness", sf->params().interface.thickness},
+        {"trap_speed", sf->params().interface.trap_speed},
+    };
+    summary["transitions"] = {{"trapped", transitions.trapped},
+                              {"dislodged", transitions.dislodged},
+                              {"slept", transitions.slept},
+                              {"woken", transitions.woken}};
+  }
   nlohmann::json prof;
   for (int s = 0; s < static_cast<int>(Stage::kCount); ++s)
     prof[std::string(stage_name(static_cast<Stage>(s)))] = world.profile().seconds[s];
   summary["stage_seconds"] = prof;
   write_file_atomic((fs::path(out) / "summary.json").string(), summary.dump(2) + "\n");
+  res.summary = summary;
+  return res;
+}
 
+int run_command(const RunOptions& o) {
+  const SceneConfig scene = load_for_run(o);
+  if (o.check) {
+    World world(scene);
+    const TimeStep& ts = world.time_step();
+    fmt::print("{}: ok — {} grains, mode {}, {} frames at {} fps, k_n = {:.4g} N/m, dt = {:.3g} s "
+               "({} substeps/frame, t_c = {:.3g} s)\n",
+               scene.path, scene.total_grains(), mode_name(scene.simulation.mode),
+               world.planned_frames(), scene.output.fps, world.scene().material.k_n, ts.dt,
+               ts.substeps, ts.t_c);
+    return 0;
+  }
+  const std::string out = o.out.empty() ? fmt::format("out/{}-{}", scene.name,
+                                                      mode_name(scene.simulation.mode))
+                                        : o.out;
+  prepare_output_dir(out, o.force);
+  const RunResult res = run_scene(scene, out);
+  const nlohmann::json& s = res.summary;
+  const HeapFit& fit = res.heap;
+  const int frames = s["frames"].get<int>();
   fmt::print("scene            {} ({})\n", scene.name, scene.path);
   fmt::print("mode             {}\n", mode_name(scene.simulation.mode));
-  fmt::print("grains           {}\n", world.total_grains());
-  fmt::print("frames           {} ({:.2f} s simulated, dt = {:.3g} s)\n", frames, world.time(), ts.dt);
-  fmt::print("time per frame   {:.3f} s  (total {:.1f} s, {} threads)\n", seconds_sum / frames,
-             seconds_sum, threads);
+  fmt::print("grains           {} ({} simulated at the end, {:.0f} on average)\n",
+             s["n_total"].get<std::int64_t>(), s["n_simulated_final"].get<std::int64_t>(),
+             s["n_simulated_mean"].get<double>());
+  fmt::print("frames           {} ({:.2f} s simulated, k_n = {:.4g} N/m, dt = {:.3g} s)\n", frames,
+             frames / scene.output.fps, s["k_n"].get<double>(), s["dt_mean"].get<double>());
+  fmt::print("time per frame   {:.3f} s  (total {:.1f} s, {} threads)\n",
+             res.wall_seconds / frames, res.wall_seconds, s["threads"].get<int>());
   if (fit.ok)
     fmt::print("repose angle     {:.1f} deg (heap height {:.3f} m, base radius {:.3f} m)\n",
                fit.repose_angle_deg, fit.height, fit.base_radius);
   else
     fmt::print("repose angle     n/a ({})\n", fit.reason);
-  fmt::print("inside geometry  {}\n", inside);
-  fmt::print("max overlap      {:.2f} % of a diameter\n", 100 * max_overlap);
-  fmt::print("state hash       {:016x}\n", world.state_hash());
+  if (s.contains("transitions")) {
+    const auto& t = s["transitions"];
+    fmt::print("transitions      trapped {}, dislodged {}, slept {}, woken {}\n",
+               t["trapped"].get<std::int64_t>(), t["dislodged"].get<std::int64_t>(),
+               t["slept"].get<std::int64_t>(), t["woken"].get<std::int64_t>());
+  }
+  fmt::print("inside geometry  {}\n", s["grains_inside_geometry"].get<std::int64_t>());
+  fmt::print("max overlap      {:.2f} % of a diameter\n", 100 * s["max_overlap_rel"].get<double>());
+  fmt::print("state hash       {}\n", s["state_hash"].get<std::string>());
   fmt::print("output           {}/ (stats.csv, summary.json, frames/)\n", out);
   if (o.profile) {
     fmt::print("stage seconds   ");
-    for (int s = 0; s < static_cast<int>(Stage::kCount); ++s)
-      fmt::print(" {} {:.2f}", stage_name(static_cast<Stage>(s)), world.profile().seconds[s]);
+    for (const auto& [k, v] : s["stage_seconds"].items()) fmt::print(" {} {:.2f}", k, v.get<double>());
     fmt::print("\n");
   }
+  return 0;
+}
+
+/// Mean of the simulated fraction (active + interface over all grains) over frames [first, end).
+double simulated_fraction(const std::vector<FrameStats>& frames, std::size_t first) {
+  double sum = 0;
+  std::size_t n = 0;
+  for (std::size_t k = first; k < frames.size(); ++k, ++n)
+    sum += frames[k].n_total > 0 ? static_cast<double>(frames[k].n_active + frames[k].n_interface) /
+                                       static_cast<double>(frames[k].n_total)
+                                 : 1.0;
+  return n ? sum / static_cast<double>(n) : 0.0;
+}
+
+nlohmann::json angle_json(const HeapFit& f) {
+  return f.ok ? nlohmann::json(f.repose_angle_deg) : nlohmann::json();
+}
+
+int compare_command(const RunOptions& o) {
+  if (!o.mode.empty()) throw InputError("compare runs both modes: --mode does not apply");
+  SceneConfig scene = load_for_run(o);
+  const std::string out = o.out.empty() ? fmt::format("out/{}-compare", scene.name) : o.out;
+  prepare_output_dir(out, o.force);
+  SceneConfig surface_scene = scene, dem_scene = scene;
+  surface_scene.simulation.mode = Mode::Surface;
+  dem_scene.simulation.mode = Mode::Dem;
+  const std::string surface_out = (fs::path(out) / "surface").string();
+  const std::string dem_out = (fs::path(out) / "dem").string();
+  prepare_output_dir(surface_out, false);
+  prepare_output_dir(dem_out, false);
+  const RunResult surf = run_scene(surface_scene, surface_out);
+  const RunResult dem = run_scene(dem_scene, dem_out);
+
+  // both final surfaces on the surface run's grid, from every grain
+  const Geometry geometry = Geometry::from_config(scene.geometry, scene.material);
+  const SurfaceParams sp =
+      surface_params(surface_scene, geometry, surf.summary["dt_mean"].get<double>());
+  const std::vector<Real> L = terrain_heights(sp, geometry);
+  const SurfaceDiff diff = compare_surfaces(measure_surface(sp.grid, L, dem.x, dem.r),
+                                            measure_surface(sp.grid, L, surf.x, surf.r), L);
+
+  const std::size_t n_frames = surf.frames.size();
+  const double frac_mean = simulated_fraction(surf.frames, 0);
+  const double frac_half = simulated_fraction(surf.frames, n_frames / 2);
+  const FrameStats& last = surf.frames.back();
+  const double frac_final = static_cast<double>(last.n_active + last.n_interface) /
+                            static_cast<double>(std::max<std::int64_t>(last.n_total, 1));
+  const double speedup = dem.wall_seconds / std::max(surf.wall_seconds, 1e-12);
+  const double k_dem = dem.summary["k_n"].get<double>(), k_surf = surf.summary["k_n"].get<double>();
+  const bool same_k = k_dem == k_surf;
+  const double angle_diff = surf.heap.ok && dem.heap.ok
+                                ? std::abs(surf.heap.repose_angle_deg - dem.heap.repose_angle_deg)
+                                : std::nan("");
+
+  nlohmann::json j = {
+      {"scene", scene.name},
+      {"scene_file", scene.path},
+      {"frames", n_frames},
+      {"n_total", last.n_total},
+      {"speedup", speedup},
+      {"simulated_fraction_mean", frac_mean},
+      {"simulated_fraction_last_half", frac_half},
+      {"simulated_fraction_final", frac_final},
+      {"n_simulated_mean", surf.summary["n_simulated_mean"]},
+      {"n_simulated_final", last.n_active + last.n_interface},
+      {"seconds_per_frame_dem", dem.wall_seconds / n_frames},
+      {"seconds_per_frame_surface", surf.wall_seconds / n_frames},
+      {"wall_seconds_dem", dem.wall_seconds},
+      {"wall_seconds_surface", surf.wall_seconds},
+      {"dt_dem", dem.summary["dt_mean"]},
+      {"dt_surface", surf.summary["dt_mean"]},
+      {"k_n_dem", k_dem},
+      {"k_n_surface", k_surf},
+      {"same_stiffness", same_k},
+      {"repose_angle_dem_deg", angle_json(dem.heap)},
+      {"repose_angle_surface_deg", angle_json(surf.heap)},
+      {"repose_angle_difference_deg", std::isnan(angle_diff) ? nlohmann::json() : nlohmann::json(angle_diff)},
+      {"surface_rms", diff.rms},
+      {"surface_rms_rel", diff.rms_rel},
+      {"heap_height_dem", diff.heap_height},
+      {"surface_columns_compared", diff.columns},
+      {"threads", thread_count(scene)},
+  };
+  write_file_atomic((fs::path(out) / "compare.json").string(), j.dump(2) + "\n");
+
+  auto angle = [](const HeapFit& f) { return f.ok ? fmt::format("{:.1f} deg", f.repose_angle_deg) : std::string("n/a"); };
+  fmt::print("\n{} ({} grains, {} frames, {} threads)\n", scene.name, last.n_total, n_frames,
+             thread_count(scene));
+  fmt::print("{:<34}{:>16}{:>16}\n", "", "plain DEM", "surface flow");
+  fmt::print("{:<34}{:>16}{:>16}\n", "total grains", dem.frames.back().n_total, last.n_total);
+  fmt::print("{:<34}{:>16.0f}{:>16.0f}\n", "simulated grains, mean",
+             dem.summary["n_simulated_mean"].get<double>(), surf.summary["n_simulated_mean"].get<double>());
+  fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, mean", "100%", 100 * frac_mean);
+  fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, last half", "100%", 100 * frac_half);
+  fmt::print("{:<34}{:>16}{:>16}\n", "simulated grains, final", dem.frames.back().n_total,
+             last.n_active + last.n_interface);
+  fmt::print("{:<34}{:>16.3f}{:>16.3f}\n", "seconds per frame", dem.wall_seconds / n_frames,
+             surf.wall_seconds / n_frames);
+  fmt::print("{:<34}{:>16.3g}{:>16.3g}\n", "k_n [N/m]", k_dem, k_surf);
+  fmt::print("{:<34}{:>16.3g}{:>16.3g}\n", "dt [s]", dem.summary["dt_mean"].get<double>(),
+             surf.summary["dt_mean"].get<double>());
+  fmt::print("{:<34}{:>16}{:>16}\n", "repose angle", angle(dem.heap), angle(surf.heap));
+  fmt::print("speed-up {:.2f}x; surfaces differ by {:.4f} m RMS = {:.1f}% of the heap height "
+             "({:.3f} m); {} stiffness in both modes\n",
+             speedup, diff.rms, 100 * diff.rms_rel, diff.heap_height, same_k ? "the same" : "a different");
+  fmt::print("output           {}/ (compare.json, dem/, surface/)\n", out);
   return 0;
 }
 
@@ -247,6 +436,20 @@ int main(int argc, char** argv) {
   auto* measure = app.add_subcommand("measure", "print the angle of repose of a run's last frame");
   measure->add_option("dir", dir, "run folder")->required();
 
+  RunOptions co;
+  auto* compare = app.add_subcommand(
+      "compare", "run a scene in both modes and compare speed, grains simulated and the heaps");
+  compare->add_option("scene", co.scene, "scene file (TOML)")->required();
+  compare->add_option("--out", co.out, "output folder (default out/SCENE-compare)");
+  compare->add_option("--frames", co.frames, "number of frames (default: from the scene)")
+      ->check(CLI::PositiveNumber);
+  compare->add_option("--grains", co.grains, "scale the emitters to N grains in total")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{2000000000}));
+  compare->add_option("--threads", co.threads, "OpenMP threads (default: all cores)")
+      ->check(CLI::Range(1, 1024));
+  compare->add_option("--set", co.sets, "override a scene key in both runs");
+  compare->add_flag("--force", co.force, "replace a comparison in a non-empty output folder");
+
   int width = 1280, height = 720, frame = 0;
   auto* render = app.add_subcommand("render", "render a run's frame with POV-Ray to PNG");
   render->add_option("dir", dir, "run folder")->required();
@@ -262,6 +465,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (*run) return run_command(ro);
+    if (*compare) return compare_command(co);
     if (*measure) return measure_command(dir);
     if (*render) return render_command(dir, width, height, frame);
   } catch (const InputError& e) {

@@ -18,12 +18,14 @@ class Stopwatch {
   Clock::time_point start_;
 };
 
-/// Forces covers the contact forces and the integration, done in one sweep (dem_solver.cpp).
-enum class Stage { Emit, Neighbours, Forces, kCount };
+/// Forces covers the contact forces and the integration, done in one sweep (dem_solver.cpp);
+/// Surface the height-field updates and the transfers through the interface.
+enum class Stage { Emit, Surface, Neighbours, Forces, kCount };
 
 inline std::string_view stage_name(Stage s) {
   switch (s) {
     case Stage::Emit: return "emit";
+    case Stage::Surface: return "surface";
     case Stage::Neighbours: return "neighbours";
     case Stage::Forces: return "forces";
     default: return "?";

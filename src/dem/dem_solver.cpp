@@ -23,6 +23,24 @@ void DemSolver::step(Grains& grains, const Geometry& geometry, Real dt, Profile&
   if (4 * max_disp2 > params_.skin * params_.skin) need_rebuild_ = true;
 }
 
+void DemSolver::contacts_of(const Grains& grains, const Geometry& geometry,
+                            std::vector<std::uint8_t>& out) const {
+  out.assign(grains.size(), 0);
+  const std::size_t n = std::min(grains.size(), pairs_.start.empty() ? 0 : pairs_.start.size() - 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::uint32_t s = pairs_.start[i]; s < pairs_.start[i + 1]; ++s) {
+      if (!pairs_.touch[s]) continue;
+      const std::uint32_t j = pairs_.j[s];
+      out[i] |= kTouches | (grains.state[j] == GrainState::Active ? kTouchesActive : 0);
+      out[j] |= kTouches | (grains.state[i] == GrainState::Active ? kTouchesActive : 0);
+    }
+    if (out[i] & kTouches || walls_.start.size() <= i + 1) continue;
+    for (std::uint32_t s = walls_.start[i]; s < walls_.start[i + 1]; ++s)
+      if (geometry.obstacles()[walls_.obstacle[s]].solid->closest(grains.x[i]).distance < grains.r[i])
+        out[i] |= kTouches;
+  }
+}
+
 void DemSolver::sort_by_cell(Grains& grains) {
   // Row-major cell order (z, y, x) keeps neighbours close in memory.
   const std::size_t n = grains.size();

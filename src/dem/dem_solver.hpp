@@ -38,6 +38,18 @@ class DemSolver {
   /// Call after grains were added, removed or changed state: the next step rebuilds the lists.
   void invalidate() { need_rebuild_ = true; }
   bool needs_rebuild() const { return need_rebuild_; }
+  /// Drops the contact history of a grain (its pairs and wall contacts start afresh at the next
+  /// rebuild, which this requests): for grains that change state.
+  void forget_history(GrainId id) {
+    if (id < slot_of_id_.size()) slot_of_id_[id] = kNoSlot;
+    need_rebuild_ = true;
+  }
+
+  /// Per grain, what it touched at the last step: kTouches (a grain or the geometry) and
+  /// kTouchesActive (an ACTIVE grain). Grains added since the last rebuild get 0.
+  static constexpr std::uint8_t kTouches = 1, kTouchesActive = 2;
+  void contacts_of(const Grains& grains, const Geometry& geometry,
+                   std::vector<std::uint8_t>& out) const;
 
   const DemParams& params() const { return params_; }
   const PairList& pairs() const { return pairs_; }

@@ -20,7 +20,7 @@ void Grains::add(GrainId gid, const Vec3& pos, const Vec3& vel, Real radius, Rea
 namespace {
 template <class T>
 void apply_permutation(std::vector<T>& a, std::span<const std::uint32_t> perm) {
-  std::vector<T> out(a.size());
+  std::vector<T> out(perm.size());
   for (std::size_t k = 0; k < perm.size(); ++k) out[k] = a[perm[k]];
   a = std::move(out);
 }
@@ -36,6 +36,29 @@ void Grains::permute(std::span<const std::uint32_t> perm) {
   apply_permutation(m, perm);
   apply_permutation(inv_m, perm);
   apply_permutation(inv_I, perm);
+}
+
+void StaticStore::add(GrainId gid, const Vec3& pos, Real radius, std::uint32_t col) {
+  id.push_back(gid);
+  x.push_back(pos);
+  r.push_back(radius);
+  column.push_back(col);
+}
+
+void StaticStore::permute(std::span<const std::uint32_t> perm) {
+  apply_permutation(id, perm);
+  apply_permutation(x, perm);
+  apply_permutation(r, perm);
+  apply_permutation(column, perm);
+}
+
+void StaticStore::file_by_column(std::size_t columns) {
+  column_start.assign(columns + 1, 0);
+  for (std::uint32_t c : column) ++column_start[c + 1];
+  for (std::size_t c = 0; c < columns; ++c) column_start[c + 1] += column_start[c];
+  by_column.resize(size());
+  std::vector<std::uint32_t> fill(column_start.begin(), column_start.end() - 1);
+  for (std::uint32_t k = 0; k < size(); ++k) by_column[fill[column[k]]++] = k;
 }
 
 }  // namespace sandflow

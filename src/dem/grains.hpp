@@ -36,7 +36,8 @@ struct Grains {
   /// Appends an ACTIVE grain of the given density.
   void add(GrainId gid, const Vec3& pos, const Vec3& vel, Real radius, Real density);
 
-  /// Reorders every array so that slot k holds what slot perm[k] held.
+  /// Reorders every array so that slot k holds what slot perm[k] held; a shorter perm keeps only
+  /// the grains it names.
   void permute(std::span<const std::uint32_t> perm);
 };
 
@@ -46,8 +47,16 @@ struct StaticStore {
   std::vector<Vec3> x;
   std::vector<Real> r;
   std::vector<std::uint32_t> column;
+  // the grains of each column, valid after file_by_column()
+  std::vector<std::uint32_t> column_start;  ///< columns+1 offsets into by_column
+  std::vector<std::uint32_t> by_column;     ///< slots, grouped by column
 
   std::size_t size() const { return id.size(); }
+  void add(GrainId gid, const Vec3& pos, Real radius, std::uint32_t col);
+  /// As Grains::permute (the column index must be rebuilt after).
+  void permute(std::span<const std::uint32_t> perm);
+  /// Files every grain by its column (counting sort).
+  void file_by_column(std::size_t columns);
 };
 
 }  // namespace sandflow

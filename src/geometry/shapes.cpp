@@ -178,4 +178,32 @@ std::size_t Geometry::count_inside(const std::vector<Vec3>& x) const {
   return n;
 }
 
+Real Geometry::top_below(Real x, Real y, Real z_from, Real z_floor) const {
+  // sphere tracing down the vertical line: each step is the distance to the nearest solid, which
+  // never crosses a surface; a hit is closer than a micrometre. Steps of at least 0.1 mm keep a
+  // line grazing a vertical wall from crawling (a top may then be found up to 0.1 mm low).
+  constexpr Real kHit = 1e-6, kMinStep = 1e-4;
+  Vec3 p{x, y, z_from};
+  for (int it = 0; it < 1000000 && p.z > z_floor; ++it) {
+    Real d = std::numeric_limits<Real>::infinity();
+    for (const Obstacle& o : obstacles_) d = std::min(d, o.solid->closest(p).distance);
+    if (d < kHit) return p.z;
+    p.z -= std::max(d, kMinStep);
+  }
+  return z_floor;
+}
+
+bool Geometry::finite_bounds(Vec3& lo, Vec3& hi) const {
+  bool any = false;
+  for (const Obstacle& o : obstacles_) {
+    Vec3 a, b;
+    o.solid->bounds(a, b);
+    if (!is_finite(a) || !is_finite(b)) continue;
+    lo = any ? min(lo, a) : a;
+    hi = any ? max(hi, b) : b;
+    any = true;
+  }
+  return any;
+}
+
 }  // namespace sandflow

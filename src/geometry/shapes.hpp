@@ -92,6 +92,12 @@ class Geometry {
   const std::vector<Obstacle>& obstacles() const { return obstacles_; }
   std::size_t size() const { return obstacles_.size(); }
 
+  /// Height of the highest solid surface met going down the vertical line at (x, y) from z_from
+  /// (z_from itself when it starts inside a solid), or z_floor when there is none above it.
+  Real top_below(Real x, Real y, Real z_from, Real z_floor) const;
+  /// Union of the bounds of the finite solids; false when every solid is infinite (or none).
+  bool finite_bounds(Vec3& lo, Vec3& hi) const;
+
   /// Number of grains whose centre lies inside a solid (should be 0).
   std::size_t count_inside(const std::vector<Vec3>& x) const;
 

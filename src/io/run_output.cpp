@@ -51,7 +51,8 @@ StatsWriter::StatsWriter(const std::string& path) : path_(path) {
   if (!f_) throw OutputError(fmt::format("{}: cannot write: {}", path, std::strerror(errno)));
   std::fputs(
       "frame,time,substeps,dt,n_total,n_active,n_interface,n_static,contacts,wall_contacts,"
-      "max_overlap_rel,kinetic_energy,rebuilds,wall_seconds\n",
+      "max_overlap_rel,kinetic_energy,rebuilds,trapped,dislodged,slept,woken,surface_updates,"
+      "wall_seconds\n",
       f_);
 }
 
@@ -60,11 +61,12 @@ StatsWriter::~StatsWriter() {
 }
 
 void StatsWriter::write(const FrameStats& s) {
-  const std::string row = fmt::format("{},{:.6f},{},{:.6e},{},{},{},{},{},{},{:.6e},{:.6e},{},{:.4f}\n",
-                                      s.frame, s.time, s.substeps, s.dt, s.n_total, s.n_active,
-                                      s.n_interface, s.n_static, s.contacts, s.wall_contacts,
-                                      s.max_overlap_rel, s.kinetic_energy, s.rebuilds,
-                                      s.wall_seconds);
+  const std::string row = fmt::format(
+      "{},{:.6f},{},{:.6e},{},{},{},{},{},{},{:.6e},{:.6e},{},{},{},{},{},{},{:.4f}\n", s.frame, s.time,
+      s.substeps, s.dt, s.n_total, s.n_active, s.n_interface, s.n_static, s.contacts,
+      s.wall_contacts, s.max_overlap_rel, s.kinetic_energy, s.rebuilds, s.transitions.trapped,
+      s.transitions.dislodged, s.transitions.slept, s.transitions.woken, s.surface_updates,
+      s.wall_seconds);
   if (std::fputs(row.c_str(), f_) < 0 || std::fflush(f_) != 0)
     throw OutputError(fmt::format("{}: cannot write: {}", path_, std::strerror(errno)));
 }

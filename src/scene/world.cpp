@@ -71,14 +71,22 @@ DemParams dem_params(const SceneConfig& scene) {
   p.gravity = scene.simulation.gravity;
   return p;
 }
+
+SceneConfig with_stiffness(SceneConfig scene, const Stiffness& s) {
+  scene.material.k_n = s.k_n;
+  return scene;
+}
 }  // namespace
 
 World::World(const SceneConfig& scene)
-    : scene_(scene),
-      ts_(choose_time_step(scene)),
-      geometry_(Geometry::from_config(scene.geometry, scene.material)),
-      dem_(dem_params(scene)),
+    : geometry_(Geometry::from_config(scene.geometry, scene.material)),
+      stiffness_(choose_stiffness(scene, scene.simulation.mode, geometry_)),
+      scene_(with_stiffness(scene, stiffness_)),
+      ts_(choose_time_step(scene_)),
+      dem_(dem_params(scene_)),
       rng_(scene.simulation.seed) {
+  if (scene_.simulation.mode == Mode::Surface)
+    surface_ = std::make_unique<SurfaceFlow>(surface_params(scene_, geometry_, ts_.dt), geometry_);
   for (std::size_t k = 0; k < scene.emitters.size(); ++k)
     emitters_.emplace_back(scene.emitters[k], scene.material, scene.simulation.gravity,
                            fmt::format("{}: emitter[{}]", scene.path, k));
@@ -109,6 +117,11 @@ void World::step() {
     ScopedStage s(profile_, Stage::Emit);
     emit();
   }
+  if (surface_ && step_ % surface_->params().update_steps == 0) {
+    ScopedStage s(profile_, Stage::Surface);
+    transitions_ += surface_->update(grains_, static_, dem_, geometry_, surface_->params().update_interval);
+    ++surface_updates_;
+  }
   dem_.step(grains_, geometry_, ts_.dt, profile_);
   ++step_;
   time_ = static_cast<Real>(step_) * ts_.dt;
@@ -117,6 +130,8 @@ void World::step() {
 FrameStats World::advance_frame() {
   Stopwatch wall;
   dem_.counters() = {};
+  transitions_ = {};
+  surface_updates_ = 0;
   for (int s = 0; s < ts_.substeps; ++s) step();
   ++frame_;
 
@@ -131,6 +146,12 @@ FrameStats World::advance_frame() {
   }
   st.n_static = static_cast<std::int64_t>(static_.size());
   st.n_total = st.n_active + st.n_interface + st.n_static;
+  st.transitions = transitions_;
+  st.surface_updates = surface_updates_;
+  if (st.n_total != static_cast<std::int64_t>(next_id_))
+    throw SimulationError(fmt::format("{} grains were emitted but {} are held at step {}: a "
+                                      "transition lost or duplicated grains",
+                                      next_id_, st.n_total, step_));
   st.contacts = dem_.counters().contacts;
   st.wall_contacts = dem_.counters().wall_contacts;
   st.max_overlap_rel = dem_.counters().max_overlap_rel;
@@ -152,6 +173,13 @@ Real World::kinetic_energy() const {
     e += 0.5 * grains_.m[i] * norm2(grains_.v[i]) +
          0.5 / grains_.inv_I[i] * norm2(grains_.w[i]);
   return e;
+}
+
+void World::all_grains(std::vector<Vec3>& x, std::vector<Real>& r) const {
+  x = grains_.x;
+  r = grains_.r;
+  x.insert(x.end(), static_.x.begin(), static_.x.end());
+  r.insert(r.end(), static_.r.begin(), static_.r.end());
 }
 
 FrameData World::visible_frame() const {

@@ -14,6 +14,8 @@
 #include "io/frame.hpp"
 #include "scene/emitters.hpp"
 #include "scene/scene_config.hpp"
+#include "scene/stiffness.hpp"
+#include "surface/surface_flow.hpp"
 
 namespace sandflow {
 
@@ -46,6 +48,8 @@ struct FrameStats {
   Real max_overlap_rel = 0;      ///< largest overlap / smaller diameter during the frame
   Real kinetic_energy = 0;       ///< translational + rotational [J]
   std::int64_t rebuilds = 0;     ///< neighbour-list rebuilds during the frame
+  TransitionCounts transitions;  ///< grains that changed state during the frame
+  std::int64_t surface_updates = 0;  ///< height-field updates during the frame
   double wall_seconds = 0;       ///< wall-clock time of the frame [s]
 };
 
@@ -64,6 +68,9 @@ class World {
   const Grains& grains() const { return grains_; }
   const StaticStore& static_grains() const { return static_; }
   const Geometry& geometry() const { return geometry_; }
+  const Stiffness& stiffness() const { return stiffness_; }
+  /// The height field and interface; nullptr in DEM mode.
+  const SurfaceFlow* surface() const { return surface_.get(); }
   const DemSolver& dem() const { return dem_; }
   const Profile& profile() const { return profile_; }
   Real time() const { return time_; }
@@ -72,6 +79,8 @@ class World {
     return static_cast<std::int64_t>(grains_.size() + static_.size());
   }
 
+  /// Centres and radii of every grain, hot and static.
+  void all_grains(std::vector<Vec3>& x, std::vector<Real>& r) const;
   /// The visible grains (ACTIVE and INTERFACE) of the current state.
   FrameData visible_frame() const;
   /// Hash of every grain's id, position, velocity and spin, in id order.
@@ -82,12 +91,16 @@ class World {
   void step();
   void emit();
 
-  SceneConfig scene_;
-  TimeStep ts_;
   Geometry geometry_;
+  Stiffness stiffness_;
+  SceneConfig scene_;  ///< as given, with k_n from the stiffness choice
+  TimeStep ts_;
   Grains grains_;
   StaticStore static_;
   DemSolver dem_;
+  std::unique_ptr<SurfaceFlow> surface_;
+  TransitionCounts transitions_;  ///< since the start of the frame
+  std::int64_t surface_updates_ = 0;
   std::vector<Emitter> emitters_;
   Rng rng_;
   std::vector<NewGrain> new_grains_;

@@ -114,14 +114,54 @@ TEST(Cli, BadSceneExitsTwoNamingThePlaceAndWritesNothing) {
   EXPECT_FALSE(fs::exists(out));
 }
 
-TEST(Cli, SurfaceModeIsNotAvailableYet) {
+TEST(Cli, SurfaceModeReportsTransitionsAndTheHeightField) {
   Sandbox box;
+  const auto out = box.dir / "out";
   std::string log;
-  EXPECT_EQ(sandflow("run " + box.write("t.toml", kTinyScene).string() + " --mode surface --out " +
-                         (box.dir / "out").string(),
+  ASSERT_EQ(sandflow("run " + box.write("t.toml", kTinyScene).string() + " --mode surface --out " +
+                         out.string(),
                      &log),
+            0)
+      << log;
+  std::ifstream stats(out / "stats.csv");
+  std::string header;
+  std::getline(stats, header);
+  for (const char* column : {"trapped", "dislodged", "slept", "woken", "n_static"})
+    EXPECT_NE(header.find(column), std::string::npos) << column;
+  std::ifstream in(out / "summary.json");
+  const auto summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary["mode"], "surface");
+  for (const char* key : {"cells", "rolling_mean", "rolling_max", "static_volume"})
+    EXPECT_TRUE(summary["height_field"].contains(key)) << key;
+  EXPECT_TRUE(summary["transitions"].contains("trapped"));
+  EXPECT_EQ(summary["n_total"], 200);
+}
+
+TEST(Cli, CompareWritesBothRunsAndTheTable) {
+  Sandbox box;
+  const auto out = box.dir / "cmp";
+  std::string log;
+  ASSERT_EQ(sandflow("compare " + box.write("t.toml", kTinyScene).string() + " --frames 10 --out " +
+                         out.string(),
+                     &log),
+            0)
+      << log;
+  EXPECT_TRUE(fs::exists(out / "dem" / "summary.json"));
+  EXPECT_TRUE(fs::exists(out / "surface" / "summary.json"));
+  std::ifstream in(out / "compare.json");
+  const auto j = nlohmann::json::parse(in);
+  for (const char* key : {"speedup", "simulated_fraction_mean", "simulated_fraction_last_half",
+                          "surface_rms_rel", "repose_angle_dem_deg", "repose_angle_surface_deg",
+                          "n_total", "dt_dem", "dt_surface", "same_stiffness"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["n_total"], 200);
+  EXPECT_GT(j["speedup"].get<double>(), 0);
+  EXPECT_LE(j["simulated_fraction_mean"].get<double>(), 1.0);
+  EXPECT_NE(log.find("speed-up"), std::string::npos) << log;
+  // --mode makes no sense for a comparison
+  EXPECT_EQ(sandflow("compare " + (box.dir / "t.toml").string() + " --mode dem --out " +
+                     (box.dir / "x").string()),
             2);
-  EXPECT_NE(log.find("not available yet"), std::string::npos) << log;
 }
 
 TEST(Cli, NonEmptyOutputFolderNeedsForce) {

@@ -16,6 +16,7 @@ SceneConfig small_pour(std::int64_t count) {
   SceneConfig s;
   s.path = "test";
   s.name = "small_pour";
+  s.simulation.mode = Mode::Dem;  // the DEM engine's own invariants; tests/surface has the rest
   s.material.diameter = 0.01;
   s.material.diameter_spread = 0.1;
   s.material.k_n = 1e4;

@@ -1,0 +1,27 @@
+// Sameness of two runs (DESIGN.md §9): their final sand surfaces H(x, y), measured from the grains
+// by the height field's own thick rays, compared column by column.
+#pragma once
+
+#include <vector>
+
+#include "core/vec3.hpp"
+#include "surface/height_field.hpp"
+
+namespace sandflow {
+
+/// H per column of `grid` from every grain (same rays and airborne rule as the height field).
+std::vector<Real> measure_surface(const HeightFieldParams& grid, const std::vector<Real>& terrain,
+                                  const std::vector<Vec3>& x, const std::vector<Real>& r);
+
+struct SurfaceDiff {
+  Real rms = 0;          ///< RMS of H_a - H_b over the columns with sand in either [m]
+  Real heap_height = 0;  ///< largest H_a - L [m]
+  Real rms_rel = 0;      ///< rms / heap_height
+  std::size_t columns = 0;  ///< columns compared
+};
+
+/// Compares surface b with the reference a over terrain L.
+SurfaceDiff compare_surfaces(const std::vector<Real>& a, const std::vector<Real>& b,
+                             const std::vector<Real>& terrain);
+
+}  // namespace sandflow

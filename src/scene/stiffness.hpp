@@ -1,0 +1,23 @@
+// k_n derived from the load a contact carries (DESIGN.md §3), for each mode: in DEM the deepest
+// grain carries the whole heap above it; in surface mode only the thin layer of grains above the
+// static surface, so springs can be softer and dt larger. Impacts bound k_n in both modes.
+#pragma once
+
+#include "geometry/shapes.hpp"
+#include "scene/scene_config.hpp"
+
+namespace sandflow {
+
+struct Stiffness {
+  Real k_n = 0;            ///< the stiffness used [N/m]
+  bool from_load = false;  ///< false: material.k_n as given
+  Real depth = 0;          ///< deepest loaded grain [m]
+  Real impact_speed = 0;   ///< fastest impact [m/s]
+  Real k_static = 0;       ///< k_n that keeps the static overlap under stiffness.max_overlap [N/m]
+  Real k_impact = 0;       ///< k_n that keeps impacts under stiffness.impact_overlap [N/m]
+};
+
+/// The stiffness of a scene run in `mode`.
+Stiffness choose_stiffness(const SceneConfig& scene, Mode mode, const Geometry& geometry);
+
+}  // namespace sandflow

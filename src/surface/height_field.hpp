@@ -1,0 +1,115 @@
+// The height field of the static layer (DESIGN.md §4): a uniform grid of columns over the scene.
+// Per column, at its centre: L (terrain top), H (top of the sand, measured from the grains), h (top
+// of the static layer) and R = H - h (the rolling layer). Slopes live on the edges between
+// columns, as on a MAC grid. One update runs the paper's order H -> theta -> Gamma -> h -> R -> R_min.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "core/vec3.hpp"
+#include "dem/grains.hpp"
+
+namespace sandflow {
+
+struct HeightFieldParams {
+  Real x0 = 0, y0 = 0;        ///< corner of the grid (low x, low y) [m]
+  Real cell = 0.01;           ///< column width [m]
+  int nx = 1, ny = 1;         ///< columns along x and y
+  Real gamma = 30;            ///< exchange rate [1/s]
+  Real theta0 = 0.56;         ///< repose angle [rad]
+  Real theta_max = 0.66;      ///< a static slope steeper than this erodes on its own [rad]
+  Real rolling_min = 0.01;    ///< R_min [m]
+  Real avalanche_depth = 0.01;///< thickness that rolls where theta > theta_max [m]
+  Real gap = 0.0025;          ///< a grain separated from the pile below by more is airborne [m]
+};
+
+class HeightField {
+ public:
+  /// `terrain` holds L per column (row-major, x fastest); h starts at L.
+  HeightField(const HeightFieldParams& p, std::vector<Real> terrain);
+
+  // ---- the grid ----
+  int nx() const { return p_.nx; }
+  int ny() const { return p_.ny; }
+  std::size_t columns() const { return static_cast<std::size_t>(p_.nx) * p_.ny; }
+  Real cell() const { return p_.cell; }
+  const HeightFieldParams& params() const { return p_; }
+  Vec3 centre(std::size_t c) const {
+    return {p_.x0 + (static_cast<Real>(c % p_.nx) + 0.5) * p_.cell,
+            p_.y0 + (static_cast<Real>(c / p_.nx) + 0.5) * p_.cell, 0};
+  }
+  /// Column holding (x, y), or -1 outside the grid.
+  std::int64_t column_of(Real x, Real y) const;
+  /// h interpolated bilinearly between column centres (clamped at the border).
+  Real static_top_at(Real x, Real y) const;
+
+  // ---- one update ----
+  /// Step 1: H from vertical thick rays (radius cell/2) against the pile. `static_top` per column
+  /// is the highest point the STATIC grains reach there (or L). Hot grains count only where
+  /// `counts` is nonzero (empty: all count), and from the bottom up only while no gap separates
+  /// them from what lies below: grains in flight never lift the surface.
+  void measure(const Grains& hot, const std::vector<Real>& static_top,
+               const std::vector<std::uint8_t>& counts = {});
+  /// Steps 2-6 over a time dt: slopes, exchange, h, R, and the R_min floor.
+  void exchange(Real dt);
+  /// Lowers h of column c to at most z (never below L): the static layer cannot reach up to where
+  /// grains are moving.
+  void limit_static_top(std::size_t c, Real z) {
+    h_[c] = std::max(std::min(h_[c], z), L_[c]);
+    R_[c] = H_[c] - h_[c];
+  }
+  /// For tests: set H directly (then call exchange).
+  void set_surface(std::vector<Real> H);
+  /// For tests and restarts: set h directly (clamped to [L, H]).
+  void set_static_top(std::vector<Real> h);
+
+  /// Contributions of one sphere to the columns its thick ray touches: f(column, bottom, top).
+  template <class F>
+  void for_each_ray_hit(const Vec3& x, Real r, F&& f) const;
+
+  // ---- state ----
+  const std::vector<Real>& terrain() const { return L_; }
+  const std::vector<Real>& surface() const { return H_; }       ///< H
+  const std::vector<Real>& static_top() const { return h_; }    ///< h
+  const std::vector<Real>& rolling() const { return R_; }       ///< R = H - h
+  const std::vector<Real>& slope() const { return theta_; }     ///< theta of h [rad]
+  const std::vector<Real>& exchange_rate() const { return Gamma_; }  ///< Gamma [m/s]
+  /// Volume of the static layer above the terrain [m^3].
+  Real static_volume() const;
+  /// Columns where there is sand (H above L).
+  std::size_t sand_columns() const;
+
+ private:
+  HeightFieldParams p_;
+  std::vector<Real> L_, H_, h_, R_, theta_, Gamma_;
+  // scratch of measure(): ray hits filed by column
+  std::vector<std::uint32_t> hit_start_;
+  struct Hit { Real bottom, top; };
+  std::vector<Hit> hits_;
+};
+
+// ---------------------------------------------------------------------------------------------
+template <class F>
+void HeightField::for_each_ray_hit(const Vec3& x, Real r, F&& f) const {
+  const Real w = 0.5 * p_.cell;  // ray radius
+  const Real reach = r + w;
+  const int i0 = static_cast<int>(std::floor((x.x - reach - p_.x0) / p_.cell));
+  const int i1 = static_cast<int>(std::floor((x.x + reach - p_.x0) / p_.cell));
+  const int j0 = static_cast<int>(std::floor((x.y - reach - p_.y0) / p_.cell));
+  const int j1 = static_cast<int>(std::floor((x.y + reach - p_.y0) / p_.cell));
+  for (int j = std::max(j0, 0); j <= std::min(j1, p_.ny - 1); ++j)
+    for (int i = std::max(i0, 0); i <= std::min(i1, p_.nx - 1); ++i) {
+      const Real dx = x.x - (p_.x0 + (i + 0.5) * p_.cell);
+      const Real dy = x.y - (p_.y0 + (j + 0.5) * p_.cell);
+      const Real rho = std::sqrt(dx * dx + dy * dy);
+      if (rho >= reach) continue;
+      const Real e = rho - w;  // horizontal distance from the ray's rim
+      const Real half = e <= 0 ? r : std::sqrt(r * r - e * e);
+      f(static_cast<std::size_t>(j) * p_.nx + i, x.z - half, x.z + half);
+    }
+}
+
+}  // namespace sandflow

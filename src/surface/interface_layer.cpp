@@ -1,0 +1,103 @@
+#include "surface/interface_layer.hpp"
+
+#include <algorithm>
+
+namespace sandflow {
+
+void InterfaceLayer::static_tops(const HeightField& hf, const StaticStore& st,
+                                 std::vector<Real>& out) const {
+  out = hf.terrain();
+  for (std::size_t k = 0; k < st.size(); ++k)
+    hf.for_each_ray_hit(st.x[k], st.r[k],
+                        [&](std::size_t c, Real, Real top) { out[c] = std::max(out[c], top); });
+}
+
+TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticStore& st,
+                                          DemSolver& dem, const std::vector<std::uint8_t>& contacts) {
+  TransitionCounts n;
+  const Real T = p_.thickness;
+  const Real m = p_.margin;
+  const Real v2_trap = p_.trap_speed * p_.trap_speed;
+
+  // 1. the hot grains: trap, dislodge, sleep
+  std::vector<std::uint32_t> keep;
+  keep.reserve(hot.size());
+  for (std::uint32_t i = 0; i < hot.size(); ++i) {
+    const Vec3& x = hot.x[i];
+    const std::int64_t c = hf.column_of(x.x, x.y);
+    if (c < 0) {  // outside the grid a grain is always simulated
+      keep.push_back(i);
+      continue;
+    }
+    const Real h = hf.static_top_at(x.x, x.y);
+    if (hot.state[i] == GrainState::Active) {
+      if (x.z < h && norm2(hot.v[i]) < v2_trap) {
+        // frozen where it is; its pairs with other frozen grains leave the list at the next
+        // rebuild, while those with active grains keep their springs, so that the grains resting
+        // on it do not lose their friction
+        hot.state[i] = GrainState::Interface;
+        hot.v[i] = hot.w[i] = {};
+        ++n.trapped;
+      }
+    } else if (x.z > h + m) {
+      hot.state[i] = GrainState::Active;
+      hot.v[i] = hot.w[i] = {};
+      dem.invalidate();  // its pairs with interface grains enter the list
+      ++n.dislodged;
+    } else if (x.z < h - T - m && !(contacts[i] & DemSolver::kTouchesActive)) {
+      st.add(hot.id[i], x, hot.r[i], static_cast<std::uint32_t>(c));
+      dem.invalidate();
+      ++n.slept;
+      continue;
+    }
+    keep.push_back(i);
+  }
+  if (keep.size() != hot.size()) hot.permute(keep);
+
+  // 2. the static grains where h fell (and around: h is interpolated between column centres)
+  const std::size_t nc = hf.columns();
+  const std::vector<Real>& h_now = hf.static_top();
+  if (h_seen_.size() != nc) h_seen_ = hf.terrain();
+  std::vector<std::uint8_t> fell(nc, 0);
+  bool any = false;
+  const int nx = hf.nx(), ny = hf.ny();
+  for (std::size_t c = 0; c < nc; ++c) {
+    if (!(h_now[c] < h_seen_[c])) continue;
+    any = true;
+    const int i = static_cast<int>(c % nx), j = static_cast<int>(c / nx);
+    for (int jj = std::max(j - 1, 0); jj <= std::min(j + 1, ny - 1); ++jj)
+      for (int ii = std::max(i - 1, 0); ii <= std::min(i + 1, nx - 1); ++ii)
+        fell[static_cast<std::size_t>(jj) * nx + ii] = 1;
+  }
+  h_seen_ = h_now;
+  if (n.slept > 0 || st.column_start.size() != nc + 1) st.file_by_column(nc);
+  if (!any) return n;
+
+  std::vector<std::uint8_t> wake(st.size(), 0);
+  for (std::size_t c = 0; c < nc; ++c) {
+    if (!fell[c]) continue;
+    for (std::uint32_t q = st.column_start[c]; q < st.column_start[c + 1]; ++q) {
+      const std::uint32_t k = st.by_column[q];
+      if (st.x[k].z > hf.static_top_at(st.x[k].x, st.x[k].y) - T) wake[k] = 1;
+    }
+  }
+  std::vector<std::uint32_t> stay;
+  stay.reserve(st.size());
+  for (std::uint32_t k = 0; k < st.size(); ++k) {
+    if (!wake[k]) {
+      stay.push_back(k);
+      continue;
+    }
+    hot.add(st.id[k], st.x[k], Vec3{}, st.r[k], p_.density);
+    hot.state.back() = GrainState::Interface;
+    dem.forget_history(st.id[k]);
+    ++n.woken;
+  }
+  if (n.woken > 0) {
+    st.permute(stay);
+    st.file_by_column(nc);
+  }
+  return n;
+}
+
+}  // namespace sandflow

@@ -1,0 +1,66 @@
+// The particle interface (DESIGN.md §5): the band of frozen grains, of constant thickness T just
+// below the static top h, through which matter passes between the grains and the height field.
+// After each height-field update every grain is classified against h at its own (x, y):
+//
+//   ACTIVE    centre below h and slow   -> INTERFACE (trapped: v = w = 0; its contacts with
+//                                                     other frozen grains are dropped)
+//   INTERFACE centre above h            -> ACTIVE    (dislodged, from rest)
+//   INTERFACE centre below h - T        -> STATIC    (sleeps: leaves the DEM, filed by column)
+//   STATIC    centre above h - T        -> INTERFACE (wakes: only where h fell)
+//
+// Two guards keep the band closed. A grain that an ACTIVE grain touches never sleeps (a grain
+// too fast to be trapped would otherwise fall through the static layer, which does not push).
+// And the band has a margin m of hysteresis: trapped below h, dislodged only above h + m; sleeps
+// below h - T - m, wakes above h - T. H is measured from grains, so h jitters by a fraction of a
+// grain; without the margin the same grains would flip state at every update.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "dem/dem_solver.hpp"
+#include "dem/grains.hpp"
+#include "surface/height_field.hpp"
+
+namespace sandflow {
+
+struct TransitionCounts {
+  std::int64_t trapped = 0, dislodged = 0, slept = 0, woken = 0;
+  TransitionCounts& operator+=(const TransitionCounts& o) {
+    trapped += o.trapped;
+    dislodged += o.dislodged;
+    slept += o.slept;
+    woken += o.woken;
+    return *this;
+  }
+  std::int64_t total() const { return trapped + dislodged + slept + woken; }
+};
+
+struct InterfaceParams {
+  Real thickness = 0.015;   ///< T [m]
+  Real trap_speed = 0.1;    ///< a grain at least this fast is never trapped [m/s]
+  Real margin = 0.0025;     ///< hysteresis of the band's edges [m]
+  Real density = 2600;      ///< to restore the mass of a woken grain [kg/m^3]
+};
+
+class InterfaceLayer {
+ public:
+  explicit InterfaceLayer(const InterfaceParams& p) : p_(p) {}
+
+  /// Per column, the highest point a STATIC grain reaches under its thick ray (or L).
+  void static_tops(const HeightField& hf, const StaticStore& st, std::vector<Real>& out) const;
+
+  /// Applies the four transitions against the current h; `dem` rebuilds its lists at the next
+  /// step where the hot set changed. A woken grain starts without contact history.
+  /// `contacts` is DemSolver::contacts_of for the hot grains.
+  TransitionCounts transfer(const HeightField& hf, Grains& hot, StaticStore& st, DemSolver& dem,
+                            const std::vector<std::uint8_t>& contacts);
+
+  const InterfaceParams& params() const { return p_; }
+
+ private:
+  InterfaceParams p_;
+  std::vector<Real> h_seen_;  ///< h at the last transfer: where it fell, static grains may wake
+};
+
+}  // namespace sandflow

@@ -1,0 +1,33 @@
+#include "surface/surface_flow.hpp"
+
+namespace sandflow {
+
+SurfaceFlow::SurfaceFlow(const SurfaceParams& params, const Geometry& geometry)
+    : p_(params), hf_(params.grid, terrain_heights(params, geometry)), interface_(params.interface) {}
+
+TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& dem,
+                                    const Geometry& geometry, Real dt) {
+  // a grain in flight touches nothing: only grains of the pile (and the interface) make H
+  dem.contacts_of(hot, geometry, contacts_);
+  counts_.resize(hot.size());
+  for (std::size_t i = 0; i < hot.size(); ++i)
+    counts_[i] = hot.state[i] != GrainState::Active || (contacts_[i] & DemSolver::kTouches);
+  interface_.static_tops(hf_, st, static_top_);
+  hf_.measure(hot, static_top_, counts_);
+  hf_.exchange(dt);
+  // Impacts: a fast grain striking the pile sets the grains beneath it in motion in DEM, so the
+  // static top stays a grain's diameter below the bottom of every fast grain in contact. Without
+  // this the stream of a pour would hit a frozen apex and build a spike where DEM digs a plateau.
+  const Real v2_fast = p_.interface.trap_speed * p_.interface.trap_speed;
+  for (std::size_t i = 0; i < hot.size(); ++i) {
+    if (hot.state[i] != GrainState::Active || !(contacts_[i] & DemSolver::kTouches) ||
+        norm2(hot.v[i]) < v2_fast)
+      continue;
+    const Real floor_z = hot.x[i].z - 3 * hot.r[i];
+    hf_.for_each_ray_hit(hot.x[i], hot.r[i],
+                         [&](std::size_t c, Real, Real) { hf_.limit_static_top(c, floor_z); });
+  }
+  return interface_.transfer(hf_, hot, st, dem, contacts_);
+}
+
+}  // namespace sandflow

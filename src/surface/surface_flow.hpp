@@ -1,0 +1,36 @@
+// The surface-flow method of Zhu & Yang (DESIGN.md §1): the height field of the static layer and
+// the particle interface, updated together every few DEM steps.
+#pragma once
+
+#include <vector>
+
+#include "dem/dem_solver.hpp"
+#include "dem/grains.hpp"
+#include "geometry/shapes.hpp"
+#include "surface/height_field.hpp"
+#include "surface/interface_layer.hpp"
+#include "surface/surface_params.hpp"
+
+namespace sandflow {
+
+class SurfaceFlow {
+ public:
+  SurfaceFlow(const SurfaceParams& params, const Geometry& geometry);
+
+  /// One update over `dt` of simulated time, in the paper's order: measure H, evolve h through
+  /// the exchange, then pass grains between the layers.
+  TransitionCounts update(Grains& hot, StaticStore& st, DemSolver& dem, const Geometry& geometry,
+                          Real dt);
+
+  const SurfaceParams& params() const { return p_; }
+  const HeightField& height_field() const { return hf_; }
+
+ private:
+  SurfaceParams p_;
+  HeightField hf_;
+  InterfaceLayer interface_;
+  std::vector<Real> static_top_;
+  std::vector<std::uint8_t> contacts_, counts_;
+};
+
+}  // namespace sandflow

@@ -1,0 +1,114 @@
+#include "surface/surface_params.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "core/error.hpp"
+
+namespace sandflow {
+
+namespace {
+constexpr Real kPacking = 0.6;                 // random packing fraction of a heap
+constexpr std::size_t kMaxColumns = 16u << 20;  // 16 M columns: 128 MB per field
+Real gravity_magnitude(const SceneConfig& s) { return norm(s.simulation.gravity); }
+}  // namespace
+
+Real rolling_min(const SceneConfig& scene) {
+  return scene.surface.rolling_min.value_or(scene.material.diameter);
+}
+
+Real interface_thickness(const SceneConfig& scene) {
+  return scene.surface.interface_thickness.value_or(scene.material.diameter);
+}
+
+HeapSize largest_heap(const SceneConfig& scene) {
+  const Real d = scene.material.diameter;
+  const Real grain_volume = kPi / 6 * d * d * d;
+  const Real bulk = static_cast<Real>(scene.total_grains()) * grain_volume / kPacking;
+  const Real t = std::tan(scene.surface.repose_angle);
+  const Real radius = std::cbrt(3 * bulk / (kPi * t));
+  return {radius * t, radius};
+}
+
+SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry, Real dt) {
+  const SurfaceConfig& sc = scene.surface;
+  const Real d = scene.material.diameter;
+  const Real g = gravity_magnitude(scene);
+  SurfaceParams p;
+  HeightFieldParams& hf = p.grid;
+  hf.cell = sc.cell_size.value_or(d);
+  // 5 sqrt(g / d): at sqrt(g / d) the deposit lagged a growing heap by a grain or more of rolling
+  // layer (floor scene, 20,000 grains: 10,537 grains simulated at the end against 7,429)
+  hf.gamma = sc.exchange_rate.value_or(5 * std::sqrt(std::max(g, 1e-12) / d));
+  hf.theta0 = sc.repose_angle;
+  hf.theta_max = sc.max_angle.value_or(sc.repose_angle + deg_to_rad(6.0));
+  hf.rolling_min = rolling_min(scene);
+  hf.avalanche_depth = d;
+  hf.gap = 0.25 * d;
+  p.interface.thickness = interface_thickness(scene);
+  p.interface.trap_speed = sc.trap_speed.value_or(0.3 * std::sqrt(g * d));
+  p.interface.density = scene.material.density;
+  p.interface.margin = 0.25 * d;
+  // a tenth of the time a grain takes to fall its diameter: the surface moves less than that
+  const Real interval = sc.update_interval.value_or(0.1 * std::sqrt(d / std::max(g, 1e-12)));
+  p.update_steps = std::max(1, static_cast<int>(std::lround(interval / dt)));
+  p.update_interval = p.update_steps * dt;
+
+  // the extent: the scene's finite geometry and every emitter with room for the largest heap
+  Real x0, y0, x1, y1, z_top = 0, z_floor = 0;
+  bool have = false;
+  auto grow = [&](Real ax, Real ay, Real bx, Real by) {
+    x0 = have ? std::min(x0, ax) : ax;
+    y0 = have ? std::min(y0, ay) : ay;
+    x1 = have ? std::max(x1, bx) : bx;
+    y1 = have ? std::max(y1, by) : by;
+    have = true;
+  };
+  const Real heap = largest_heap(scene).radius + 4 * d;
+  for (const EmitterConfig& e : scene.emitters) {
+    const Real hx = e.type == EmitterType::Pour && e.shape == PourShape::Disk ? e.radius : e.size.x / 2;
+    const Real hy = e.type == EmitterType::Pour && e.shape == PourShape::Disk ? e.radius : e.size.y / 2;
+    grow(e.center.x - hx - heap, e.center.y - hy - heap, e.center.x + hx + heap, e.center.y + hy + heap);
+    z_top = std::max(z_top, e.center.z + e.size.z);
+    z_floor = std::min(z_floor, e.center.z - e.size.z);
+  }
+  Vec3 lo, hi;
+  if (geometry.finite_bounds(lo, hi)) {
+    grow(lo.x, lo.y, hi.x, hi.y);
+    z_top = std::max(z_top, hi.z);
+    z_floor = std::min(z_floor, lo.z);
+  }
+  if (sc.extent) {
+    x0 = (*sc.extent)[0], y0 = (*sc.extent)[1], x1 = (*sc.extent)[2], y1 = (*sc.extent)[3];
+    have = true;
+  }
+  if (!have) x0 = y0 = -heap, x1 = y1 = heap;
+  const Real nxf = std::ceil((x1 - x0) / hf.cell), nyf = std::ceil((y1 - y0) / hf.cell);
+  if (nxf * nyf > static_cast<Real>(kMaxColumns))
+    throw InputError(fmt::format(
+        "{}: the height field would need {:.0f} x {:.0f} columns of {:.4g} m (at most {}): set a "
+        "larger surface.cell_size or a smaller surface.extent",
+        scene.path, nxf, nyf, hf.cell, kMaxColumns));
+  hf.nx = std::max(1, static_cast<int>(nxf));
+  hf.ny = std::max(1, static_cast<int>(nyf));
+  // centre the whole columns on the extent
+  hf.x0 = 0.5 * (x0 + x1) - 0.5 * hf.nx * hf.cell;
+  hf.y0 = 0.5 * (y0 + y1) - 0.5 * hf.ny * hf.cell;
+  p.z_top = z_top + 1;
+  p.z_floor = z_floor - 1;
+  return p;
+}
+
+std::vector<Real> terrain_heights(const SurfaceParams& p, const Geometry& geometry) {
+  const HeightFieldParams& grid = p.grid;
+  std::vector<Real> L(static_cast<std::size_t>(grid.nx) * grid.ny);
+  for (int j = 0; j < grid.ny; ++j)
+    for (int i = 0; i < grid.nx; ++i)
+      L[static_cast<std::size_t>(j) * grid.nx + i] = geometry.top_below(
+          grid.x0 + (i + 0.5) * grid.cell, grid.y0 + (j + 0.5) * grid.cell, p.z_top, p.z_floor);
+  return L;
+}
+
+}  // namespace sandflow

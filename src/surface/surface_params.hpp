@@ -1,0 +1,39 @@
+// The parameters of the height field and the interface, with the defaults of docs/scenes.md
+// derived from the grain size and the material where the scene leaves them unset.
+#pragma once
+
+#include <vector>
+
+#include "geometry/shapes.hpp"
+#include "scene/scene_config.hpp"
+#include "surface/height_field.hpp"
+#include "surface/interface_layer.hpp"
+
+namespace sandflow {
+
+struct SurfaceParams {
+  HeightFieldParams grid;
+  InterfaceParams interface;
+  int update_steps = 1;      ///< DEM steps between height-field updates
+  Real update_interval = 0;  ///< update_steps * dt [s]
+  Real z_top = 1, z_floor = -1;  ///< vertical span searched for the terrain [m]
+};
+
+/// R_min [m] and T [m] of a scene (defaults: d and d).
+Real rolling_min(const SceneConfig& scene);
+Real interface_thickness(const SceneConfig& scene);
+
+/// Height [m] and base radius [m] of the cone that holds every grain of the scene at theta_0
+/// (packing fraction 0.6): the scale of the largest heap the scene can make.
+struct HeapSize {
+  Real height, radius;
+};
+HeapSize largest_heap(const SceneConfig& scene);
+
+/// Every parameter, resolved for a run with time step dt.
+SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry, Real dt);
+
+/// L per column: the top of the geometry under each column centre (z_floor where there is none).
+std::vector<Real> terrain_heights(const SurfaceParams& p, const Geometry& geometry);
+
+}  // namespace sandflow

@@ -1,0 +1,197 @@
+// The BCRE exchange of the height field on analytic slopes (DESIGN.md §4), and the measurement of
+// H from grains.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "surface/height_field.hpp"
+
+namespace sandflow {
+namespace {
+
+constexpr Real kCell = 0.01;
+
+HeightFieldParams ramp_params(Real rolling_min = 0.0) {
+  HeightFieldParams p;
+  p.x0 = 0;
+  p.y0 = 0;
+  p.cell = kCell;
+  p.nx = 20;
+  p.ny = 3;
+  p.gamma = 30;
+  p.theta0 = deg_to_rad(32);
+  p.theta_max = deg_to_rad(38);
+  p.rolling_min = rolling_min;
+  p.avalanche_depth = kCell;
+  return p;
+}
+
+// A plane rising along x at `angle` for h, with a rolling layer of thickness R on top, over a
+// terrain at `terrain_z`.
+HeightField ramp(Real angle_deg, Real R, Real rolling_min = 0.0, Real base = 0.05,
+                 Real terrain_z = 0.0) {
+  const HeightFieldParams p = ramp_params(rolling_min);
+  HeightField hf(p, std::vector<Real>(static_cast<std::size_t>(p.nx) * p.ny, terrain_z));
+  std::vector<Real> h(hf.columns()), H(hf.columns());
+  const Real t = std::tan(deg_to_rad(angle_deg));
+  for (std::size_t c = 0; c < hf.columns(); ++c) {
+    h[c] = terrain_z + base + t * hf.centre(c).x;
+    H[c] = h[c] + R;
+  }
+  hf.set_surface(H);
+  hf.set_static_top(h);
+  return hf;
+}
+
+// The interior columns: the lowest and highest x columns have a one-sided slope.
+template <class F>
+void for_interior(const HeightField& hf, F&& f) {
+  for (int j = 0; j < hf.ny(); ++j)
+    for (int i = 1; i + 1 < hf.nx(); ++i) f(static_cast<std::size_t>(j) * hf.nx() + i);
+}
+
+TEST(Exchange, SlopeAboveReposeErodesTheStaticLayer) {
+  HeightField hf = ramp(35, 0.01);
+  const std::vector<Real> before = hf.static_top();
+  hf.exchange(0.003);
+  for_interior(hf, [&](std::size_t c) {
+    EXPECT_LT(hf.static_top()[c], before[c]) << c;
+    EXPECT_GT(hf.exchange_rate()[c], 0) << c;  // Gamma > 0: erosion
+    EXPECT_NEAR(hf.slope()[c], deg_to_rad(35), 1e-9) << c;  // the upwind slope of a plane
+  });
+}
+
+TEST(Exchange, SlopeBelowReposeDeposits) {
+  HeightField hf = ramp(25, 0.01);
+  const std::vector<Real> before = hf.static_top();
+  hf.exchange(0.003);
+  for_interior(hf, [&](std::size_t c) {
+    EXPECT_GT(hf.static_top()[c], before[c]) << c;
+    EXPECT_LT(hf.exchange_rate()[c], 0) << c;
+  });
+}
+
+TEST(Exchange, AtTheReposeAngleNothingMoves) {
+  HeightField hf = ramp(32, 0.01);
+  const std::vector<Real> before = hf.static_top();
+  hf.exchange(0.003);
+  // Gamma = gamma R (theta - theta0) = 0 up to the rounding of tan/atan
+  for_interior(hf, [&](std::size_t c) { EXPECT_NEAR(hf.static_top()[c], before[c], 1e-12) << c; });
+}
+
+TEST(Exchange, DepositionNeverTakesMoreThanTheRollingLayer) {
+  // flat and thin: the exchange rate times a long step would bury ten times R
+  HeightField hf = ramp(0, 0.002);
+  const std::vector<Real> h0 = hf.static_top();
+  const std::vector<Real> R0 = hf.rolling();
+  hf.exchange(10.0);
+  for (std::size_t c = 0; c < hf.columns(); ++c) {
+    EXPECT_LE(hf.static_top()[c] - h0[c], R0[c] * (1 + 1e-12)) << c;
+    EXPECT_GE(hf.rolling()[c], 0) << c;
+  }
+}
+
+TEST(Exchange, ErosionNeverDigsBelowTheTerrain) {
+  // a steep thin static layer on a raised terrain, eroded for many long steps
+  HeightField hf = ramp(60, 0.02, 0.0, 0.0005, 0.3);
+  for (int k = 0; k < 200; ++k) {
+    hf.exchange(0.05);
+    for (std::size_t c = 0; c < hf.columns(); ++c)
+      ASSERT_GE(hf.static_top()[c], hf.terrain()[c]) << "update " << k << " column " << c;
+  }
+}
+
+TEST(Exchange, RollingLayerNeverThinnerThanRmin) {
+  const Real r_min = 0.01;
+  for (Real angle : {0.0, 20.0, 32.0, 40.0}) {
+    HeightField hf = ramp(angle, 0.004, r_min);  // starts thinner than R_min
+    for (int k = 0; k < 50; ++k) {
+      hf.exchange(0.003);
+      for (std::size_t c = 0; c < hf.columns(); ++c)
+        if (hf.surface()[c] - hf.terrain()[c] >= r_min) {
+          ASSERT_GE(hf.rolling()[c], r_min - 1e-12) << angle << " deg, column " << c;
+        }
+    }
+  }
+}
+
+TEST(Exchange, AvalancheStartsOnlyAboveThetaMax) {
+  // no rolling layer: BCRE alone would hold any slope; theta_max makes the steep one fail
+  HeightField steep = ramp(45, 0.0);
+  HeightField held = ramp(35, 0.0);  // between theta0 and theta_max: a static slope can stand
+  const std::vector<Real> s0 = steep.static_top(), h0 = held.static_top();
+  steep.exchange(0.003);
+  held.exchange(0.003);
+  for_interior(steep, [&](std::size_t c) {
+    EXPECT_LT(steep.static_top()[c], s0[c]) << c;
+    EXPECT_DOUBLE_EQ(held.static_top()[c], h0[c]) << c;
+  });
+}
+
+TEST(Exchange, StableForLongUpdateSteps) {
+  // the exact integration with the no-overshoot cap: however long the step, h stays between L
+  // and H and no checkerboard grows (an unstable update makes the total variation of h along
+  // the ramp blow up; a stable one keeps it within that of the sand surface H)
+  for (Real dt : {0.001, 0.01, 0.1, 1.0}) {
+    HeightField hf = ramp(40, 0.05);
+    auto variation = [&](const std::vector<Real>& f) {
+      Real tv = 0;
+      for (int j = 0; j < hf.ny(); ++j)
+        for (int i = 0; i + 1 < hf.nx(); ++i)
+          tv += std::abs(f[static_cast<std::size_t>(j) * hf.nx() + i + 1] -
+                         f[static_cast<std::size_t>(j) * hf.nx() + i]);
+      return tv;
+    };
+    const Real tv_surface = variation(hf.surface());
+    for (int k = 0; k < 100; ++k) {
+      hf.exchange(dt);
+      for (std::size_t c = 0; c < hf.columns(); ++c) {
+        ASSERT_TRUE(std::isfinite(hf.static_top()[c]));
+        ASSERT_GE(hf.static_top()[c], hf.terrain()[c]);
+        ASSERT_LE(hf.static_top()[c], hf.surface()[c]);
+      }
+    }
+    // h may overshoot a neighbour while a long step deposits at the foot, but never keeps a
+    // checkerboard: after 100 updates it is as smooth as the sand surface
+    EXPECT_LE(variation(hf.static_top()), tv_surface * (1 + 1e-9)) << "dt " << dt;
+    // and, given a second or more, it settles: the interior ends at theta0 or below (deposition
+    // fills from the foot)
+    if (dt >= 0.01)
+      for_interior(hf, [&](std::size_t c) { EXPECT_LE(hf.slope()[c], deg_to_rad(32) + 0.02) << dt; });
+  }
+}
+
+TEST(Measure, GrainsInFlightDoNotLiftTheSurface) {
+  HeightFieldParams p = ramp_params();
+  p.nx = p.ny = 5;
+  p.gap = 0.0025;
+  HeightField hf(p, std::vector<Real>(25, 0.0));
+  const std::size_t c = 2 * 5 + 2;  // the middle column, centre (0.025, 0.025)
+  Grains g;
+  g.add(0, {0.025, 0.025, 0.005}, {}, 0.005, 2600);   // on the floor
+  g.add(1, {0.025, 0.025, 0.0145}, {}, 0.005, 2600);  // stacked on it
+  g.add(2, {0.025, 0.025, 0.1}, {}, 0.005, 2600);     // falling, far above
+  g.add(3, {0.005, 0.005, 0.05}, {}, 0.005, 2600);    // falling over an empty corner
+  hf.measure(g, hf.terrain());
+  EXPECT_NEAR(hf.surface()[c], 0.0195, 1e-12);  // the stack's top, not the falling grain's
+  EXPECT_DOUBLE_EQ(hf.surface()[0], 0.0);        // nothing under the lone grain: the terrain
+  // a grain that does not count (no contact) is not part of the pile
+  hf.measure(g, hf.terrain(), {1, 0, 1, 1});
+  EXPECT_NEAR(hf.surface()[c], 0.010, 1e-12);
+}
+
+TEST(Measure, ThickRayFindsTheTopBetweenGrains) {
+  // a ray at a column centre between grains still meets the grains within half a cell of it
+  HeightFieldParams p = ramp_params();
+  p.nx = p.ny = 3;
+  HeightField hf(p, std::vector<Real>(9, 0.0));
+  Grains g;
+  g.add(0, {0.015 + 0.007, 0.015, 0.005}, {}, 0.005, 2600);  // 7 mm off the centre column's axis
+  hf.measure(g, hf.terrain());
+  // the ray's rim (5 mm) is 2 mm from the grain's centre: height sqrt(r^2 - 2mm^2) above it
+  EXPECT_NEAR(hf.surface()[4], 0.005 + std::sqrt(0.005 * 0.005 - 0.002 * 0.002), 1e-12);
+}
+
+}  // namespace
+}  // namespace sandflow

@@ -1,0 +1,133 @@
+// The four transitions of the particle interface (DESIGN.md §5) against a given static top h.
+#include <gtest/gtest.h>
+
+#include <set>
+#include <vector>
+
+#include "surface/interface_layer.hpp"
+
+namespace sandflow {
+namespace {
+
+constexpr Real kR = 0.005;
+
+struct Fixture {
+  HeightField hf;
+  Grains hot;
+  StaticStore st;
+  DemSolver dem{DemParams{}};
+  InterfaceLayer layer;
+
+  // a flat static top at h_level over a 10 x 10 grid of 1 cm columns, sand up to h_level + 1 cm
+  explicit Fixture(Real h_level)
+      : hf(params(), std::vector<Real>(100, 0.0)), layer(interface_params()) {
+    set_h(h_level);
+  }
+  static HeightFieldParams params() {
+    HeightFieldParams p;
+    p.cell = 0.01;
+    p.nx = p.ny = 10;
+    return p;
+  }
+  static InterfaceParams interface_params() {
+    InterfaceParams p;
+    p.thickness = 0.015;
+    p.trap_speed = 0.1;
+    p.margin = 0.0025;
+    return p;
+  }
+  void set_h(Real h_level) {
+    hf.set_surface(std::vector<Real>(100, h_level + 0.01));
+    hf.set_static_top(std::vector<Real>(100, h_level));
+  }
+  TransitionCounts transfer() {
+    std::vector<std::uint8_t> contacts(hot.size(), 0);
+    return layer.transfer(hf, hot, st, dem, contacts);
+  }
+  GrainState state_of(GrainId id) const {
+    for (std::size_t i = 0; i < hot.size(); ++i)
+      if (hot.id[i] == id) return hot.state[i];
+    for (std::size_t k = 0; k < st.size(); ++k)
+      if (st.id[k] == id) return GrainState::Static;
+    ADD_FAILURE() << "grain " << id << " was lost";
+    return GrainState::Static;
+  }
+  void expect_conserved(std::size_t n) const {
+    std::set<GrainId> ids(hot.id.begin(), hot.id.end());
+    for (GrainId id : st.id) EXPECT_TRUE(ids.insert(id).second) << "grain " << id << " is twice";
+    EXPECT_EQ(ids.size(), n);
+  }
+};
+
+TEST(Interface, SlowGrainBelowTheStaticTopIsTrapped) {
+  Fixture f(0.05);
+  f.hot.add(0, {0.05, 0.05, 0.045}, {0.01, 0, 0}, kR, 2600);  // slow, below h
+  f.hot.add(1, {0.03, 0.05, 0.045}, {0.5, 0, 0}, kR, 2600);   // fast, below h
+  f.hot.add(2, {0.07, 0.05, 0.055}, {0, 0, 0}, kR, 2600);     // at rest, above h
+  f.hot.w[0] = {3, 0, 0};
+  const TransitionCounts n = f.transfer();
+  EXPECT_EQ(n.trapped, 1);
+  EXPECT_EQ(f.state_of(0), GrainState::Interface);
+  EXPECT_EQ(f.hot.v[0], Vec3{});  // frozen
+  EXPECT_EQ(f.hot.w[0], Vec3{});
+  EXPECT_EQ(f.state_of(1), GrainState::Active);  // a fast grain is never trapped
+  EXPECT_EQ(f.state_of(2), GrainState::Active);
+  f.expect_conserved(3);
+}
+
+TEST(Interface, ErosionDislodgesAndDeepGrainsSleep) {
+  Fixture f(0.05);
+  f.hot.add(0, {0.05, 0.05, 0.045}, {}, kR, 2600);
+  f.hot.add(1, {0.05, 0.05, 0.025}, {}, kR, 2600);  // deeper than h - T - margin = 0.0325
+  f.hot.state[0] = f.hot.state[1] = GrainState::Interface;
+  TransitionCounts n = f.transfer();
+  EXPECT_EQ(n.slept, 1);
+  EXPECT_EQ(f.state_of(1), GrainState::Static);
+  EXPECT_EQ(f.st.column[0], 5u * 10 + 5);  // filed by its column
+  EXPECT_EQ(f.state_of(0), GrainState::Interface);
+
+  // erosion: h falls 2 cm; grain 0 is now above h (dislodged), the static one within T (woken)
+  f.set_h(0.03);
+  n = f.transfer();
+  EXPECT_EQ(n.dislodged, 1);
+  EXPECT_EQ(n.woken, 1);
+  EXPECT_EQ(f.state_of(0), GrainState::Active);
+  EXPECT_EQ(f.state_of(1), GrainState::Interface);
+  f.expect_conserved(2);
+}
+
+TEST(Interface, GrainTouchedByAnActiveOneNeverSleeps) {
+  Fixture f(0.05);
+  f.hot.add(0, {0.05, 0.05, 0.02}, {}, kR, 2600);
+  f.hot.state[0] = GrainState::Interface;
+  std::vector<std::uint8_t> contacts{DemSolver::kTouches | DemSolver::kTouchesActive};
+  EXPECT_EQ(f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts).slept, 0);
+  EXPECT_EQ(f.state_of(0), GrainState::Interface);
+  contacts[0] = DemSolver::kTouches;  // only interface neighbours: it may sleep
+  EXPECT_EQ(f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts).slept, 1);
+}
+
+TEST(Interface, HysteresisKeepsGrainsNearTheEdgesStill) {
+  Fixture f(0.05);
+  f.hot.add(0, {0.05, 0.05, 0.051}, {}, kR, 2600);  // 1 mm above h: inside the margin
+  f.hot.add(1, {0.05, 0.03, 0.034}, {}, kR, 2600);  // 1 mm above h - T - margin
+  f.hot.state[0] = f.hot.state[1] = GrainState::Interface;
+  EXPECT_EQ(f.transfer().total(), 0);
+}
+
+TEST(Interface, GrainsOutsideTheGridStaySimulated) {
+  Fixture f(0.05);
+  f.hot.add(0, {0.5, 0.5, 0.001}, {}, kR, 2600);  // far outside, far below h
+  EXPECT_EQ(f.transfer().total(), 0);
+  EXPECT_EQ(f.state_of(0), GrainState::Active);
+}
+
+TEST(Interface, StaticGrainsWakeOnlyWhereTheStaticTopFell) {
+  Fixture f(0.05);
+  f.st.add(7, {0.05, 0.05, 0.04}, kR, 55);  // within T of h: would wake if its column were visited
+  f.transfer();                              // first call: h has not fallen anywhere
+  EXPECT_EQ(f.state_of(7), GrainState::Static);
+}
+
+}  // namespace
+}  // namespace sandflow
