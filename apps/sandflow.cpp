@@ -128,6 +128,8 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out) {
 
   // the heap of the final state, and what ended up where it must not be
   world.all_grains(res.x, res.r);
+  // every grain of the final state, the static ones too (state 2): nothing is lost with the run
+  write_ply((fs::path(out) / "final_grains.ply").string(), world.all_grains_frame());
   res.heap = measure_heap(res.x, res.r);
   const HeapFit& fit = res.heap;
   const auto inside = world.geometry().count_inside(res.x);

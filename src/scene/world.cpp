@@ -194,6 +194,18 @@ FrameData World::visible_frame() const {
   return f;
 }
 
+FrameData World::all_grains_frame() const {
+  FrameData f = visible_frame();
+  for (std::size_t k = 0; k < static_.size(); ++k) {
+    f.position.push_back(static_.x[k]);
+    f.radius.push_back(static_.r[k]);
+    f.velocity.push_back({});
+    f.id.push_back(static_.id[k]);
+    f.state.push_back(static_cast<std::uint8_t>(GrainState::Static));
+  }
+  return f;
+}
+
 std::uint64_t World::state_hash() const {
   // every grain, hot or static, in id order
   struct Ref { GrainId id; bool hot; std::uint32_t slot; };

@@ -81,6 +81,8 @@ class World {
 
   /// Centres and radii of every grain, hot and static.
   void all_grains(std::vector<Vec3>& x, std::vector<Real>& r) const;
+  /// Every grain, hot and static (state 2, zero velocity), of the current state.
+  FrameData all_grains_frame() const;
   /// The visible grains (ACTIVE and INTERFACE) of the current state.
   FrameData visible_frame() const;
   /// Hash of every grain's id, position, velocity and spin, in id order.

@@ -35,7 +35,17 @@ Real HeightField::static_top_at(Real x, Real y) const {
   const int j = std::min(static_cast<int>(v), std::max(p_.ny - 2, 0));
   const int i1 = std::min(i + 1, p_.nx - 1), j1 = std::min(j + 1, p_.ny - 1);
   const Real a = u - i, b = v - j;
-  auto at = [&](int ii, int jj) { return h_[static_cast<std::size_t>(jj) * p_.nx + ii]; };
+  auto idx = [&](int ii, int jj) { return static_cast<std::size_t>(jj) * p_.nx + ii; };
+  // across a step of the terrain (a wall, the rim of a bowl) interpolation would put the static
+  // top halfway up the wall: there the grain's own column decides
+  const Real l00 = L_[idx(i, j)];
+  const Real step = std::max({std::abs(L_[idx(i1, j)] - l00), std::abs(L_[idx(i, j1)] - l00),
+                              std::abs(L_[idx(i1, j1)] - l00)});
+  if (step > p_.cell) {
+    const std::int64_t c = column_of(x, y);
+    return c >= 0 ? h_[static_cast<std::size_t>(c)] : h_[idx(i, j)];
+  }
+  auto at = [&](int ii, int jj) { return h_[idx(ii, jj)]; };
   return (1 - b) * ((1 - a) * at(i, j) + a * at(i1, j)) + b * ((1 - a) * at(i, j1) + a * at(i1, j1));
 }
 
@@ -82,7 +92,7 @@ void HeightField::set_static_top(std::vector<Real> h) {
   }
 }
 
-void HeightField::exchange(Real dt) {
+void HeightField::exchange(Real dt, const std::vector<std::uint8_t>& flowing) {
   const int nx = p_.nx, ny = p_.ny;
   const Real dx = p_.cell;
   const Real tan0 = std::tan(p_.theta0);
@@ -113,10 +123,17 @@ void HeightField::exchange(Real dt) {
       const Real R = std::max(H_[c] - h_[c], 0.0);
       Real dh = 0;
       if (H_[c] > L_[c]) {
-        // BCRE exchange dR/dt = gamma R (theta - theta0), integrated exactly over dt with the
-        // slope held: stable for any dt, and a deposit never takes more than R.
-        const Real a = p_.gamma * (theta - p_.theta0);
-        dh = -R * std::expm1(a * dt);
+        // BCRE exchange dR/dt = gamma R (theta - theta_c), integrated exactly over dt with the
+        // slope held: stable for any dt, and a deposit never takes more than R. theta_c is
+        // theta0 under a flowing layer and theta_max under one at rest: grains that stopped on
+        // a slope between the two stay there in DEM, so they join the static layer.
+        const bool flows = flowing.empty() || flowing[c];
+        const Real theta_c = flows ? p_.theta0 : p_.theta_max;
+        dh = -R * std::expm1(p_.gamma * (theta - theta_c) * dt);
+        // a deposit stops where the column's own downhill slope would pass theta_c: otherwise it
+        // builds a step that the next update erodes again, and the grains on it flip between
+        // trapped and dislodged at every update
+        if (dh > 0) dh = std::min(dh, 0.5 * dx * std::max(std::tan(theta_c) - tan_theta, 0.0));
         // an avalanche: a static slope above theta_max erodes even with no rolling layer
         if (theta > p_.theta_max) dh -= p_.gamma * p_.avalanche_depth * (theta - p_.theta_max) * dt;
         // erosion stops where the slope would fall below theta0 (no overshoot between updates)

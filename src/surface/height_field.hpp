@@ -53,8 +53,11 @@ class HeightField {
   /// them from what lies below: grains in flight never lift the surface.
   void measure(const Grains& hot, const std::vector<Real>& static_top,
                const std::vector<std::uint8_t>& counts = {});
-  /// Steps 2-6 over a time dt: slopes, exchange, h, R, and the R_min floor.
-  void exchange(Real dt);
+  /// Steps 2-6 over a time dt: slopes, exchange, h, R, and the R_min floor. `flowing` marks the
+  /// columns whose rolling layer holds moving grains (empty: all flow). A rolling layer at rest
+  /// deposits up to theta_max, the steepest a static slope stands; a flowing one erodes the
+  /// static layer down to theta0 (the hysteresis of the angle of repose).
+  void exchange(Real dt, const std::vector<std::uint8_t>& flowing = {});
   /// Lowers h of column c to at most z (never below L): the static layer cannot reach up to where
   /// grains are moving.
   void limit_static_top(std::size_t c, Real z) {

@@ -31,7 +31,8 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
     }
     const Real h = hf.static_top_at(x.x, x.y);
     if (hot.state[i] == GrainState::Active) {
-      if (x.z < h && norm2(hot.v[i]) < v2_trap) {
+      // only a grain resting on something: a slow grain at the top of a bounce stays free
+      if (x.z < h && norm2(hot.v[i]) < v2_trap && (contacts[i] & DemSolver::kTouches)) {
         // frozen where it is; its pairs with other frozen grains leave the list at the next
         // rebuild, while those with active grains keep their springs, so that the grains resting
         // on it do not lose their friction

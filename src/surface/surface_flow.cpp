@@ -14,15 +14,23 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
     counts_[i] = hot.state[i] != GrainState::Active || (contacts_[i] & DemSolver::kTouches);
   interface_.static_tops(hf_, st, static_top_);
   hf_.measure(hot, static_top_, counts_);
-  hf_.exchange(dt);
-  // Impacts: a fast grain striking the pile sets the grains beneath it in motion in DEM, so the
-  // static top stays a grain's diameter below the bottom of every fast grain in contact. Without
-  // this the stream of a pour would hit a frozen apex and build a spike where DEM digs a plateau.
+  // The columns where grains move: a fast grain in contact with the pile. There the rolling
+  // layer flows (BCRE with theta0); elsewhere it is at rest and deposits up to theta_max.
   const Real v2_fast = p_.interface.trap_speed * p_.interface.trap_speed;
+  flowing_.assign(hf_.columns(), 0);
+  fast_.clear();
   for (std::size_t i = 0; i < hot.size(); ++i) {
     if (hot.state[i] != GrainState::Active || !(contacts_[i] & DemSolver::kTouches) ||
         norm2(hot.v[i]) < v2_fast)
       continue;
+    fast_.push_back(static_cast<std::uint32_t>(i));
+    hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) { flowing_[c] = 1; });
+  }
+  hf_.exchange(dt, flowing_);
+  // Impacts: a fast grain striking the pile sets the grains beneath it in motion in DEM, so the
+  // static top stays a grain's diameter below the bottom of every fast grain in contact. Without
+  // this the stream of a pour would hit a frozen apex and build a spike where DEM digs a plateau.
+  for (std::uint32_t i : fast_) {
     const Real floor_z = hot.x[i].z - 3 * hot.r[i];
     hf_.for_each_ray_hit(hot.x[i], hot.r[i],
                          [&](std::size_t c, Real, Real) { hf_.limit_static_top(c, floor_z); });

@@ -30,7 +30,8 @@ class SurfaceFlow {
   HeightField hf_;
   InterfaceLayer interface_;
   std::vector<Real> static_top_;
-  std::vector<std::uint8_t> contacts_, counts_;
+  std::vector<std::uint8_t> contacts_, counts_, flowing_;
+  std::vector<std::uint32_t> fast_;
 };
 
 }  // namespace sandflow

@@ -80,6 +80,23 @@ TEST(Exchange, AtTheReposeAngleNothingMoves) {
   for_interior(hf, [&](std::size_t c) { EXPECT_NEAR(hf.static_top()[c], before[c], 1e-12) << c; });
 }
 
+TEST(Exchange, LayerAtRestDepositsUpToThetaMaxAndAFlowingOneErodesToTheta0) {
+  // 35 degrees: between theta0 (32) and theta_max (38)
+  HeightField resting = ramp(35, 0.01), flowing = ramp(35, 0.01);
+  const std::vector<Real> before = resting.static_top();
+  resting.exchange(0.003, std::vector<std::uint8_t>(resting.columns(), 0));
+  flowing.exchange(0.003, std::vector<std::uint8_t>(flowing.columns(), 1));
+  for_interior(resting, [&](std::size_t c) {
+    EXPECT_GT(resting.static_top()[c], before[c]) << c;  // grains at rest on it join it
+    EXPECT_LT(flowing.static_top()[c], before[c]) << c;  // a flow erodes it
+  });
+  // above theta_max even a layer at rest erodes
+  HeightField steep = ramp(42, 0.01);
+  const std::vector<Real> s0 = steep.static_top();
+  steep.exchange(0.003, std::vector<std::uint8_t>(steep.columns(), 0));
+  for_interior(steep, [&](std::size_t c) { EXPECT_LT(steep.static_top()[c], s0[c]) << c; });
+}
+
 TEST(Exchange, DepositionNeverTakesMoreThanTheRollingLayer) {
   // flat and thin: the exchange rate times a long step would bury ten times R
   HeightField hf = ramp(0, 0.002);

@@ -41,7 +41,7 @@ struct Fixture {
     hf.set_static_top(std::vector<Real>(100, h_level));
   }
   TransitionCounts transfer() {
-    std::vector<std::uint8_t> contacts(hot.size(), 0);
+    std::vector<std::uint8_t> contacts(hot.size(), DemSolver::kTouches);
     return layer.transfer(hf, hot, st, dem, contacts);
   }
   GrainState state_of(GrainId id) const {
@@ -94,6 +94,14 @@ TEST(Interface, ErosionDislodgesAndDeepGrainsSleep) {
   EXPECT_EQ(f.state_of(0), GrainState::Active);
   EXPECT_EQ(f.state_of(1), GrainState::Interface);
   f.expect_conserved(2);
+}
+
+TEST(Interface, GrainInFlightIsNeverTrapped) {
+  Fixture f(0.05);
+  f.hot.add(0, {0.05, 0.05, 0.045}, {}, kR, 2600);  // slow and below h, but touching nothing
+  std::vector<std::uint8_t> contacts{0};
+  EXPECT_EQ(f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts).trapped, 0);
+  EXPECT_EQ(f.state_of(0), GrainState::Active);
 }
 
 TEST(Interface, GrainTouchedByAnActiveOneNeverSleeps) {
