@@ -16,13 +16,12 @@ Stiffness choose_stiffness(const SceneConfig& scene, Mode mode, const Geometry& 
   const MaterialConfig& m = scene.material;
   const Real d = m.diameter;
   const Real g = norm(scene.simulation.gravity);
-  constexpr Real kPacking = 0.6;
 
   s.depth = mode == Mode::Dem
                 ? c.dem_depth.value_or(largest_heap(scene).height)
                 : c.surface_depth.value_or(rolling_min(scene) + interface_thickness(scene) + 2 * d);
   // one contact carries the weight of the column of cross-section d^2 above it
-  s.k_static = kPacking * m.density * g * s.depth * d / c.max_overlap;
+  s.k_static = kHeapPacking * m.density * g * s.depth * d / c.max_overlap;
 
   if (c.impact_speed) {
     s.impact_speed = *c.impact_speed;

@@ -10,7 +10,6 @@
 namespace sandflow {
 
 namespace {
-constexpr Real kPacking = 0.6;                 // random packing fraction of a heap
 constexpr std::size_t kMaxColumns = 16u << 20;  // 16 M columns: 128 MB per field
 Real gravity_magnitude(const SceneConfig& s) { return norm(s.simulation.gravity); }
 }  // namespace
@@ -26,7 +25,7 @@ Real interface_thickness(const SceneConfig& scene) {
 HeapSize largest_heap(const SceneConfig& scene) {
   const Real d = scene.material.diameter;
   const Real grain_volume = kPi / 6 * d * d * d;
-  const Real bulk = static_cast<Real>(scene.total_grains()) * grain_volume / kPacking;
+  const Real bulk = static_cast<Real>(scene.total_grains()) * grain_volume / kHeapPacking;
   const Real t = std::tan(scene.surface.repose_angle);
   const Real radius = std::cbrt(3 * bulk / (kPi * t));
   return {radius * t, radius};

@@ -11,6 +11,9 @@
 
 namespace sandflow {
 
+/// Random packing fraction of a heap, for the volume the grains of a scene take.
+constexpr Real kHeapPacking = 0.6;
+
 struct SurfaceParams {
   HeightFieldParams grid;
   InterfaceParams interface;

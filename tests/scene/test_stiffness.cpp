@@ -1,0 +1,70 @@
+// k_n from the load a contact carries (DESIGN.md §3), per mode.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "scene/stiffness.hpp"
+#include "surface/surface_params.hpp"
+
+namespace sandflow {
+namespace {
+
+SceneConfig pour_scene(Real height, Real speed) {
+  SceneConfig s;
+  s.path = "stiffness";
+  s.material.diameter = 0.01;
+  s.material.density = 2600;
+  GeometryConfig floor;
+  floor.type = GeometryType::Plane;
+  s.geometry = {floor};
+  EmitterConfig e;
+  e.type = EmitterType::Pour;
+  e.center = {0, 0, height};
+  e.velocity = {0, 0, -speed};
+  e.count = 100000;
+  s.emitters = {e};
+  s.stiffness.from_load = true;
+  return s;
+}
+
+TEST(Stiffness, GivenKnWhenNotFromLoad) {
+  SceneConfig s = pour_scene(0.6, 2);
+  s.stiffness.from_load = false;
+  s.material.k_n = 1234;
+  const Geometry g = Geometry::from_config(s.geometry, s.material);
+  EXPECT_EQ(choose_stiffness(s, Mode::Dem, g).k_n, 1234);
+  EXPECT_EQ(choose_stiffness(s, Mode::Surface, g).k_n, 1234);
+}
+
+TEST(Stiffness, ImpactSpeedFromTheFallAndTheFormulas) {
+  SceneConfig s = pour_scene(0.6, 2);
+  const Geometry g = Geometry::from_config(s.geometry, s.material);
+  const Stiffness dem = choose_stiffness(s, Mode::Dem, g);
+  // free fall from 0.6 m starting at 2 m/s
+  EXPECT_NEAR(dem.impact_speed, std::sqrt(4 + 2 * 9.81 * 0.6), 1e-6);
+  const Real mass = 2600 * kPi / 6 * 1e-6;
+  EXPECT_NEAR(dem.k_impact, 0.5 * mass * dem.impact_speed * dem.impact_speed / (1e-3 * 1e-3),
+              1e-6 * dem.k_impact);
+  EXPECT_NEAR(dem.depth, largest_heap(s).height, 1e-12);
+  EXPECT_NEAR(dem.k_static, 0.6 * 2600 * 9.81 * dem.depth * 0.01 / 0.01, 1e-9 * dem.k_static);
+  EXPECT_EQ(dem.k_n, std::max(dem.k_static, dem.k_impact));
+}
+
+TEST(Stiffness, SurfaceModeIsSofterWhereTheStaticLoadDominates) {
+  // a gentle pour (low, slow) onto what becomes a tall heap: the weight of the pile decides in
+  // DEM, the thin active layer in surface mode
+  SceneConfig s = pour_scene(0.02, 0.1);
+  s.stiffness.impact_speed = 0.5;
+  const Geometry g = Geometry::from_config(s.geometry, s.material);
+  const Stiffness dem = choose_stiffness(s, Mode::Dem, g), surf = choose_stiffness(s, Mode::Surface, g);
+  EXPECT_GT(dem.k_static, dem.k_impact);
+  EXPECT_LT(surf.k_n, dem.k_n);
+  EXPECT_NEAR(surf.depth, 0.01 + 0.01 + 0.02, 1e-12);  // R_min + T + 2 d
+  // impacts bound both modes alike
+  SceneConfig fast = pour_scene(0.6, 2);
+  const Stiffness fd = choose_stiffness(fast, Mode::Dem, g), fs = choose_stiffness(fast, Mode::Surface, g);
+  EXPECT_EQ(fd.k_n, fs.k_n);
+}
+
+}  // namespace
+}  // namespace sandflow
