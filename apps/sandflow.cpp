@@ -269,7 +269,6 @@ nlohmann::json angle_json(const HeapFit& f) {
 }
 
 int compare_command(const RunOptions& o) {
-  if (!o.mode.empty()) throw InputError("compare runs both modes: --mode does not apply");
   SceneConfig scene = load_for_run(o);
   const std::string out = o.out.empty() ? fmt::format("out/{}-compare", scene.name) : o.out;
   prepare_output_dir(out, o.force);
@@ -410,6 +409,20 @@ int render_command(const std::string& dir, int width, int height, int frame) {
   return 0;
 }
 
+/// The options of the commands that run a scene: the file, where to write, and how to scale it.
+void add_scene_options(CLI::App* cmd, RunOptions& o, const std::string& out_help,
+                       const std::string& set_help) {
+  cmd->add_option("scene", o.scene, "scene file (TOML)")->required();
+  cmd->add_option("--out", o.out, out_help);
+  cmd->add_option("--frames", o.frames, "number of frames (default: from the scene)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--grains", o.grains, "scale the emitters to N grains in total")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{2000000000}));
+  cmd->add_option("--threads", o.threads, "OpenMP threads (default: all cores)")
+      ->check(CLI::Range(1, 1024));
+  cmd->add_option("--set", o.sets, set_help);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -419,17 +432,10 @@ int main(int argc, char** argv) {
 
   RunOptions ro;
   auto* run = app.add_subcommand("run", "simulate a scene and write its frames and statistics");
-  run->add_option("scene", ro.scene, "scene file (TOML)")->required();
+  add_scene_options(run, ro, "output folder (default out/SCENE-MODE)",
+                    "override a scene key: --set material.friction=0.5");
   run->add_option("--mode", ro.mode, "surface (height field + DEM) or dem (plain DEM)")
       ->check(CLI::IsMember({"surface", "dem"}));
-  run->add_option("--out", ro.out, "output folder (default out/SCENE-MODE)");
-  run->add_option("--frames", ro.frames, "number of frames (default: from the scene)")
-      ->check(CLI::PositiveNumber);
-  run->add_option("--grains", ro.grains, "scale the emitters to N grains in total")
-      ->check(CLI::Range(std::int64_t{1}, std::int64_t{2000000000}));
-  run->add_option("--threads", ro.threads, "OpenMP threads (default: all cores)")
-      ->check(CLI::Range(1, 1024));
-  run->add_option("--set", ro.sets, "override a scene key: --set material.friction=0.5");
   run->add_flag("--check", ro.check, "validate the scene and print its plan, then stop");
   run->add_flag("--force", ro.force, "replace the run in a non-empty output folder");
   run->add_flag("--profile", ro.profile, "print the seconds spent in each stage");
@@ -441,15 +447,8 @@ int main(int argc, char** argv) {
   RunOptions co;
   auto* compare = app.add_subcommand(
       "compare", "run a scene in both modes and compare speed, grains simulated and the heaps");
-  compare->add_option("scene", co.scene, "scene file (TOML)")->required();
-  compare->add_option("--out", co.out, "output folder (default out/SCENE-compare)");
-  compare->add_option("--frames", co.frames, "number of frames (default: from the scene)")
-      ->check(CLI::PositiveNumber);
-  compare->add_option("--grains", co.grains, "scale the emitters to N grains in total")
-      ->check(CLI::Range(std::int64_t{1}, std::int64_t{2000000000}));
-  compare->add_option("--threads", co.threads, "OpenMP threads (default: all cores)")
-      ->check(CLI::Range(1, 1024));
-  compare->add_option("--set", co.sets, "override a scene key in both runs");
+  add_scene_options(compare, co, "output folder (default out/SCENE-compare)",
+                    "override a scene key in both runs");
   compare->add_flag("--force", co.force, "replace a comparison in a non-empty output folder");
 
   int width = 1280, height = 720, frame = 0;
