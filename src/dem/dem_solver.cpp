@@ -29,14 +29,19 @@ void DemSolver::contacts_of(const Grains& grains, const Geometry& geometry,
   const std::size_t n = std::min(grains.size(), pairs_.start.empty() ? 0 : pairs_.start.size() - 1);
   for (std::size_t i = 0; i < n; ++i) {
     for (std::uint32_t s = pairs_.start[i]; s < pairs_.start[i + 1]; ++s) {
-      if (!pairs_.touch[s]) continue;
       const std::uint32_t j = pairs_.j[s];
+      // listed pairs are within reach of the skin: a frozen grain that an active one may
+      // touch before the next rebuild must keep pushing
+      if (grains.state[j] == GrainState::Active) out[i] |= kNearActive;
+      if (grains.state[i] == GrainState::Active) out[j] |= kNearActive;
+      if (!pairs_.touch[s]) continue;
       out[i] |= kTouches | (grains.state[j] == GrainState::Active ? kTouchesActive : 0);
       out[j] |= kTouches | (grains.state[i] == GrainState::Active ? kTouchesActive : 0);
     }
     if (out[i] & kTouches || walls_.start.size() <= i + 1) continue;
     for (std::uint32_t s = walls_.start[i]; s < walls_.start[i + 1]; ++s)
-      if (geometry.obstacles()[walls_.obstacle[s]].solid->closest(grains.x[i]).distance < grains.r[i])
+      if (geometry.obstacles()[walls_.obstacle[s]].solid->closest(grains.x[i]).distance <
+          grains.r[i])
         out[i] |= kTouches;
   }
 }
@@ -182,8 +187,7 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
       const Vec3 d = x[i] - x[j];
       const Real dist2 = norm2(d);
       const Real rsum = r[i] + r[j];
-      if (dist2 >= rsum * rsum ||
-          (st[i] != GrainState::Active && st[j] != GrainState::Active)) {
+      if (dist2 >= rsum * rsum || (st[i] != GrainState::Active && st[j] != GrainState::Active)) {
         // apart: the contact and its memory are gone (written only when it just ended)
         if (pl.touch[s]) {
           pl.touch[s] = 0;
@@ -198,7 +202,11 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
       g.delta = rsum - dist;
       g.arm_i = r[i];
       g.arm_j = r[j];
-      g.c_n = pl.c_n[s];
+      // a frozen partner does not recoil: damp as against a wall, so that the restitution of a
+      // bounce on the interface is the material's, not that of a grain half the mass
+      g.c_n = st[i] == GrainState::Active && st[j] == GrainState::Active
+                  ? pl.c_n[s]
+                  : normal_damping(cp, grains.m[st[i] == GrainState::Active ? i : j]);
       g.r_eff = r[i] * r[j] / rsum;
       ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
       cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, dt);

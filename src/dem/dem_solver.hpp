@@ -46,8 +46,9 @@ class DemSolver {
   }
 
   /// Per grain, what it touched at the last step: kTouches (a grain or the geometry) and
-  /// kTouchesActive (an ACTIVE grain). Grains added since the last rebuild get 0.
-  static constexpr std::uint8_t kTouches = 1, kTouchesActive = 2;
+  /// kTouchesActive (an ACTIVE grain), kNearActive (an ACTIVE grain within the Verlet skin).
+  /// Grains added since the last rebuild get 0.
+  static constexpr std::uint8_t kTouches = 1, kTouchesActive = 2, kNearActive = 4;
   void contacts_of(const Grains& grains, const Geometry& geometry,
                    std::vector<std::uint8_t>& out) const;
 

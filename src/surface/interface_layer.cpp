@@ -13,7 +13,8 @@ void InterfaceLayer::static_tops(const HeightField& hf, const StaticStore& st,
 }
 
 TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticStore& st,
-                                          DemSolver& dem, const std::vector<std::uint8_t>& contacts) {
+                                          DemSolver& dem,
+                                          const std::vector<std::uint8_t>& contacts) {
   TransitionCounts n;
   const Real T = p_.thickness;
   const Real m = p_.margin;
@@ -45,7 +46,8 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
       hot.v[i] = hot.w[i] = {};
       dem.invalidate();  // its pairs with interface grains enter the list
       ++n.dislodged;
-    } else if (x.z < h - T - m && !(contacts[i] & DemSolver::kTouchesActive)) {
+    } else if (x.z < h - T - m && !(contacts[i] & DemSolver::kNearActive)) {
+      // (an active grain within reach would sink into it: static grains push nothing)
       st.add(hot.id[i], x, hot.r[i], static_cast<std::uint32_t>(c));
       dem.invalidate();
       ++n.slept;

@@ -1,12 +1,16 @@
 #include "surface/surface_flow.hpp"
 
+#include <algorithm>
+
 namespace sandflow {
 
 SurfaceFlow::SurfaceFlow(const SurfaceParams& params, const Geometry& geometry)
-    : p_(params), hf_(params.grid, terrain_heights(params, geometry)), interface_(params.interface) {}
+    : p_(params),
+      hf_(params.grid, terrain_heights(params, geometry)),
+      interface_(params.interface) {}
 
 TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& dem,
-                                    const Geometry& geometry, Real dt) {
+                                     const Geometry& geometry, Real dt) {
   // a grain in flight touches nothing: only grains of the pile (and the interface) make H
   dem.contacts_of(hot, geometry, contacts_);
   counts_.resize(hot.size());
@@ -30,9 +34,22 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
   // Impacts: a fast grain striking the pile sets the grains beneath it in motion in DEM, so the
   // static top stays a grain's diameter below the bottom of every fast grain in contact. Without
   // this the stream of a pour would hit a frozen apex and build a spike where DEM digs a plateau.
+  // It reaches below the grain as far as the grain can fall before the next update.
   for (std::uint32_t i : fast_) {
-    const Real floor_z = hot.x[i].z - 3 * hot.r[i];
+    const Real floor_z = hot.x[i].z - 3 * hot.r[i] - std::max(-hot.v[i].z, 0.0) * dt;
     hf_.for_each_ray_hit(hot.x[i], hot.r[i],
+                         [&](std::size_t c, Real, Real) { hf_.limit_static_top(c, floor_z); });
+  }
+  // An active grain inside the static layer (pushed through the interface between updates)
+  // would sink through grains that push nothing: the static layer retreats below it, and the
+  // grains around it wake.
+  const Real T = p_.interface.thickness;
+  for (std::size_t i = 0; i < hot.size(); ++i) {
+    if (hot.state[i] != GrainState::Active) continue;
+    const Vec3& x = hot.x[i];
+    if (hf_.column_of(x.x, x.y) < 0 || x.z >= hf_.static_top_at(x.x, x.y) - T) continue;
+    const Real floor_z = x.z - hot.r[i] - T;
+    hf_.for_each_ray_hit(x, hot.r[i],
                          [&](std::size_t c, Real, Real) { hf_.limit_static_top(c, floor_z); });
   }
   return interface_.transfer(hf_, hot, st, dem, contacts_);

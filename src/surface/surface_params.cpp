@@ -45,7 +45,7 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   hf.theta_max = sc.max_angle.value_or(sc.repose_angle + deg_to_rad(6.0));
   hf.rolling_min = rolling_min(scene);
   hf.avalanche_depth = d;
-  hf.gap = 0.25 * d;
+  hf.gap = d;  // a quarter of d cut H at gaps left below grains held up from the side
   p.interface.thickness = interface_thickness(scene);
   p.interface.trap_speed = sc.trap_speed.value_or(0.3 * std::sqrt(g * d));
   p.interface.density = scene.material.density;
