@@ -23,7 +23,7 @@ struct HeightFieldParams {
   Real theta_max = 0.66;      ///< a static slope steeper than this erodes on its own [rad]
   Real rolling_min = 0.01;    ///< R_min [m]
   Real avalanche_depth = 0.01;///< thickness that rolls where theta > theta_max [m]
-  Real gap = 0.0025;          ///< a grain separated from the pile below by more is airborne [m]
+  Real gap = 0.01;            ///< a grain separated from the pile below by more is airborne [m]
 };
 
 class HeightField {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -54,6 +55,21 @@ void expect_each_grain_once(const World& w, std::int64_t n) {
   }
 }
 
+// The largest overlap of an ACTIVE grain with a STATIC one, as a fraction of the smaller diameter.
+Real deepest_active_static_overlap(const World& w) {
+  const Grains& g = w.grains();
+  const StaticStore& st = w.static_grains();
+  Real worst = 0;
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    if (g.state[i] != GrainState::Active) continue;
+    for (std::size_t k = 0; k < st.size(); ++k) {
+      const Real overlap = g.r[i] + st.r[k] - norm(g.x[i] - st.x[k]);
+      worst = std::max(worst, overlap / (2 * std::min(g.r[i], st.r[k])));
+    }
+  }
+  return worst;
+}
+
 TEST(SurfaceMode, GrainsConservedAndHeightFieldInvariantsHoldEveryFrame) {
   SceneConfig s = coarse_pour(1200, 3000);
   s.output.frames = 40;
@@ -75,6 +91,12 @@ TEST(SurfaceMode, GrainsConservedAndHeightFieldInvariantsHoldEveryFrame) {
     }
     for (std::size_t i = 0; i < w.grains().size(); ++i)
       ASSERT_GT(w.grains().x[i].z, 0.0) << "grain below the floor";
+    // STATIC grains push nothing, so an active grain must never sink into one. Contacts at this
+    // stiffness overlap by a few per cent. In the floor scene at 20,000 grains, grains that got
+    // into the static layer overlapped its grains by 44-87 % of a diameter before the guards of
+    // docs/physics.md; this small pour does not provoke that even without them, so it checks the
+    // invariant here and the floor run (docs/physics.md) is the evidence for the guards.
+    EXPECT_LT(deepest_active_static_overlap(w), 0.25) << "frame " << f;
   }
   // the method did engage: matter went down into the static layer
   EXPECT_GT(all.trapped, 0);
