@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "analysis/heap.hpp"
@@ -46,7 +46,9 @@ struct RunOptions {
   bool profile = false;
 };
 
-std::string mode_name(Mode m) { return m == Mode::Dem ? "dem" : "surface"; }
+std::string mode_name(Mode m) {
+  return m == Mode::Dem ? "dem" : "surface";
+}
 
 SceneConfig load_for_run(const RunOptions& o) {
   std::vector<Override> overrides;
@@ -102,7 +104,9 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out) {
   const TimeStep& ts = world.time_step();
   const int threads = thread_count(scene);
   omp_set_num_threads(threads);
-  fmt::print(stderr, "sandflow {}: {} ({} grains, mode {}), {} frames, k_n = {:.4g} N/m, dt = {:.3g} s, {} threads -> {}\n",
+  fmt::print(stderr,
+             "sandflow {}: {} ({} grains, mode {}), {} frames, k_n = {:.4g} N/m, dt = {:.3g} s, {} "
+             "threads -> {}\n",
              SANDFLOW_VERSION, scene.path, scene.total_grains(), mode_name(scene.simulation.mode),
              frames, world.scene().material.k_n, ts.dt, threads, out);
 
@@ -192,6 +196,13 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out) {
                               {"slept", transitions.slept},
                               {"woken", transitions.woken}};
   }
+  nlohmann::json emitters = nlohmann::json::array();
+  for (const Emitter& e : world.emitters())
+    emitters.push_back({{"name", e.name()},
+                        {"count", e.count()},
+                        {"emitted", e.emitted()},
+                        {"delayed_by_occupied_slots", e.delayed()}});
+  summary["emitters"] = emitters;
   nlohmann::json prof;
   for (int s = 0; s < static_cast<int>(Stage::kCount); ++s)
     prof[std::string(stage_name(static_cast<Stage>(s)))] = world.profile().seconds[s];
@@ -206,16 +217,16 @@ int run_command(const RunOptions& o) {
   if (o.check) {
     World world(scene);
     const TimeStep& ts = world.time_step();
-    fmt::print("{}: ok — {} grains, mode {}, {} frames at {} fps, k_n = {:.4g} N/m, dt = {:.3g} s "
-               "({} substeps/frame, t_c = {:.3g} s)\n",
-               scene.path, scene.total_grains(), mode_name(scene.simulation.mode),
-               world.planned_frames(), scene.output.fps, world.scene().material.k_n, ts.dt,
-               ts.substeps, ts.t_c);
+    fmt::print(
+        "{}: ok — {} grains, mode {}, {} frames at {} fps, k_n = {:.4g} N/m, dt = {:.3g} s "
+        "({} substeps/frame, t_c = {:.3g} s)\n",
+        scene.path, scene.total_grains(), mode_name(scene.simulation.mode), world.planned_frames(),
+        scene.output.fps, world.scene().material.k_n, ts.dt, ts.substeps, ts.t_c);
     return 0;
   }
-  const std::string out = o.out.empty() ? fmt::format("out/{}-{}", scene.name,
-                                                      mode_name(scene.simulation.mode))
-                                        : o.out;
+  const std::string out =
+      o.out.empty() ? fmt::format("out/{}-{}", scene.name, mode_name(scene.simulation.mode))
+                    : o.out;
   prepare_output_dir(out, o.force);
   const RunResult res = run_scene(scene, out);
   const nlohmann::json& s = res.summary;
@@ -228,8 +239,8 @@ int run_command(const RunOptions& o) {
              s["n_simulated_mean"].get<double>());
   fmt::print("frames           {} ({:.2f} s simulated, k_n = {:.4g} N/m, dt = {:.3g} s)\n", frames,
              frames / scene.output.fps, s["k_n"].get<double>(), s["dt_mean"].get<double>());
-  fmt::print("time per frame   {:.3f} s  (total {:.1f} s, {} threads)\n",
-             res.wall_seconds / frames, res.wall_seconds, s["threads"].get<int>());
+  fmt::print("time per frame   {:.3f} s  (total {:.1f} s, {} threads)\n", res.wall_seconds / frames,
+             res.wall_seconds, s["threads"].get<int>());
   if (fit.ok)
     fmt::print("repose angle     {:.1f} deg (heap height {:.3f} m, base radius {:.3f} m)\n",
                fit.repose_angle_deg, fit.height, fit.base_radius);
@@ -241,13 +252,26 @@ int run_command(const RunOptions& o) {
                t["trapped"].get<std::int64_t>(), t["dislodged"].get<std::int64_t>(),
                t["slept"].get<std::int64_t>(), t["woken"].get<std::int64_t>());
   }
+  for (const auto& e : s["emitters"]) {
+    const auto emitted = e["emitted"].get<std::int64_t>(), count = e["count"].get<std::int64_t>();
+    const auto delayed = e["delayed_by_occupied_slots"].get<std::int64_t>();
+    if (emitted < count)
+      fmt::print(stderr,
+                 "warning: emitter '{}' emitted {} of its {} grains before the run ended: its "
+                 "slots were taken by grains below it {} times; raise it or add frames\n",
+                 e["name"].get<std::string>(), emitted, count, delayed);
+    else if (delayed > 0)
+      fmt::print("emitter          '{}': {} grains waited for a free slot\n",
+                 e["name"].get<std::string>(), delayed);
+  }
   fmt::print("inside geometry  {}\n", s["grains_inside_geometry"].get<std::int64_t>());
   fmt::print("max overlap      {:.2f} % of a diameter\n", 100 * s["max_overlap_rel"].get<double>());
   fmt::print("state hash       {}\n", s["state_hash"].get<std::string>());
   fmt::print("output           {}/ (stats.csv, summary.json, frames/)\n", out);
   if (o.profile) {
     fmt::print("stage seconds   ");
-    for (const auto& [k, v] : s["stage_seconds"].items()) fmt::print(" {} {:.2f}", k, v.get<double>());
+    for (const auto& [k, v] : s["stage_seconds"].items())
+      fmt::print(" {} {:.2f}", k, v.get<double>());
     fmt::print("\n");
   }
   return 0;
@@ -325,7 +349,8 @@ int compare_command(const RunOptions& o) {
       {"same_stiffness", same_k},
       {"repose_angle_dem_deg", angle_json(dem.heap)},
       {"repose_angle_surface_deg", angle_json(surf.heap)},
-      {"repose_angle_difference_deg", std::isnan(angle_diff) ? nlohmann::json() : nlohmann::json(angle_diff)},
+      {"repose_angle_difference_deg",
+       std::isnan(angle_diff) ? nlohmann::json() : nlohmann::json(angle_diff)},
       {"surface_rms", diff.rms},
       {"surface_rms_rel", diff.rms_rel},
       {"heap_height_dem", diff.heap_height},
@@ -334,13 +359,16 @@ int compare_command(const RunOptions& o) {
   };
   write_file_atomic((fs::path(out) / "compare.json").string(), j.dump(2) + "\n");
 
-  auto angle = [](const HeapFit& f) { return f.ok ? fmt::format("{:.1f} deg", f.repose_angle_deg) : std::string("n/a"); };
+  auto angle = [](const HeapFit& f) {
+    return f.ok ? fmt::format("{:.1f} deg", f.repose_angle_deg) : std::string("n/a");
+  };
   fmt::print("\n{} ({} grains, {} frames, {} threads)\n", scene.name, last.n_total, n_frames,
              thread_count(scene));
   fmt::print("{:<34}{:>16}{:>16}\n", "", "plain DEM", "surface flow");
   fmt::print("{:<34}{:>16}{:>16}\n", "total grains", dem.frames.back().n_total, last.n_total);
   fmt::print("{:<34}{:>16.0f}{:>16.0f}\n", "simulated grains, mean",
-             dem.summary["n_simulated_mean"].get<double>(), surf.summary["n_simulated_mean"].get<double>());
+             dem.summary["n_simulated_mean"].get<double>(),
+             surf.summary["n_simulated_mean"].get<double>());
   fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, mean", "100%", 100 * frac_mean);
   fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, last half", "100%", 100 * frac_half);
   fmt::print("{:<34}{:>16}{:>16}\n", "simulated grains, final", dem.frames.back().n_total,
@@ -351,9 +379,10 @@ int compare_command(const RunOptions& o) {
   fmt::print("{:<34}{:>16.3g}{:>16.3g}\n", "dt [s]", dem.summary["dt_mean"].get<double>(),
              surf.summary["dt_mean"].get<double>());
   fmt::print("{:<34}{:>16}{:>16}\n", "repose angle", angle(dem.heap), angle(surf.heap));
-  fmt::print("speed-up {:.2f}x; surfaces differ by {:.4f} m RMS = {:.1f}% of the heap height "
-             "({:.3f} m); {} stiffness in both modes\n",
-             speedup, diff.rms, 100 * diff.rms_rel, diff.heap_height, same_k ? "the same" : "a different");
+  fmt::print(
+      "speed-up {:.2f}x; surfaces differ by {:.4f} m RMS = {:.1f}% of the heap height "
+      "({:.3f} m); {} stiffness in both modes\n",
+      speedup, diff.rms, 100 * diff.rms_rel, diff.heap_height, same_k ? "the same" : "a different");
   fmt::print("output           {}/ (compare.json, dem/, surface/)\n", out);
   return 0;
 }
@@ -426,7 +455,8 @@ void add_scene_options(CLI::App* cmd, RunOptions& o, const std::string& out_help
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"sandflow: sand animated as a surface flow (Zhu & Yang 2010), with plain DEM beside it"};
+  CLI::App app{
+      "sandflow: sand animated as a surface flow (Zhu & Yang 2010), with plain DEM beside it"};
   app.require_subcommand(1);
   app.set_version_flag("--version", SANDFLOW_VERSION);
 
@@ -456,7 +486,8 @@ int main(int argc, char** argv) {
   render->add_option("dir", dir, "run folder")->required();
   render->add_option("--width", width, "image width")->check(CLI::Range(16, 16384));
   render->add_option("--height", height, "image height")->check(CLI::Range(16, 16384));
-  render->add_option("--frame", frame, "frame number (default: the last)")->check(CLI::PositiveNumber);
+  render->add_option("--frame", frame, "frame number (default: the last)")
+      ->check(CLI::PositiveNumber);
 
   try {
     app.parse(argc, argv);

@@ -34,7 +34,8 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
       throw InputError(fmt::format("{}: the pour area is smaller than one grain", where));
     // the next batch waits until the previous one has fallen one spacing: v0 t + g t^2 / 2 = s
     const Real g = norm(gravity);
-    const Real v0 = g > 0 ? std::max(0.0, dot(config.velocity, gravity) / g) : norm(config.velocity);
+    const Real v0 =
+        g > 0 ? std::max(0.0, dot(config.velocity, gravity) / g) : norm(config.velocity);
     if (g <= 0 && v0 <= 0)
       throw InputError(fmt::format(
           "{}: a pour needs gravity or an initial velocity to carry grains away", where));
@@ -70,6 +71,19 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
           where, slots_.size(), config.spacing, config.count));
   }
   next_time_ = config.start;
+  // a new grain's surface reaches its slot plus the jitter plus its radius
+  reach_ = config.jitter * std::max(0.0, spacing_ - d_max_) / 2 + d_max_ / 2;
+  slot_lo_ = slot_hi_ = slots_.front();
+  for (const Vec3& p : slots_) {
+    slot_lo_ = min(slot_lo_, p);
+    slot_hi_ = max(slot_hi_, p);
+  }
+}
+
+bool Emitter::near_slots(const Vec3& x, Real r) const {
+  const Real m = reach_ + r;
+  return x.x > slot_lo_.x - m && x.x < slot_hi_.x + m && x.y > slot_lo_.y - m &&
+         x.y < slot_hi_.y + m && x.z > slot_lo_.z - m && x.z < slot_hi_.z + m;
 }
 
 Real Emitter::end_time() const {
@@ -83,7 +97,8 @@ Real Emitter::draw_radius(Rng& rng) const {
   return 0.5 * material_.diameter * (1 + spread * rng.uniform(-1.0, 1.0));
 }
 
-void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out) {
+void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vector<Vec3>& nearby_x,
+                   const std::vector<Real>& nearby_r) {
   if (done() || t < next_time_) return;
   // Jitter moves a grain by at most half the free gap, so new grains never overlap.
   const Real gap = std::max(0.0, spacing_ - d_max_);
@@ -101,16 +116,32 @@ void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out) {
   // pour: a batch of randomly chosen free slots
   owed_ += per_batch_;
   auto k = static_cast<std::int64_t>(owed_);
-  k = std::min<std::int64_t>({k, config_.count - emitted_, static_cast<std::int64_t>(slots_.size())});
+  k = std::min<std::int64_t>(
+      {k, config_.count - emitted_, static_cast<std::int64_t>(slots_.size())});
   owed_ -= static_cast<Real>(k);
   std::vector<std::uint32_t> order(slots_.size());
   for (std::uint32_t q = 0; q < order.size(); ++q) order[q] = q;
-  for (std::int64_t q = 0; q < k; ++q) {  // partial Fisher-Yates
-    const auto pick = q + static_cast<std::int64_t>(rng.uniform() * static_cast<Real>(order.size() - q));
-    std::swap(order[q], order[std::min<std::int64_t>(pick, order.size() - 1)]);
+  // a slot is taken when a grain already there (the top of a heap grown up to the pour, or a
+  // grain thrown back up) would overlap a new grain at it: placing one there would fire both off
+  auto occupied = [&](const Vec3& slot) {
+    for (std::size_t g = 0; g < nearby_x.size(); ++g) {
+      const Real reach = reach_ + nearby_r[g];
+      if (norm2(nearby_x[g] - slot) < reach * reach) return true;
+    }
+    return false;
+  };
+  std::int64_t placed = 0;
+  for (std::size_t q = 0; q < order.size() && placed < k; ++q) {  // partial Fisher-Yates
+    const auto pick =
+        q + static_cast<std::size_t>(rng.uniform() * static_cast<Real>(order.size() - q));
+    std::swap(order[q], order[std::min(pick, order.size() - 1)]);
+    if (occupied(slots_[order[q]])) continue;
     out.push_back({jittered(slots_[order[q]]), config_.velocity, draw_radius(rng)});
+    ++placed;
   }
-  emitted_ += k;
+  owed_ += static_cast<Real>(k - placed);  // the grains of taken slots come with later batches
+  delayed_ += k - placed;
+  emitted_ += placed;
   next_time_ += batch_interval_;
 }
 

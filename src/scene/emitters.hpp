@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/rng.hpp"
@@ -26,8 +27,20 @@ class Emitter {
   Emitter(const EmitterConfig& config, const MaterialConfig& material, const Vec3& gravity,
           const std::string& where);
 
-  /// Appends the grains due by time t (radii drawn from rng).
-  void emit(Real t, Rng& rng, std::vector<NewGrain>& out);
+  /// Appends the grains due by time t (radii drawn from rng). A pour leaves out the slots that
+  /// `nearby` (grains already near its slots: centres and radii) would overlap, and owes their
+  /// grains to its next batches.
+  void emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vector<Vec3>& nearby_x = {},
+            const std::vector<Real>& nearby_r = {});
+
+  /// True when a batch is due at time t.
+  bool due(Real t) const { return !done() && t >= next_time_; }
+  /// True when a grain centred at x with radius r may overlap a new grain of this pour.
+  bool near_slots(const Vec3& x, Real r) const;
+  /// Grains a pour owed but could not place because its slots were occupied (summed per batch).
+  std::int64_t delayed() const { return delayed_; }
+  const std::string& name() const { return config_.name; }
+  EmitterType type() const { return config_.type; }
 
   /// Time the last grain is emitted [s].
   Real end_time() const;
@@ -40,14 +53,17 @@ class Emitter {
 
   EmitterConfig config_;
   MaterialConfig material_;
-  Real d_max_;                     ///< largest diameter [m]
-  Real spacing_;                   ///< slot spacing [m]
-  std::vector<Vec3> slots_;        ///< slot centres (pour: one layer; block/lattice: all)
-  Real batch_interval_ = 0;        ///< pour: time between batches [s]
-  Real per_batch_ = 0;             ///< pour: grains per batch (fractional)
-  Real owed_ = 0;                  ///< pour: fractional grains carried to the next batch
-  Real next_time_ = 0;             ///< time of the next batch [s]
+  Real d_max_;               ///< largest diameter [m]
+  Real spacing_;             ///< slot spacing [m]
+  std::vector<Vec3> slots_;  ///< slot centres (pour: one layer; block/lattice: all)
+  Real batch_interval_ = 0;  ///< pour: time between batches [s]
+  Real per_batch_ = 0;       ///< pour: grains per batch (fractional)
+  Real owed_ = 0;            ///< pour: fractional grains carried to the next batch
+  Real next_time_ = 0;       ///< time of the next batch [s]
+  Real reach_ = 0;           ///< largest distance of a new grain's surface from its slot [m]
+  Vec3 slot_lo_, slot_hi_;   ///< bounds of the slot centres [m]
   std::int64_t emitted_ = 0;
+  std::int64_t delayed_ = 0;
 };
 
 }  // namespace sandflow

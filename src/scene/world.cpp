@@ -59,7 +59,8 @@ void scale_grain_count(SceneConfig& scene, std::int64_t total) {
     rem.emplace_back(-(exact - std::floor(exact)), k);
   }
   std::sort(rem.begin(), rem.end());
-  for (std::size_t q = 0; sum < total; ++q, ++sum) ++scene.emitters[rem[q % rem.size()].second].count;
+  for (std::size_t q = 0; sum < total; ++q, ++sum)
+    ++scene.emitters[rem[q % rem.size()].second].count;
 }
 
 namespace {
@@ -106,9 +107,27 @@ int World::planned_frames() const {
 
 void World::emit() {
   new_grains_.clear();
-  for (Emitter& e : emitters_) e.emit(time_, rng_, new_grains_);
+  for (Emitter& e : emitters_) {
+    // a pour skips slots taken by grains already there: the hot ones, the static ones, and the
+    // ones placed this step by an earlier emitter
+    nearby_x_.clear();
+    nearby_r_.clear();
+    if (e.due(time_) && e.type() == EmitterType::Pour) {
+      auto consider = [&](const Vec3& x, Real r) {
+        if (e.near_slots(x, r)) {
+          nearby_x_.push_back(x);
+          nearby_r_.push_back(r);
+        }
+      };
+      for (std::size_t i = 0; i < grains_.size(); ++i) consider(grains_.x[i], grains_.r[i]);
+      for (std::size_t k = 0; k < static_.size(); ++k) consider(static_.x[k], static_.r[k]);
+      for (const NewGrain& g : new_grains_) consider(g.x, g.r);
+    }
+    e.emit(time_, rng_, new_grains_, nearby_x_, nearby_r_);
+  }
   if (new_grains_.empty()) return;
-  for (const NewGrain& g : new_grains_) grains_.add(next_id_++, g.x, g.v, g.r, scene_.material.density);
+  for (const NewGrain& g : new_grains_)
+    grains_.add(next_id_++, g.x, g.v, g.r, scene_.material.density);
   dem_.invalidate();
 }
 
@@ -119,7 +138,8 @@ void World::step() {
   }
   if (surface_ && step_ % surface_->params().update_steps == 0) {
     ScopedStage s(profile_, Stage::Surface);
-    transitions_ += surface_->update(grains_, static_, dem_, geometry_, surface_->params().update_interval);
+    transitions_ +=
+        surface_->update(grains_, static_, dem_, geometry_, surface_->params().update_interval);
     ++surface_updates_;
   }
   dem_.step(grains_, geometry_, ts_.dt, profile_);
@@ -141,17 +161,20 @@ FrameStats World::advance_frame() {
   st.substeps = ts_.substeps;
   st.dt = ts_.dt;
   for (GrainState s : grains_.state) {
-    if (s == GrainState::Active) ++st.n_active;
-    else ++st.n_interface;
+    if (s == GrainState::Active)
+      ++st.n_active;
+    else
+      ++st.n_interface;
   }
   st.n_static = static_cast<std::int64_t>(static_.size());
   st.n_total = st.n_active + st.n_interface + st.n_static;
   st.transitions = transitions_;
   st.surface_updates = surface_updates_;
   if (st.n_total != static_cast<std::int64_t>(next_id_))
-    throw SimulationError(fmt::format("{} grains were emitted but {} are held at step {}: a "
-                                      "transition lost or duplicated grains",
-                                      next_id_, st.n_total, step_));
+    throw SimulationError(
+        fmt::format("{} grains were emitted but {} are held at step {}: a "
+                    "transition lost or duplicated grains",
+                    next_id_, st.n_total, step_));
   st.contacts = dem_.counters().contacts;
   st.wall_contacts = dem_.counters().wall_contacts;
   st.max_overlap_rel = dem_.counters().max_overlap_rel;
@@ -170,8 +193,7 @@ FrameStats World::advance_frame() {
 Real World::kinetic_energy() const {
   Real e = 0;
   for (std::size_t i = 0; i < grains_.size(); ++i)
-    e += 0.5 * grains_.m[i] * norm2(grains_.v[i]) +
-         0.5 / grains_.inv_I[i] * norm2(grains_.w[i]);
+    e += 0.5 * grains_.m[i] * norm2(grains_.v[i]) + 0.5 / grains_.inv_I[i] * norm2(grains_.w[i]);
   return e;
 }
 
@@ -208,7 +230,11 @@ FrameData World::all_grains_frame() const {
 
 std::uint64_t World::state_hash() const {
   // every grain, hot or static, in id order
-  struct Ref { GrainId id; bool hot; std::uint32_t slot; };
+  struct Ref {
+    GrainId id;
+    bool hot;
+    std::uint32_t slot;
+  };
   std::vector<Ref> refs;
   refs.reserve(total_grains());
   for (std::uint32_t i = 0; i < grains_.size(); ++i) refs.push_back({grains_.id[i], true, i});

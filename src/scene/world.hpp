@@ -39,18 +39,18 @@ void scale_grain_count(SceneConfig& scene, std::int64_t total);
 
 struct FrameStats {
   int frame = 0;
-  Real time = 0;                 ///< simulated time at the end of the frame [s]
+  Real time = 0;  ///< simulated time at the end of the frame [s]
   int substeps = 0;
-  Real dt = 0;                   ///< [s]
+  Real dt = 0;  ///< [s]
   std::int64_t n_total = 0, n_active = 0, n_interface = 0, n_static = 0;
-  std::int64_t contacts = 0;     ///< touching grain-grain pairs at the end of the frame
+  std::int64_t contacts = 0;  ///< touching grain-grain pairs at the end of the frame
   std::int64_t wall_contacts = 0;
-  Real max_overlap_rel = 0;      ///< largest overlap / smaller diameter during the frame
-  Real kinetic_energy = 0;       ///< translational + rotational [J]
-  std::int64_t rebuilds = 0;     ///< neighbour-list rebuilds during the frame
-  TransitionCounts transitions;  ///< grains that changed state during the frame
+  Real max_overlap_rel = 0;          ///< largest overlap / smaller diameter during the frame
+  Real kinetic_energy = 0;           ///< translational + rotational [J]
+  std::int64_t rebuilds = 0;         ///< neighbour-list rebuilds during the frame
+  TransitionCounts transitions;      ///< grains that changed state during the frame
   std::int64_t surface_updates = 0;  ///< height-field updates during the frame
-  double wall_seconds = 0;       ///< wall-clock time of the frame [s]
+  double wall_seconds = 0;           ///< wall-clock time of the frame [s]
 };
 
 class World {
@@ -73,6 +73,7 @@ class World {
   const SurfaceFlow* surface() const { return surface_.get(); }
   const DemSolver& dem() const { return dem_; }
   const Profile& profile() const { return profile_; }
+  const std::vector<Emitter>& emitters() const { return emitters_; }
   Real time() const { return time_; }
   int frame() const { return frame_; }
   std::int64_t total_grains() const {
@@ -106,6 +107,8 @@ class World {
   std::vector<Emitter> emitters_;
   Rng rng_;
   std::vector<NewGrain> new_grains_;
+  std::vector<Vec3> nearby_x_;  ///< grains near a pour's slots
+  std::vector<Real> nearby_r_;
   GrainId next_id_ = 0;
   Real time_ = 0;
   std::int64_t step_ = 0;
