@@ -257,8 +257,8 @@ int run_command(const RunOptions& o) {
     const auto delayed = e["delayed_by_occupied_slots"].get<std::int64_t>();
     if (emitted < count)
       fmt::print(stderr,
-                 "warning: emitter '{}' emitted {} of its {} grains before the run ended: its "
-                 "slots were taken by grains below it {} times; raise it or add frames\n",
+                 "warning: emitter '{}' emitted {} of its {} grains before the run ended; {} "
+                 "grains waited for slots taken by grains below it: raise it or add frames\n",
                  e["name"].get<std::string>(), emitted, count, delayed);
     else if (delayed > 0)
       fmt::print("emitter          '{}': {} grains waited for a free slot\n",
