@@ -14,13 +14,12 @@ DemSolver::DemSolver(const DemParams& params)
 void DemSolver::step(Grains& grains, const Geometry& geometry, Real dt, Profile& profile) {
   if (need_rebuild_ || wall_params_.size() != geometry.size()) {
     ScopedStage s(profile, Stage::Neighbours);
-    rebuild(grains, geometry);
+    rebuild(grains, geometry, dt);
   }
   ScopedStage s(profile, Stage::Forces);
-  const Real max_disp2 =
-      rolling_ ? sweep<true>(grains, geometry, dt) : sweep<false>(grains, geometry, dt);
-  // Lists stay valid while no two grains can have closed the skin between them.
-  if (4 * max_disp2 > params_.skin * params_.skin) need_rebuild_ = true;
+  // Lists stay valid while every grain stays within its allowance.
+  if (rolling_ ? sweep<true>(grains, geometry, dt) : sweep<false>(grains, geometry, dt))
+    need_rebuild_ = true;
 }
 
 void DemSolver::contacts_of(const Grains& grains, const Geometry& geometry,
@@ -69,7 +68,7 @@ void DemSolver::sort_by_cell(Grains& grains) {
   grains.permute(perm);
 }
 
-void DemSolver::rebuild(Grains& grains, const Geometry& geometry) {
+void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
   const std::size_t n = grains.size();
   const auto& cp = params_.contact;
   if (wall_params_.size() != geometry.size()) {
@@ -85,9 +84,21 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry) {
   ++rebuild_count_;
   ++counters_.rebuilds;
 
+  // allowances: half the skin, or the way a fast grain goes in skin_steps steps at its speed
+  const Real a_min = params_.skin / 2;
+  const Real a_max = std::max(a_min, params_.skin_max);
+  const Real horizon = dt * params_.skin_steps;
+  allow_.resize(n);
+  allow2_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Real a = grains.state[i] == GrainState::Active ? norm(grains.v[i]) * horizon : 0;
+    allow_[i] = std::clamp(a, a_min, a_max);
+    allow2_[i] = allow_[i] * allow_[i];
+  }
+
   std::swap(pairs_, old_pairs_);
   std::swap(walls_, old_walls_);
-  build_pair_list(grains, params_.skin, rolling_, grid_, old_pairs_, slot_of_id_, pairs_);
+  build_pair_list(grains, allow_, rolling_, grid_, old_pairs_, slot_of_id_, pairs_);
   // the normal damping of a pair depends on its masses only: computed once per list
 #pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i)
@@ -96,11 +107,12 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry) {
       pairs_.c_n[s] = normal_damping(cp, grains.m[i] * grains.m[j] / (grains.m[i] + grains.m[j]));
     }
 
-  // wall candidates: obstacles within reach of each grain, history carried by grain id
-  const Real skin = params_.skin;
+  // wall candidates: obstacles within reach of each grain (twice its allowance: an obstacle
+  // does not move, the margin is spare), history carried by grain id
   const std::size_t n_obs = geometry.size();
   auto near = [&](std::size_t i, std::size_t k) {
-    return geometry.obstacles()[k].solid->closest(grains.x[i]).distance < grains.r[i] + skin;
+    return geometry.obstacles()[k].solid->closest(grains.x[i]).distance <
+           grains.r[i] + 2 * allow_[i];
   };
   walls_.start.assign(n + 1, 0);
 #pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
@@ -158,7 +170,7 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry) {
 // order as a single thread would — its accumulator in ascending order of the other grain, its own
 // pairs in slot order — and the state is bit-identical for any thread count.
 template <bool kRolling>
-Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
+bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   const std::size_t n = grains.size();
   const ContactParams& cp = params_.contact;
   PairList& pl = pairs_;
@@ -172,12 +184,14 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   Vec3* acc_q = acc_q_.data();
   Vec3* acc_t = acc_t_.data();
   std::int64_t contacts = 0, wall_contacts = 0;
-  Real max_ov = counters_.max_overlap_rel, max_disp2 = 0;
+  Real max_ov = counters_.max_overlap_rel;
+  int moved_out = 0;  // some grain left its allowance
+  const Real* allow2 = allow2_.data();
   std::vector<std::uint32_t>& split = split_;
   split.resize(n);
 
 #pragma omp parallel if (n >= kParallelMinGrains) \
-    reduction(+ : contacts, wall_contacts) reduction(max : max_ov, max_disp2)
+    reduction(+ : contacts, wall_contacts) reduction(max : max_ov, moved_out)
   {
     // defined inside the parallel region, so they update this thread's reduction copies
 
@@ -299,13 +313,13 @@ Real DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
       v[i] += (f * grains.inv_m[i] + gravity) * dt;
       w[i] += torque * (grains.inv_I[i] * dt);
       x[i] += v[i] * dt;
-      max_disp2 = std::max(max_disp2, norm2(x[i] - x_at_build_[i]));
+      if (norm2(x[i] - x_at_build_[i]) > allow2[i]) moved_out = 1;
     }
   }
   counters_.contacts = contacts;
   counters_.wall_contacts = wall_contacts;
   counters_.max_overlap_rel = max_ov;
-  return max_disp2;
+  return moved_out != 0;
 }
 
 }  // namespace sandflow

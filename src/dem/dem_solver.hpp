@@ -15,7 +15,11 @@ namespace sandflow {
 
 struct DemParams {
   ContactParams contact;  ///< grain-grain law (walls use it with their own friction)
-  Real skin = 0.002;      ///< Verlet skin [m]
+  Real skin = 0.002;      ///< Verlet skin [m]: each grain may move skin / 2 between rebuilds
+  /// A grain faster than skin / (2 dt skin_steps) may move |v| dt skin_steps, up to skin_max, so
+  /// that a few fast grains do not force a rebuild every few steps (0: skin / 2 for all).
+  int skin_steps = 0;
+  Real skin_max = 0;      ///< largest allowance of a fast grain [m]
   int sort_every = 20;    ///< re-sort grains by cell every N rebuilds (0: never)
   Vec3 gravity{0, 0, -9.81};
 };
@@ -57,12 +61,12 @@ class DemSolver {
   DemCounters& counters() { return counters_; }
 
  private:
-  void rebuild(Grains& grains, const Geometry& geometry);
+  void rebuild(Grains& grains, const Geometry& geometry, Real dt);
   void sort_by_cell(Grains& grains);
-  /// Forces and integration in one sweep; returns the largest squared displacement since the
-  /// last rebuild.
+  /// Forces and integration in one sweep; returns whether some grain has moved further than its
+  /// allowance since the last rebuild.
   template <bool kRolling>
-  Real sweep(Grains& grains, const Geometry& geometry, Real dt);
+  bool sweep(Grains& grains, const Geometry& geometry, Real dt);
 
   DemParams params_;
   bool rolling_;
@@ -72,6 +76,7 @@ class DemSolver {
   WallList walls_, old_walls_;
   std::vector<std::uint32_t> slot_of_id_;  ///< grain id -> slot at the last rebuild
   std::vector<Vec3> x_at_build_;
+  std::vector<Real> allow_, allow2_;  ///< per grain: how far it may move before a rebuild [m, m^2]
   std::vector<Vec3> acc_f_, acc_q_, acc_t_;  ///< per grain: reversed pair results of this step
   std::vector<std::uint32_t> split_;         ///< per grain: first slot reaching a later thread
   bool need_rebuild_ = true;

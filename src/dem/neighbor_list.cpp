@@ -69,51 +69,109 @@ std::uint32_t find_old_slot(const PairList& old, std::uint32_t a, std::uint32_t 
 void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& grid,
                      const PairList& old, const std::vector<std::uint32_t>& old_slot_of_id,
                      PairList& out) {
+  build_pair_list(grains, std::vector<Real>(grains.size(), skin / 2), rolling, grid, old,
+                  old_slot_of_id, out);
+}
+
+void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool rolling,
+                     CellGrid& grid, const PairList& old,
+                     const std::vector<std::uint32_t>& old_slot_of_id, PairList& out) {
   const std::size_t n = grains.size();
   const auto& x = grains.x;
   const auto& r = grains.r;
-  Real r_max = 0;
-  for (Real ri : r) r_max = std::max(r_max, ri);
-  grid.build(x, 2 * r_max + skin);
+  Real r_max = 0, a_min = n ? allow[0] : 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    r_max = std::max(r_max, r[i]);
+    a_min = std::min(a_min, allow[i]);
+  }
+  // cells fit the pairs of the least mobile grains; a grain with a larger allowance looks further
+  grid.build(x, 2 * r_max + 2 * a_min);
+  const Real inv_cell = 1.0 / grid.cell_size();
 
-  // A pair is listed when the grains are within reach and at least one of them can move.
+  // A pair is listed when the grains are within reach and at least one of them can move. It is
+  // found by the grain with the larger allowance (the lower index on a tie), whose search reaches
+  // r_i + r_max + 2 a_i: every partner with an allowance no larger than its own.
+  auto owns = [&](std::size_t i, std::uint32_t j) {
+    return allow[i] > allow[j] || (allow[i] == allow[j] && i < j);
+  };
   auto listed = [&](std::size_t i, std::uint32_t j) {
-    if (j <= i) return false;
+    if (j == i || !owns(i, j)) return false;
     if (grains.state[i] != GrainState::Active && grains.state[j] != GrainState::Active)
       return false;
-    const Real cut = r[i] + r[j] + skin;
+    const Real cut = r[i] + r[j] + allow[i] + allow[j];
     return norm2(x[i] - x[j]) < cut * cut;
   };
 
   // One pass: each thread lists a contiguous range of grains into its own buffer; the buffers
-  // are then joined in thread order, so the list is in grain order for any thread count.
-  out.start.assign(n + 1, 0);
+  // are then joined in thread order, so the list is in grain order for any thread count. A pair
+  // found by its higher-index grain goes to a side list and joins the lower one's row after.
+  std::vector<std::uint32_t> own_count(n + 1, 0);
   std::vector<std::vector<std::uint32_t>> buffers;
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> side_buffers;
 #pragma omp parallel if (n >= kParallelMinGrains)
   {
 #pragma omp single
-    buffers.resize(omp_get_num_threads());
+    {
+      buffers.resize(omp_get_num_threads());
+      side_buffers.resize(omp_get_num_threads());
+    }
     std::vector<std::uint32_t>& buf = buffers[omp_get_thread_num()];
+    auto& side = side_buffers[omp_get_thread_num()];
     buf.clear();
+    side.clear();
 #pragma omp for schedule(static)
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t first = buf.size();
-      grid.for_each_near(x[i], [&](std::uint32_t j) {
-        if (listed(i, j)) buf.push_back(j);
+      const int k = std::max(1, static_cast<int>(std::ceil((r[i] + r_max + 2 * allow[i]) *
+                                                           inv_cell)));
+      grid.for_each_within(x[i], k, [&](std::uint32_t j) {
+        if (!listed(i, j)) return;
+        if (j > i)
+          buf.push_back(j);
+        else
+          side.emplace_back(j, static_cast<std::uint32_t>(i));
       });
       // ascending j: a canonical order, independent of how the grid visits cells
       std::sort(buf.begin() + first, buf.end());
-      out.start[i + 1] = static_cast<std::uint32_t>(buf.size() - first);
+      own_count[i + 1] = static_cast<std::uint32_t>(buf.size() - first);
     }
   }
-  for (std::size_t i = 0; i < n; ++i) out.start[i + 1] += out.start[i];
-  const std::size_t slots = out.start[n];
-  out.j.resize(slots);
+  std::vector<std::uint32_t> own_start(std::move(own_count));
+  for (std::size_t i = 0; i < n; ++i) own_start[i + 1] += own_start[i];
+  std::vector<std::uint32_t> own(own_start[n]);
   std::size_t offset = 0;
   for (const auto& buf : buffers) {
-    std::copy(buf.begin(), buf.end(), out.j.begin() + offset);
+    std::copy(buf.begin(), buf.end(), own.begin() + offset);
     offset += buf.size();
   }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> side;
+  for (const auto& sb : side_buffers) side.insert(side.end(), sb.begin(), sb.end());
+
+  if (side.empty()) {
+    out.start = std::move(own_start);
+    out.j = std::move(own);
+  } else {
+    // rows = own pairs merged with the side pairs of the same grain, both ascending
+    std::sort(side.begin(), side.end());
+    out.start.assign(n + 1, 0);
+    for (const auto& [a, b] : side) ++out.start[a + 1];
+    for (std::size_t i = 0; i < n; ++i)
+      out.start[i + 1] += out.start[i] + (own_start[i + 1] - own_start[i]);
+    out.j.resize(out.start[n]);
+    std::size_t q = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto side_begin = side.begin() + static_cast<std::ptrdiff_t>(q);
+      while (q < side.size() && side[q].first == i) ++q;
+      auto dst = out.j.begin() + out.start[i];
+      auto o = own.begin() + own_start[i], o_end = own.begin() + own_start[i + 1];
+      for (auto s = side_begin; s != side.begin() + static_cast<std::ptrdiff_t>(q); ++s) {
+        while (o != o_end && *o < s->second) *dst++ = *o++;
+        *dst++ = s->second;
+      }
+      std::copy(o, o_end, dst);
+    }
+  }
+  const std::size_t slots = out.j.size();
 
   // history, carried over by grain id (the tangential one changes sign when the pair flips);
   // every slot is written, so the arrays need no clearing first
@@ -165,18 +223,23 @@ void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& gr
   out.c_n.resize(slots);
 }
 
-std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const Grains& grains,
-                                                                        Real skin) {
+std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(
+    const Grains& grains, const std::vector<Real>& allow) {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   const std::size_t n = grains.size();
   for (std::uint32_t i = 0; i < n; ++i)
     for (std::uint32_t j = i + 1; j < n; ++j) {
       if (grains.state[i] != GrainState::Active && grains.state[j] != GrainState::Active)
         continue;
-      const Real cut = grains.r[i] + grains.r[j] + skin;
+      const Real cut = grains.r[i] + grains.r[j] + allow[i] + allow[j];
       if (norm2(grains.x[i] - grains.x[j]) < cut * cut) pairs.emplace_back(i, j);
     }
   return pairs;
+}
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const Grains& grains,
+                                                                        Real skin) {
+  return brute_force_pairs(grains, std::vector<Real>(grains.size(), skin / 2));
 }
 
 }  // namespace sandflow

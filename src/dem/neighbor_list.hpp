@@ -1,7 +1,10 @@
 // Neighbour search (DESIGN.md §3): a uniform cell grid over the grains' extent builds Verlet half
-// lists (pairs i < j closer than r_i + r_j + skin) that
-// stay valid until some grain has moved more than half the skin. Contact history lives beside
-// the list, one entry per pair slot, and is carried across rebuilds by grain id.
+// lists. Each grain i has an allowance a_i, how far it may move before the lists are rebuilt; a
+// pair i < j is listed when closer than r_i + r_j + a_i + a_j, so no unlisted pair can touch
+// before some grain has used up its allowance. With one allowance for all (half the skin) these
+// are the usual Verlet lists; a larger allowance for the few fast grains (a falling stream) keeps
+// them from forcing a rebuild every few steps. Contact history lives beside the list, one entry
+// per pair slot, and is carried across rebuilds by grain id.
 //
 // How the forces of the pairs reach both grains without atomics, identically for any thread
 // count, is told in dem_solver.cpp (DemSolver::sweep).
@@ -52,7 +55,12 @@ class CellGrid {
 
   /// Calls f(j) for every grain j in the 27 cells around p.
   template <class F>
-  void for_each_near(const Vec3& p, F&& f) const;
+  void for_each_near(const Vec3& p, F&& f) const {
+    for_each_within(p, 1, f);
+  }
+  /// Calls f(j) for every grain j in the cells at most k cells away from p's along each axis.
+  template <class F>
+  void for_each_within(const Vec3& p, int k, F&& f) const;
 
   Real cell_size() const { return cell_; }
 
@@ -72,14 +80,22 @@ class CellGrid {
   std::vector<std::uint32_t> items_;       ///< grain indices, grouped by cell
 };
 
-/// Builds the half list of `grains` for the given skin, carrying history over from `old` (whose
-/// slots refer to grains by the slot they had then; old_slot_of_id maps an id to that slot, or
-/// kNoSlot). Uses `grid` as scratch.
+/// Builds the half list of `grains` for the allowances `allow` (one per grain, >= 0), carrying
+/// history over from `old` (whose slots refer to grains by the slot they had then;
+/// old_slot_of_id maps an id to that slot, or kNoSlot). Uses `grid` as scratch.
+void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool rolling,
+                     CellGrid& grid, const PairList& old,
+                     const std::vector<std::uint32_t>& old_slot_of_id, PairList& out);
+/// The same with one skin for all grains (allowance skin / 2 each).
 void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& grid,
                      const PairList& old, const std::vector<std::uint32_t>& old_slot_of_id,
                      PairList& out);
 
-/// The reference: all pairs i < j with |x_i - x_j| < r_i + r_j + skin, by brute force.
+/// The reference: all pairs i < j with |x_i - x_j| < r_i + r_j + a_i + a_j (at least one of them
+/// ACTIVE), by brute force.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(
+    const Grains& grains, const std::vector<Real>& allow);
+/// The same with one skin for all grains.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const Grains& grains,
                                                                         Real skin);
 
@@ -90,16 +106,16 @@ constexpr std::size_t kParallelMinGrains = 4096;
 
 // ---------------------------------------------------------------------------------------------
 template <class F>
-void CellGrid::for_each_near(const Vec3& p, F&& f) const {
+void CellGrid::for_each_within(const Vec3& p, int k, F&& f) const {
   const int cx = coord(p.x, 0), cy = coord(p.y, 1), cz = coord(p.z, 2);
-  const int x0 = cx > 0 ? cx - 1 : 0, x1 = cx + 1 < dims_[0] ? cx + 1 : cx;
-  for (int z = cz - 1; z <= cz + 1; ++z) {
+  const int x0 = cx > k ? cx - k : 0, x1 = cx + k < dims_[0] ? cx + k : dims_[0] - 1;
+  for (int z = cz - k; z <= cz + k; ++z) {
     if (z < 0 || z >= dims_[2]) continue;
-    for (int y = cy - 1; y <= cy + 1; ++y) {
+    for (int y = cy - k; y <= cy + k; ++y) {
       if (y < 0 || y >= dims_[1]) continue;
-      // the three cells along x are contiguous
+      // the cells along x are contiguous
       const std::uint32_t end = cell_start_[index(x1, y, z) + 1];
-      for (std::uint32_t k = cell_start_[index(x0, y, z)]; k < end; ++k) f(items_[k]);
+      for (std::uint32_t q = cell_start_[index(x0, y, z)]; q < end; ++q) f(items_[q]);
     }
   }
 }

@@ -62,6 +62,8 @@ struct SimulationConfig {
   std::optional<Real> dt;           ///< fixed time step [s]; unset: dt_fraction * t_c
   Real dt_fraction = 0.05;          ///< dt = dt_fraction * t_c when dt is unset (t_c/20)
   Real skin = 0.2;                  ///< Verlet skin as a fraction of the mean diameter [-]
+  int skin_steps = 32;              ///< a fast grain's allowance: this many steps at its speed
+  Real skin_max = 1.0;              ///< largest allowance, as a fraction of the mean diameter [-]
   int sort_every = 20;              ///< re-sort grains by cell every N neighbour rebuilds
   std::uint64_t seed = 1;           ///< random seed of the emitters
   int threads = 0;                  ///< 0: all cores

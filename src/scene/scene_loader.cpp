@@ -427,6 +427,8 @@ void read_simulation(TableReader r, SimulationConfig& s) {
   r.read("dt", s.dt, kPositive);
   r.read("dt_fraction", s.dt_fraction, open_closed(0, 0.2));
   r.read("skin", s.skin, open_closed(0, 2));
+  r.read("skin_steps", s.skin_steps, closed(0, 1000));  // 0: one skin for all grains
+  r.read("skin_max", s.skin_max, closed(0, 2));
   r.read("sort_every", s.sort_every, kNonNegative);  // 0: never re-sort
   r.read("seed", s.seed, kNonNegative);
   r.read("threads", s.threads, closed(0, 4096));

@@ -68,6 +68,8 @@ DemParams dem_params(const SceneConfig& scene) {
   DemParams p;
   p.contact = contact_params(scene.material);
   p.skin = scene.simulation.skin * scene.material.diameter;
+  p.skin_steps = scene.simulation.skin_steps;
+  p.skin_max = scene.simulation.skin_max * scene.material.diameter;
   p.sort_every = scene.simulation.sort_every;
   p.gravity = scene.simulation.gravity;
   return p;

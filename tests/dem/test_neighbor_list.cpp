@@ -46,6 +46,29 @@ TEST(NeighbourList, SamePairsAsBruteForce) {
   }
 }
 
+// A few grains with large allowances (a fast stream) look further than the grid's cells: their
+// pairs, found from their side whatever the index order, must be exactly the brute-force ones.
+TEST(NeighbourList, LargerAllowancesOfAFewGrainsGiveTheBruteForcePairs) {
+  for (std::uint64_t seed : {4, 5}) {
+    Grains g = random_grains(3000, seed, 0.12);
+    g.add(5000, {1e3, -2e3, 5e2}, {}, 0.005, 2600);  // a far-away grain: clamped cells
+    for (std::size_t i = 0; i < g.size(); i += 3) g.state[i] = GrainState::Interface;
+    Rng rng(seed);
+    std::vector<Real> allow(g.size(), 0.001);
+    for (std::size_t i = 0; i < g.size(); i += 7) allow[i] = rng.uniform(0.001, 0.012);
+    allow[17] = allow[18] = 0.004;  // equal large allowances: found once, by the lower index
+    CellGrid grid;
+    PairList pl, none;
+    build_pair_list(g, allow, true, grid, none, {}, pl);
+    auto expected = brute_force_pairs(g, allow);
+    std::sort(expected.begin(), expected.end());
+    ASSERT_GT(expected.size(), 1000u);
+    EXPECT_EQ(listed_pairs(pl), expected) << "seed " << seed;
+    for (std::size_t i = 0; i + 1 < pl.start.size(); ++i)  // rows ascending, as the sweep needs
+      EXPECT_TRUE(std::is_sorted(pl.j.begin() + pl.start[i], pl.j.begin() + pl.start[i + 1]));
+  }
+}
+
 TEST(NeighbourList, FrozenPairsAreNotListed) {
   Grains g = random_grains(500, 7, 0.08);
   for (std::size_t i = 0; i < g.size(); i += 2) g.state[i] = GrainState::Interface;
