@@ -310,9 +310,9 @@ int compare_command(const RunOptions& o) {
   const Geometry geometry = Geometry::from_config(scene.geometry, scene.material);
   const SurfaceParams sp =
       surface_params(surface_scene, geometry, surf.summary["dt_mean"].get<double>());
-  const std::vector<Real> L = terrain_heights(sp, geometry);
+  const TerrainColumns L = terrain_columns(sp, geometry);
   const SurfaceDiff diff = compare_surfaces(measure_surface(sp.grid, L, dem.x, dem.r),
-                                            measure_surface(sp.grid, L, surf.x, surf.r), L);
+                                            measure_surface(sp.grid, L, surf.x, surf.r));
 
   const std::size_t n_frames = surf.frames.size();
   const double frac_mean = simulated_fraction(surf.frames, 0);

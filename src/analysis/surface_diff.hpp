@@ -9,9 +9,15 @@
 
 namespace sandflow {
 
-/// H per column of `grid` from every grain (same rays and airborne rule as the height field).
-std::vector<Real> measure_surface(const HeightFieldParams& grid, const std::vector<Real>& terrain,
-                                  const std::vector<Vec3>& x, const std::vector<Real>& r);
+/// A sand surface: H per column, and L, the top of the solid the column's sand rests on.
+struct MeasuredSurface {
+  std::vector<Real> H, L;
+};
+
+/// H per column of `grid` from every grain (same rays, airborne rule and levels as the height
+/// field).
+MeasuredSurface measure_surface(const HeightFieldParams& grid, const TerrainColumns& terrain,
+                                const std::vector<Vec3>& x, const std::vector<Real>& r);
 
 struct SurfaceDiff {
   Real rms = 0;          ///< RMS of H_a - H_b over the columns with sand in either [m]
@@ -20,8 +26,8 @@ struct SurfaceDiff {
   std::size_t columns = 0;  ///< columns compared
 };
 
-/// Compares surface b with the reference a over terrain L.
-SurfaceDiff compare_surfaces(const std::vector<Real>& a, const std::vector<Real>& b,
-                             const std::vector<Real>& terrain);
+/// Compares surface b with the reference a, over the columns where either has sand. The heap
+/// height is a's largest H - L.
+SurfaceDiff compare_surfaces(const MeasuredSurface& a, const MeasuredSurface& b);
 
 }  // namespace sandflow

@@ -193,6 +193,39 @@ Real Geometry::top_below(Real x, Real y, Real z_from, Real z_floor) const {
   return z_floor;
 }
 
+std::vector<std::pair<Real, Real>> Geometry::solid_intervals(Real x, Real y, Real z_from,
+                                                               Real z_floor) const {
+  // sphere tracing down the line, as top_below does, on through each solid: inside the union, the
+  // most negative distance is still no more than the way out (every solid it is in must be left).
+  // Where two solids meet it is near 0 though the union goes on: only a point found outside ends
+  // the interval, at most one least step below the true bottom.
+  constexpr Real kHit = 1e-6, kMinStep = 1e-4;
+  std::vector<std::pair<Real, Real>> down;  // found top first
+  Vec3 p{x, y, z_from};
+  auto distance = [&] {
+    Real d = std::numeric_limits<Real>::infinity();
+    for (const Obstacle& o : obstacles_) d = std::min(d, o.solid->closest(p).distance);
+    return d;
+  };
+  bool inside = distance() < kHit;
+  if (inside) down.push_back({0, z_from});
+  Real last_step = 0;
+  for (int it = 0; it < 1000000 && p.z > z_floor; ++it) {
+    const Real d = distance();
+    if (!inside && d < kHit) {
+      inside = true;
+      down.push_back({0, p.z});
+    } else if (inside && d > kHit) {
+      inside = false;
+      down.back().first = p.z + std::min(d, last_step);  // the bottom lies in between
+    }
+    last_step = std::max(std::abs(d), kMinStep);
+    p.z -= last_step;
+  }
+  if (inside) down.back().first = -std::numeric_limits<Real>::infinity();
+  return {down.rbegin(), down.rend()};
+}
+
 bool Geometry::finite_bounds(Vec3& lo, Vec3& hi) const {
   bool any = false;
   for (const Obstacle& o : obstacles_) {

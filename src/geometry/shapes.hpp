@@ -95,6 +95,11 @@ class Geometry {
   /// Height of the highest solid surface met going down the vertical line at (x, y) from z_from
   /// (z_from itself when it starts inside a solid), or z_floor when there is none above it.
   Real top_below(Real x, Real y, Real z_from, Real z_floor) const;
+  /// The solid intervals [bottom, top] along the vertical line at (x, y) between z_floor and
+  /// z_from, ascending (a bottom at or below z_floor is -infinity: the solid goes on down).
+  /// Tops and bottoms are found to 0.1 mm.
+  std::vector<std::pair<Real, Real>> solid_intervals(Real x, Real y, Real z_from,
+                                                     Real z_floor) const;
   /// Union of the bounds of the finite solids; false when every solid is infinite (or none).
   bool finite_bounds(Vec3& lo, Vec3& hi) const;
 

@@ -2,18 +2,42 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include "core/error.hpp"
 
 namespace sandflow {
 
+TerrainColumns TerrainColumns::single(const std::vector<Real>& L) {
+  TerrainColumns t;
+  for (Real l : L) t.add_column({{-std::numeric_limits<Real>::infinity(), l}});
+  return t;
+}
+
+void TerrainColumns::add_column(const std::vector<std::pair<Real, Real>>& intervals) {
+  for (const auto& [b, t] : intervals) {
+    bottom.push_back(b);
+    top.push_back(t);
+  }
+  start.push_back(static_cast<std::uint32_t>(top.size()));
+}
+
 HeightField::HeightField(const HeightFieldParams& p, std::vector<Real> terrain)
-    : p_(p), L_(std::move(terrain)) {
+    : HeightField(p, TerrainColumns::single(terrain)) {}
+
+HeightField::HeightField(const HeightFieldParams& p, TerrainColumns terrain)
+    : p_(p), solids_(std::move(terrain)) {
   if (p_.nx < 1 || p_.ny < 1 || !(p_.cell > 0))
     throw InputError("height field: the grid needs at least one column of positive width");
-  if (L_.size() != columns())
+  if (solids_.columns() != columns())
     throw InputError("height field: the terrain must give one height per column");
+  L_.resize(columns());
+  for (std::size_t c = 0; c < columns(); ++c) {
+    if (solids_.start[c + 1] == solids_.start[c])
+      throw InputError("height field: every column needs a solid below it");
+    L_[c] = solids_.top[solids_.start[c + 1] - 1];  // the highest top, until sand says otherwise
+  }
   H_ = L_;
   h_ = L_;
   R_.assign(columns(), 0);
@@ -68,15 +92,37 @@ void HeightField::measure(const Grains& hot, const std::vector<Real>& static_top
       });
 
   for (std::size_t c = 0; c < nc; ++c) {
-    Real top = std::max(L_[c], static_top[c]);
-    auto first = hits_.begin() + hit_start_[c], last = hits_.begin() + hit_start_[c + 1];
-    std::sort(first, last, [](const Hit& a, const Hit& b) { return a.bottom < b.bottom; });
-    for (auto it = first; it != last; ++it) {
-      if (it->bottom > top + p_.gap) break;  // everything higher is in flight
-      top = std::max(top, it->top);
+    std::sort(hits_.begin() + hit_start_[c], hits_.begin() + hit_start_[c + 1],
+              [](const Hit& a, const Hit& b) { return a.bottom < b.bottom; });
+    // the level: the highest solid with sand on it, else the highest solid
+    const std::size_t k0 = solids_.start[c], k1 = solids_.start[c + 1];
+    std::size_t level = k1 - 1;
+    Real H = walk_up(c, level, static_top[c]);
+    for (std::size_t k = k1 - 1; k-- > k0 && !(H > solids_.top[level]);) {
+      const Real Hk = walk_up(c, k, static_top[c]);
+      if (Hk > solids_.top[k]) level = k, H = Hk;
     }
-    H_[c] = top;
+    if (!(H > solids_.top[level])) level = k1 - 1, H = solids_.top[level];
+    if (solids_.top[level] != L_[c]) {
+      // a new level: its static layer starts empty
+      L_[c] = solids_.top[level];
+      h_[c] = L_[c];
+    }
+    H_[c] = H;
   }
+}
+
+Real HeightField::walk_up(std::size_t c, std::size_t k, Real static_top) const {
+  Real top = std::max(solids_.top[k], static_top);
+  const Real ceiling = k + 1 < solids_.start[c + 1] ? solids_.bottom[k + 1]
+                                                    : std::numeric_limits<Real>::infinity();
+  if (static_top >= ceiling) top = solids_.top[k];  // static grains of a higher level
+  for (std::uint32_t q = hit_start_[c]; q < hit_start_[c + 1]; ++q) {
+    // hits below the solid's top are grains of a lower level: they raise nothing
+    if (hits_[q].bottom > top + p_.gap || hits_[q].bottom >= ceiling) break;  // in flight
+    top = std::max(top, hits_[q].top);
+  }
+  return std::min(top, ceiling);
 }
 
 void HeightField::set_surface(std::vector<Real> H) {

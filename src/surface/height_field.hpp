@@ -2,6 +2,11 @@
 // Per column, at its centre: L (terrain top), H (top of the sand, measured from the grains), h (top
 // of the static layer) and R = H - h (the rolling layer). Slopes live on the edges between
 // columns, as on a MAC grid. One update runs the paper's order H -> theta -> Gamma -> h -> R -> R_min.
+//
+// The terrain is multi-valued: a column may cross several solids (a bowl above the floor, the
+// back of an obstacle above the ground below it). Its sand rests on one of their tops, the
+// column's level: the highest top with sand on it, or the highest top while there is none. L is
+// that top and H never reaches the solid above it (the column's ceiling).
 #pragma once
 
 #include <algorithm>
@@ -26,10 +31,25 @@ struct HeightFieldParams {
   Real gap = 0.01;            ///< a grain separated from the pile below by more is airborne [m]
 };
 
+/// The solid intervals [bottom, top] crossed by the vertical line through each column centre,
+/// ascending and disjoint, in compressed rows (columns row-major, x fastest).
+struct TerrainColumns {
+  std::vector<std::uint32_t> start{0};  ///< columns+1 offsets
+  std::vector<Real> bottom, top;        ///< per interval [m]; the lowest may start at -infinity
+
+  std::size_t columns() const { return start.size() - 1; }
+  /// One solid per column, from -infinity up to L[c].
+  static TerrainColumns single(const std::vector<Real>& L);
+  /// Appends a column (intervals ascending, disjoint).
+  void add_column(const std::vector<std::pair<Real, Real>>& intervals);
+};
+
 class HeightField {
  public:
   /// `terrain` holds L per column (row-major, x fastest); h starts at L.
   HeightField(const HeightFieldParams& p, std::vector<Real> terrain);
+  /// A multi-valued terrain: every column needs at least one solid interval.
+  HeightField(const HeightFieldParams& p, TerrainColumns terrain);
 
   // ---- the grid ----
   int nx() const { return p_.nx; }
@@ -48,9 +68,10 @@ class HeightField {
 
   // ---- one update ----
   /// Step 1: H from vertical thick rays (radius cell/2) against the pile. `static_top` per column
-  /// is the highest point the STATIC grains reach there (or L). Hot grains count only where
-  /// `counts` is nonzero (empty: all count), and from the bottom up only while no gap separates
-  /// them from what lies below: grains in flight never lift the surface.
+  /// is the highest point the STATIC grains reach there (or anything not above L). Hot grains
+  /// count only where `counts` is nonzero (empty: all count), and from the bottom up only while
+  /// no gap separates them from what lies below: grains in flight never lift the surface. Also
+  /// picks each column's level; where it changes, h starts afresh at the new L.
   void measure(const Grains& hot, const std::vector<Real>& static_top,
                const std::vector<std::uint8_t>& counts = {});
   /// Steps 2-6 over a time dt: slopes, exchange, h, R, and the R_min floor. `flowing` marks the
@@ -74,7 +95,9 @@ class HeightField {
   void for_each_ray_hit(const Vec3& x, Real r, F&& f) const;
 
   // ---- state ----
+  /// L: the top of each column's level (changes with the level; see above).
   const std::vector<Real>& terrain() const { return L_; }
+  const TerrainColumns& solids() const { return solids_; }
   const std::vector<Real>& surface() const { return H_; }       ///< H
   const std::vector<Real>& static_top() const { return h_; }    ///< h
   const std::vector<Real>& rolling() const { return R_; }       ///< R = H - h
@@ -86,7 +109,11 @@ class HeightField {
   std::size_t sand_columns() const;
 
  private:
+  /// H of column c with its sand resting on solid k (no higher than the solid above).
+  Real walk_up(std::size_t c, std::size_t k, Real static_top) const;
+
   HeightFieldParams p_;
+  TerrainColumns solids_;
   std::vector<Real> L_, H_, h_, R_, theta_, Gamma_;
   // scratch of measure(): ray hits filed by column
   std::vector<std::uint32_t> hit_start_;

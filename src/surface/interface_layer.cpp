@@ -30,6 +30,15 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
       keep.push_back(i);
       continue;
     }
+    if (x.z < hf.terrain()[static_cast<std::size_t>(c)]) {  // below the column's level
+      if (hot.state[i] != GrainState::Active) {
+        hot.state[i] = GrainState::Active;
+        dem.invalidate();
+        ++n.dislodged;
+      }
+      keep.push_back(i);
+      continue;
+    }
     const Real h = hf.static_top_at(x.x, x.y);
     if (hot.state[i] == GrainState::Active) {
       // only a grain resting on something: a slow grain at the top of a bounce stays free
@@ -60,12 +69,14 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
   // 2. the static grains where h fell (and around: h is interpolated between column centres)
   const std::size_t nc = hf.columns();
   const std::vector<Real>& h_now = hf.static_top();
-  if (h_seen_.size() != nc) h_seen_ = hf.terrain();
+  const std::vector<Real>& L_now = hf.terrain();
+  if (h_seen_.size() != nc) h_seen_ = L_now;
+  if (L_seen_.size() != nc) L_seen_ = L_now;
   std::vector<std::uint8_t> fell(nc, 0);
   bool any = false;
   const int nx = hf.nx(), ny = hf.ny();
   for (std::size_t c = 0; c < nc; ++c) {
-    if (!(h_now[c] < h_seen_[c])) continue;
+    if (!(h_now[c] < h_seen_[c]) && !(L_now[c] > L_seen_[c])) continue;
     any = true;
     const int i = static_cast<int>(c % nx), j = static_cast<int>(c / nx);
     for (int jj = std::max(j - 1, 0); jj <= std::min(j + 1, ny - 1); ++jj)
@@ -73,6 +84,7 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
         fell[static_cast<std::size_t>(jj) * nx + ii] = 1;
   }
   h_seen_ = h_now;
+  L_seen_ = L_now;
   if (n.slept > 0 || st.column_start.size() != nc + 1) st.file_by_column(nc);
   if (!any) return n;
 
@@ -81,7 +93,8 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
     if (!fell[c]) continue;
     for (std::uint32_t q = st.column_start[c]; q < st.column_start[c + 1]; ++q) {
       const std::uint32_t k = st.by_column[q];
-      if (st.x[k].z > hf.static_top_at(st.x[k].x, st.x[k].y) - T) wake[k] = 1;
+      if (st.x[k].z > hf.static_top_at(st.x[k].x, st.x[k].y) - T || st.x[k].z < L_now[c])
+        wake[k] = 1;
     }
   }
   std::vector<std::uint32_t> stay;
@@ -92,6 +105,7 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
       continue;
     }
     hot.add(st.id[k], st.x[k], Vec3{}, st.r[k], p_.density);
+    // (one below its column's level moves on its own; transfer() makes it ACTIVE next time)
     hot.state.back() = GrainState::Interface;
     dem.forget_history(st.id[k]);
     ++n.woken;

@@ -13,6 +13,10 @@
 // And the band has a margin m of hysteresis: trapped below h, dislodged only above h + m; sleeps
 // below h - T - m, wakes above h - T. H is measured from grains, so h jitters by a fraction of a
 // grain; without the margin the same grains would flip state at every update.
+//
+// Grains below their column's level (under an overhang whose top holds the column's sand, or
+// beside a wall whose top the column centre sits on) are outside the height field's reach: they
+// stay ACTIVE, and static ones wake when a column's level rises above them.
 #pragma once
 
 #include <cstdint>
@@ -61,6 +65,7 @@ class InterfaceLayer {
  private:
   InterfaceParams p_;
   std::vector<Real> h_seen_;  ///< h at the last transfer: where it fell, static grains may wake
+  std::vector<Real> L_seen_;  ///< L at the last transfer: where it rose, grains below it wake
 };
 
 }  // namespace sandflow

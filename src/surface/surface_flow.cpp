@@ -6,8 +6,13 @@ namespace sandflow {
 
 SurfaceFlow::SurfaceFlow(const SurfaceParams& params, const Geometry& geometry)
     : p_(params),
-      hf_(params.grid, terrain_heights(params, geometry)),
+      hf_(params.grid, terrain_columns(params, geometry)),
       interface_(params.interface) {}
+
+bool SurfaceFlow::below_level(const Vec3& x) const {
+  const std::int64_t c = hf_.column_of(x.x, x.y);
+  return c >= 0 && x.z < hf_.terrain()[static_cast<std::size_t>(c)];
+}
 
 TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& dem,
                                      const Geometry& geometry, Real dt) {
@@ -25,7 +30,7 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
   fast_.clear();
   for (std::size_t i = 0; i < hot.size(); ++i) {
     if (hot.state[i] != GrainState::Active || !(contacts_[i] & DemSolver::kTouches) ||
-        norm2(hot.v[i]) < v2_fast)
+        norm2(hot.v[i]) < v2_fast || below_level(hot.x[i]))
       continue;
     fast_.push_back(static_cast<std::uint32_t>(i));
     hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) { flowing_[c] = 1; });
@@ -47,7 +52,8 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
   for (std::size_t i = 0; i < hot.size(); ++i) {
     if (hot.state[i] != GrainState::Active) continue;
     const Vec3& x = hot.x[i];
-    if (hf_.column_of(x.x, x.y) < 0 || x.z >= hf_.static_top_at(x.x, x.y) - T) continue;
+    if (hf_.column_of(x.x, x.y) < 0 || below_level(x) || x.z >= hf_.static_top_at(x.x, x.y) - T)
+      continue;
     const Real floor_z = x.z - hot.r[i] - T;
     hf_.for_each_ray_hit(x, hot.r[i],
                          [&](std::size_t c, Real, Real) { hf_.limit_static_top(c, floor_z); });

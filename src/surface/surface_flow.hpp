@@ -26,6 +26,9 @@ class SurfaceFlow {
   const HeightField& height_field() const { return hf_; }
 
  private:
+  /// Under its column's level (an overhang, a wall's foot): the height field does not reach it.
+  bool below_level(const Vec3& x) const;
+
   SurfaceParams p_;
   HeightField hf_;
   InterfaceLayer interface_;

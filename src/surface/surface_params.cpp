@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -100,14 +101,17 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   return p;
 }
 
-std::vector<Real> terrain_heights(const SurfaceParams& p, const Geometry& geometry) {
+TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry) {
   const HeightFieldParams& grid = p.grid;
-  std::vector<Real> L(static_cast<std::size_t>(grid.nx) * grid.ny);
+  TerrainColumns t;
   for (int j = 0; j < grid.ny; ++j)
-    for (int i = 0; i < grid.nx; ++i)
-      L[static_cast<std::size_t>(j) * grid.nx + i] = geometry.top_below(
-          grid.x0 + (i + 0.5) * grid.cell, grid.y0 + (j + 0.5) * grid.cell, p.z_top, p.z_floor);
-  return L;
+    for (int i = 0; i < grid.nx; ++i) {
+      auto solids = geometry.solid_intervals(grid.x0 + (i + 0.5) * grid.cell,
+                                             grid.y0 + (j + 0.5) * grid.cell, p.z_top, p.z_floor);
+      if (solids.empty()) solids.push_back({-std::numeric_limits<Real>::infinity(), p.z_floor});
+      t.add_column(solids);
+    }
+  return t;
 }
 
 }  // namespace sandflow

@@ -36,7 +36,7 @@ HeapSize largest_heap(const SceneConfig& scene);
 /// Every parameter, resolved for a run with time step dt.
 SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry, Real dt);
 
-/// L per column: the top of the geometry under each column centre (z_floor where there is none).
-std::vector<Real> terrain_heights(const SurfaceParams& p, const Geometry& geometry);
+/// The solids under each column centre (a solid at z_floor where there is none).
+TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry);
 
 }  // namespace sandflow

@@ -146,11 +146,11 @@ TEST(SurfaceMode, SettledHeapKeepsItsShapeAndSleeps) {
   World w(s);
   for (int f = 0; f < 45; ++f) w.advance_frame();  // 1.5 s
   const SurfaceParams& sp = w.surface()->params();
-  const std::vector<Real>& L = w.surface()->height_field().terrain();
+  const TerrainColumns& L = w.surface()->height_field().solids();
   std::vector<Vec3> x;
   std::vector<Real> r;
   w.all_grains(x, r);
-  const std::vector<Real> before = measure_surface(sp.grid, L, x, r);
+  const MeasuredSurface before = measure_surface(sp.grid, L, x, r);
   // two simulated seconds left alone
   TransitionCounts late;
   FrameStats st;
@@ -159,7 +159,7 @@ TEST(SurfaceMode, SettledHeapKeepsItsShapeAndSleeps) {
     if (f >= 30) late += st.transitions;
   }
   w.all_grains(x, r);
-  const SurfaceDiff d = compare_surfaces(before, measure_surface(sp.grid, L, x, r), L);
+  const SurfaceDiff d = compare_surfaces(before, measure_surface(sp.grid, L, x, r));
   const Real diameter = s.material.diameter;
   EXPECT_GT(d.heap_height, 3 * diameter);
   // no creep: the surface moves by less than a tenth of a grain (RMS), measured with rays that

@@ -1,0 +1,172 @@
+// The multi-valued terrain (DESIGN.md §4): the solids under each column, the level a column's
+// sand rests on, and a pour onto a shelf that overhangs a floor.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "geometry/shapes.hpp"
+#include "scene/world.hpp"
+#include "surface/height_field.hpp"
+
+namespace sandflow {
+namespace {
+
+constexpr Real kInf = std::numeric_limits<Real>::infinity();
+// solid_intervals steps at least 0.1 mm near a surface: tops and bottoms are found to that
+constexpr Real kTraceTol = 1e-4;
+
+GeometryConfig plane_at(Real z) {
+  GeometryConfig g;
+  g.type = GeometryType::Plane;
+  g.point = {0, 0, z};
+  return g;
+}
+
+GeometryConfig box(const Vec3& center, const Vec3& size) {
+  GeometryConfig g;
+  g.type = GeometryType::Box;
+  g.center = center;
+  g.size = size;
+  return g;
+}
+
+TEST(TerrainIntervals, FloorAndAShelfAboveIt) {
+  const Geometry geo = Geometry::from_config(
+      {plane_at(0), box({0, 0, 0.3}, {0.2, 0.2, 0.1})}, MaterialConfig{});
+  const auto under = geo.solid_intervals(0.05, 0.0, 1.0, -1.0);
+  ASSERT_EQ(under.size(), 2u);
+  EXPECT_EQ(under[0].first, -kInf);  // the floor goes on down
+  EXPECT_NEAR(under[0].second, 0.0, kTraceTol);
+  EXPECT_NEAR(under[1].first, 0.25, kTraceTol);
+  EXPECT_NEAR(under[1].second, 0.35, kTraceTol);
+  const auto beside = geo.solid_intervals(0.15, 0.0, 1.0, -1.0);
+  ASSERT_EQ(beside.size(), 1u);
+  EXPECT_NEAR(beside[0].second, 0.0, kTraceTol);
+}
+
+TEST(TerrainIntervals, OpenContainerHoldsItsFloorAboveTheGround) {
+  GeometryConfig cup;
+  cup.type = GeometryType::Cylinder;
+  cup.container = true;
+  cup.center = {0, 0, 0.2};
+  cup.radius = 0.1;
+  cup.height = 0.1;
+  cup.wall_thickness = 0.02;
+  const Geometry geo = Geometry::from_config({plane_at(0), cup}, MaterialConfig{});
+  const auto inside = geo.solid_intervals(0, 0, 1.0, -1.0);
+  ASSERT_EQ(inside.size(), 2u);
+  EXPECT_NEAR(inside[1].first, 0.13, kTraceTol);   // the cup's bottom plate, 2 cm thick
+  EXPECT_NEAR(inside[1].second, 0.15, kTraceTol);
+  const auto wall = geo.solid_intervals(0.11, 0, 1.0, -1.0);  // through the tube and its plate
+  ASSERT_EQ(wall.size(), 2u);
+  EXPECT_NEAR(wall[1].first, 0.13, kTraceTol);
+  EXPECT_NEAR(wall[1].second, 0.25, kTraceTol);
+  EXPECT_TRUE(geo.solid_intervals(0, 0, 1.0, 0.5).empty());  // nothing between 0.5 and 1
+}
+
+// One column with the floor at 0 and a shelf from 0.10 to 0.12.
+HeightField shelf_column() {
+  HeightFieldParams p;
+  p.cell = 0.01;
+  p.nx = p.ny = 1;
+  p.gap = 0.01;
+  TerrainColumns t;
+  t.add_column({{-kInf, 0.0}, {0.10, 0.12}});
+  return HeightField(p, t);
+}
+
+const std::vector<Real> kNoStatic{-kInf};
+
+TEST(TerrainLevels, EmptyColumnRestsOnTheHighestSolid) {
+  HeightField hf = shelf_column();
+  hf.measure(Grains{}, kNoStatic);
+  EXPECT_DOUBLE_EQ(hf.terrain()[0], 0.12);
+  EXPECT_DOUBLE_EQ(hf.surface()[0], 0.12);
+}
+
+TEST(TerrainLevels, SandUnderTheShelfMovesTheLevelDownAndStopsAtTheShelf) {
+  HeightField hf = shelf_column();
+  Grains g;
+  g.add(0, {0.005, 0.005, 0.005}, {}, 0.005, 2600);  // on the floor, under the shelf
+  hf.measure(g, kNoStatic);
+  EXPECT_DOUBLE_EQ(hf.terrain()[0], 0.0);
+  EXPECT_NEAR(hf.surface()[0], 0.01, 1e-12);
+  // a stack up to the shelf's underside: H stops there, it does not climb through the shelf
+  for (int k = 1; k < 12; ++k) g.add(k, {0.005, 0.005, 0.005 + 0.0095 * k}, {}, 0.005, 2600);
+  hf.measure(g, kNoStatic);
+  EXPECT_DOUBLE_EQ(hf.terrain()[0], 0.0);
+  EXPECT_DOUBLE_EQ(hf.surface()[0], 0.10);
+}
+
+TEST(TerrainLevels, SandOnTheShelfWinsAndItsStaticLayerStartsThere) {
+  HeightField hf = shelf_column();
+  Grains g;
+  g.add(0, {0.005, 0.005, 0.005}, {}, 0.005, 2600);  // under the shelf
+  hf.measure(g, kNoStatic);
+  hf.set_static_top({0.004});  // a static layer under the shelf
+  ASSERT_DOUBLE_EQ(hf.static_top()[0], 0.004);
+  g.add(1, {0.005, 0.005, 0.125}, {}, 0.005, 2600);  // on the shelf
+  hf.measure(g, kNoStatic);
+  EXPECT_DOUBLE_EQ(hf.terrain()[0], 0.12);
+  EXPECT_NEAR(hf.surface()[0], 0.13, 1e-12);
+  EXPECT_DOUBLE_EQ(hf.static_top()[0], 0.12);  // the new level's static layer is empty
+  // static grains under the shelf do not count as sand on it
+  hf.measure(Grains{}, {0.009});
+  EXPECT_DOUBLE_EQ(hf.terrain()[0], 0.0);
+  EXPECT_DOUBLE_EQ(hf.surface()[0], 0.009);
+}
+
+// A pour onto the edge of a shelf above the floor: sand heaps on the shelf and spills onto the
+// floor, some of it under the shelf. The height field must keep every grain under the shelf moving
+// (it cannot see them), no grain may end inside the shelf, and none may be lost.
+TEST(TerrainLevels, PourOverAShelfEdgeKeepsTheGrainsUnderItActive) {
+  SceneConfig s;
+  s.path = "test";
+  s.name = "shelf";
+  s.simulation.mode = Mode::Surface;
+  s.material.diameter = 0.02;
+  s.material.diameter_spread = 0.1;
+  s.material.k_n = 1e4;
+  s.material.rolling_friction = 0.3;
+  s.output.fps = 30;
+  s.geometry = {plane_at(0), box({-0.15, 0, 0.15}, {0.3, 0.3, 0.04})};  // shelf x in [-0.3, 0]
+  EmitterConfig e;
+  e.type = EmitterType::Pour;
+  e.center = {0.0, 0, 0.45};
+  e.radius = 0.08;
+  e.rate = 1000;
+  e.count = 900;
+  e.velocity = {0, 0, -1};
+  s.emitters = {e};
+  World w(s);
+  const HeightField& hf = w.surface()->height_field();
+  bool shelf_held_sand = false, floor_held_sand = false;
+  for (int f = 0; f < 60; ++f) {
+    w.advance_frame();
+    const Grains& g = w.grains();
+    for (std::size_t i = 0; i < g.size(); ++i) {
+      const std::int64_t c = hf.column_of(g.x[i].x, g.x[i].y);
+      if (c >= 0 && g.x[i].z < hf.terrain()[static_cast<std::size_t>(c)]) {
+        ASSERT_EQ(g.state[i], GrainState::Active) << "frame " << f << ": a grain under its level";
+      }
+    }
+  }
+  // a static layer at least half a grain deep on each level (the shelf's top is at 0.17 m)
+  for (std::size_t c = 0; c < hf.columns(); ++c) {
+    const Real depth = hf.static_top()[c] - hf.terrain()[c];
+    if (std::abs(hf.terrain()[c] - 0.17) < kTraceTol) shelf_held_sand |= depth > 0.01;
+    if (std::abs(hf.terrain()[c]) < kTraceTol) floor_held_sand |= depth > 0.01;
+  }
+  EXPECT_TRUE(shelf_held_sand) << "no static layer formed on the shelf";
+  EXPECT_TRUE(floor_held_sand) << "no static layer formed on the floor";
+  std::vector<Vec3> x;
+  std::vector<Real> r;
+  w.all_grains(x, r);
+  EXPECT_EQ(x.size(), 900u);
+  EXPECT_EQ(w.geometry().count_inside(x), 0u);
+}
+
+}  // namespace
+}  // namespace sandflow
