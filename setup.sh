@@ -12,7 +12,7 @@ case "$what" in demo|test|build) ;; *) echo "usage: ./setup.sh demo|test|build" 
 
 # 1. Debian packages (only the missing ones are installed)
 packages=(g++ cmake make pkg-config libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev
-          libgtest-dev libpng-dev povray)
+          libgtest-dev libpng-dev zlib1g-dev povray)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,0 +1,49 @@
+// Mesh obstacles as fixed boundary particles (DESIGN.md §6, "particle surfaces"): points placed
+// on the surface densely enough that no grain can pass between them.
+//
+// Each triangle is cut into n^2 congruent copies of itself, n = ceil(longest edge / spacing), and
+// the corners of the copies are the samples; samples closer than spacing / 8 to one already kept
+// are dropped, which removes the copies made along shared edges and at shared vertices.
+//
+// Guarantee: every point of the surface lies within covering_radius(spacing) =
+// spacing / sqrt(3) + spacing / 8 ~ 0.702 spacing (< spacing / sqrt(2)) of a sample. Proof:
+// (1) a point p of a triangle with longest edge l is within l / sqrt(3) of one of its corners.
+//     The distance to the nearest corner is largest either at the circumcentre, if it lies in the
+//     triangle, or on the boundary (inside one corner's Voronoi cell the distance to that corner
+//     is convex, so its maximum is on the cell's border; along a bisector it grows away from the
+//     edge's midpoint). The circumcentre lies in the triangle only if the angle g opposite l is
+//     at most 90 deg, and g >= 60 deg as the largest angle, so R = l / (2 sin g) <= l / sqrt(3);
+//     on an edge the nearer end point is at most l / 2 away.
+// (2) The n^2 copies have longest edge l / n <= spacing, so p is within spacing / sqrt(3) of a
+//     generated point, and that point was kept or dropped for a kept one within spacing / 8.
+//
+// Choosing the spacing: a grain whose centre reaches the surface at p is then within
+// covering_radius of a boundary particle's centre. With boundary particles of radius r_b,
+//   spacing <= sqrt(2) r_b     gives covering_radius < r_b: no grain of any size can even touch
+//                              the surface without overlapping a boundary particle;
+//   spacing <= sqrt(2) (r_b + r_min) is the bare minimum for grains of radius >= r_min (the
+//                              grain's centre cannot reach the surface without overlap).
+// The first is the recommended one: the overlap at the surface is then at least r_min.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "geometry/mesh.hpp"
+
+namespace sandflow {
+
+/// Largest number of samples sample_surface produces (about 1.2 GB of points).
+inline constexpr std::size_t kMaxSurfaceSamples = 50'000'000;
+
+/// The distance within which every surface point has a sample (see above).
+constexpr Real covering_radius(Real spacing) {
+  return spacing * (0.57735026918962576 + 0.125);
+}
+
+/// Samples covering every triangle (edges and vertices included), in a deterministic order.
+/// spacing must be positive and finite (std::invalid_argument); InputError when the mesh would
+/// need more than kMaxSurfaceSamples points at that spacing (refused before allocating).
+std::vector<Vec3> sample_surface(const TriangleMesh& mesh, Real spacing);
+
+}  // namespace sandflow
