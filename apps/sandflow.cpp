@@ -5,6 +5,7 @@
 // 3 the simulation blew up, 4 an output could not be written.
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -98,7 +99,9 @@ struct RunResult {
 };
 
 /// Runs a scene into `out` (prepared by the caller), writing stats.csv, frames and summary.json.
-RunResult run_scene(const SceneConfig& scene, const std::string& out) {
+/// `label` prefixes the progress line (table1's "scene k of n: ").
+RunResult run_scene(const SceneConfig& scene, const std::string& out,
+                    const std::string& label = "") {
   World world(scene);
   const int frames = world.planned_frames();
   const TimeStep& ts = world.time_step();
@@ -112,7 +115,8 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out) {
 
   RunResult res;
   StatsWriter stats(fs::path(out) / "stats.csv");
-  Progress progress(fmt::format("{} [{}]", scene.name, mode_name(scene.simulation.mode)), frames);
+  Progress progress(fmt::format("{}{} [{}]", label, scene.name, mode_name(scene.simulation.mode)),
+                    frames);
   double simulated_sum = 0;
   Real max_overlap = 0;
   TransitionCounts transitions;
@@ -292,52 +296,74 @@ nlohmann::json angle_json(const HeapFit& f) {
   return f.ok ? nlohmann::json(f.repose_angle_deg) : nlohmann::json();
 }
 
-int compare_command(const RunOptions& o) {
-  SceneConfig scene = load_for_run(o);
-  const std::string out = o.out.empty() ? fmt::format("out/{}-compare", scene.name) : o.out;
-  prepare_output_dir(out, o.force);
+/// Prepares a comparison folder: OUT is refused when not empty unless `force`, in which case the
+/// earlier comparison (compare.json, dem/, surface/) is removed; OUT/dem and OUT/surface are made.
+void prepare_compare_dir(const std::string& out, bool force) {
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw InputError(fmt::format("{}: the output path exists and is not a folder", out));
+  if (fs::exists(out, ec) && !fs::is_empty(out, ec)) {
+    if (!force)
+      throw InputError(fmt::format(
+          "{}: the output folder is not empty; pass --force to replace its comparison", out));
+    for (const char* name : {"compare.json", "dem", "surface"})
+      fs::remove_all(fs::path(out) / name, ec);
+  }
+  prepare_output_dir((fs::path(out) / "surface").string(), false);
+  prepare_output_dir((fs::path(out) / "dem").string(), false);
+}
+
+/// Both runs of a scene and the figures compared (what compare.json holds).
+struct Comparison {
+  RunResult surface, dem;
+  SurfaceDiff diff;
+  nlohmann::json json;
+};
+
+/// The shared part of `compare` and `table1`: runs `scene` in surface mode into OUT/surface, then
+/// in plain DEM into OUT/dem, compares the two final surfaces and writes OUT/compare.json.
+/// OUT is prepared here (see prepare_compare_dir); `label` prefixes the progress lines.
+Comparison compare_scene(const SceneConfig& scene, const std::string& out, bool force,
+                         const std::string& label = "") {
+  prepare_compare_dir(out, force);
   SceneConfig surface_scene = scene, dem_scene = scene;
   surface_scene.simulation.mode = Mode::Surface;
   dem_scene.simulation.mode = Mode::Dem;
-  const std::string surface_out = (fs::path(out) / "surface").string();
-  const std::string dem_out = (fs::path(out) / "dem").string();
-  prepare_output_dir(surface_out, false);
-  prepare_output_dir(dem_out, false);
-  const RunResult surf = run_scene(surface_scene, surface_out);
-  const RunResult dem = run_scene(dem_scene, dem_out);
+  Comparison c;
+  c.surface = run_scene(surface_scene, (fs::path(out) / "surface").string(), label);
+  c.dem = run_scene(dem_scene, (fs::path(out) / "dem").string(), label);
+  const RunResult& surf = c.surface;
+  const RunResult& dem = c.dem;
 
   // both final surfaces on the surface run's grid, from every grain
   const Geometry geometry = Geometry::from_config(scene.geometry, scene.material);
   const SurfaceParams sp =
       surface_params(surface_scene, geometry, surf.summary["dt_mean"].get<double>());
   const std::vector<Real> L = terrain_heights(sp, geometry);
-  const SurfaceDiff diff = compare_surfaces(measure_surface(sp.grid, L, dem.x, dem.r),
-                                            measure_surface(sp.grid, L, surf.x, surf.r), L);
+  c.diff = compare_surfaces(measure_surface(sp.grid, L, dem.x, dem.r),
+                            measure_surface(sp.grid, L, surf.x, surf.r), L);
+  const SurfaceDiff& diff = c.diff;
 
   const std::size_t n_frames = surf.frames.size();
-  const double frac_mean = simulated_fraction(surf.frames, 0);
-  const double frac_half = simulated_fraction(surf.frames, n_frames / 2);
   const FrameStats& last = surf.frames.back();
   const double frac_final = static_cast<double>(last.n_active + last.n_interface) /
                             static_cast<double>(std::max<std::int64_t>(last.n_total, 1));
-  const double speedup = dem.wall_seconds / std::max(surf.wall_seconds, 1e-12);
   const double k_dem = dem.summary["k_n"].get<double>(), k_surf = surf.summary["k_n"].get<double>();
-  const bool same_k = k_dem == k_surf;
   const double angle_diff = surf.heap.ok && dem.heap.ok
                                 ? std::abs(surf.heap.repose_angle_deg - dem.heap.repose_angle_deg)
                                 : std::nan("");
-
-  nlohmann::json j = {
+  c.json = {
       {"scene", scene.name},
       {"scene_file", scene.path},
       {"frames", n_frames},
       {"n_total", last.n_total},
-      {"speedup", speedup},
-      {"simulated_fraction_mean", frac_mean},
-      {"simulated_fraction_last_half", frac_half},
+      {"speedup", dem.wall_seconds / std::max(surf.wall_seconds, 1e-12)},
+      {"simulated_fraction_mean", simulated_fraction(surf.frames, 0)},
+      {"simulated_fraction_last_half", simulated_fraction(surf.frames, n_frames / 2)},
       {"simulated_fraction_final", frac_final},
       {"n_simulated_mean", surf.summary["n_simulated_mean"]},
       {"n_simulated_final", last.n_active + last.n_interface},
+      {"n_simulated_mean_dem", dem.summary["n_simulated_mean"]},
       {"seconds_per_frame_dem", dem.wall_seconds / n_frames},
       {"seconds_per_frame_surface", surf.wall_seconds / n_frames},
       {"wall_seconds_dem", dem.wall_seconds},
@@ -346,7 +372,7 @@ int compare_command(const RunOptions& o) {
       {"dt_surface", surf.summary["dt_mean"]},
       {"k_n_dem", k_dem},
       {"k_n_surface", k_surf},
-      {"same_stiffness", same_k},
+      {"same_stiffness", k_dem == k_surf},
       {"repose_angle_dem_deg", angle_json(dem.heap)},
       {"repose_angle_surface_deg", angle_json(surf.heap)},
       {"repose_angle_difference_deg",
@@ -355,9 +381,24 @@ int compare_command(const RunOptions& o) {
       {"surface_rms_rel", diff.rms_rel},
       {"heap_height_dem", diff.heap_height},
       {"surface_columns_compared", diff.columns},
+      {"grains_inside_geometry_dem", dem.summary["grains_inside_geometry"]},
+      {"grains_inside_geometry_surface", surf.summary["grains_inside_geometry"]},
       {"threads", thread_count(scene)},
   };
-  write_file_atomic((fs::path(out) / "compare.json").string(), j.dump(2) + "\n");
+  write_file_atomic((fs::path(out) / "compare.json").string(), c.json.dump(2) + "\n");
+  return c;
+}
+
+int compare_command(const RunOptions& o) {
+  const SceneConfig scene = load_for_run(o);
+  const std::string out = o.out.empty() ? fmt::format("out/{}-compare", scene.name) : o.out;
+  const Comparison c = compare_scene(scene, out, o.force);
+  const RunResult& surf = c.surface;
+  const RunResult& dem = c.dem;
+  const nlohmann::json& j = c.json;
+  const std::size_t n_frames = surf.frames.size();
+  const FrameStats& last = surf.frames.back();
+  const double k_dem = j["k_n_dem"].get<double>(), k_surf = j["k_n_surface"].get<double>();
 
   auto angle = [](const HeapFit& f) {
     return f.ok ? fmt::format("{:.1f} deg", f.repose_angle_deg) : std::string("n/a");
@@ -369,8 +410,10 @@ int compare_command(const RunOptions& o) {
   fmt::print("{:<34}{:>16.0f}{:>16.0f}\n", "simulated grains, mean",
              dem.summary["n_simulated_mean"].get<double>(),
              surf.summary["n_simulated_mean"].get<double>());
-  fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, mean", "100%", 100 * frac_mean);
-  fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, last half", "100%", 100 * frac_half);
+  fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, mean", "100%",
+             100 * j["simulated_fraction_mean"].get<double>());
+  fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, last half", "100%",
+             100 * j["simulated_fraction_last_half"].get<double>());
   fmt::print("{:<34}{:>16}{:>16}\n", "simulated grains, final", dem.frames.back().n_total,
              last.n_active + last.n_interface);
   fmt::print("{:<34}{:>16.3f}{:>16.3f}\n", "seconds per frame", dem.wall_seconds / n_frames,
@@ -382,7 +425,8 @@ int compare_command(const RunOptions& o) {
   fmt::print(
       "speed-up {:.2f}x; surfaces differ by {:.4f} m RMS = {:.1f}% of the heap height "
       "({:.3f} m); {} stiffness in both modes\n",
-      speedup, diff.rms, 100 * diff.rms_rel, diff.heap_height, same_k ? "the same" : "a different");
+      j["speedup"].get<double>(), c.diff.rms, 100 * c.diff.rms_rel, c.diff.heap_height,
+      k_dem == k_surf ? "the same" : "a different");
   fmt::print("output           {}/ (compare.json, dem/, surface/)\n", out);
   return 0;
 }

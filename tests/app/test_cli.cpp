@@ -178,6 +178,21 @@ TEST(Cli, NonEmptyOutputFolderNeedsForce) {
             0);
 }
 
+TEST(Cli, CompareForceReplacesAnEarlierComparison) {
+  Sandbox box;
+  const auto scene = box.write("t.toml", kTinyScene);
+  const std::string args =
+      "compare " + scene.string() + " --frames 2 --out " + (box.dir / "cmp").string();
+  ASSERT_EQ(sandflow(args), 0);
+  std::string log;
+  EXPECT_EQ(sandflow(args, &log), 2);
+  EXPECT_NE(log.find("--force"), std::string::npos) << log;
+  // the earlier dem/ and surface/ are replaced, not refused
+  EXPECT_EQ(sandflow(args + " --force", &log), 0) << log;
+  EXPECT_TRUE(fs::exists(box.dir / "cmp" / "compare.json"));
+  EXPECT_TRUE(fs::exists(box.dir / "cmp" / "surface" / "stats.csv"));
+}
+
 TEST(Cli, CheckValidatesWithoutRunning) {
   Sandbox box;
   std::string log;
