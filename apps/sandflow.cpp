@@ -5,8 +5,10 @@
 // 3 the simulation blew up, 4 an output could not be written.
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -27,6 +29,7 @@
 #include "scene/scene_loader.hpp"
 #include "scene/world.hpp"
 #include "surface/surface_params.hpp"
+#include "table1.hpp"
 
 namespace fs = std::filesystem;
 using namespace sandflow;
@@ -98,7 +101,9 @@ struct RunResult {
 };
 
 /// Runs a scene into `out` (prepared by the caller), writing stats.csv, frames and summary.json.
-RunResult run_scene(const SceneConfig& scene, const std::string& out) {
+/// `label` prefixes the progress line (table1's "scene k of n: ").
+RunResult run_scene(const SceneConfig& scene, const std::string& out,
+                    const std::string& label = "") {
   World world(scene);
   const int frames = world.planned_frames();
   const TimeStep& ts = world.time_step();
@@ -112,7 +117,8 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out) {
 
   RunResult res;
   StatsWriter stats(fs::path(out) / "stats.csv");
-  Progress progress(fmt::format("{} [{}]", scene.name, mode_name(scene.simulation.mode)), frames);
+  Progress progress(fmt::format("{}{} [{}]", label, scene.name, mode_name(scene.simulation.mode)),
+                    frames);
   double simulated_sum = 0;
   Real max_overlap = 0;
   TransitionCounts transitions;
@@ -292,52 +298,74 @@ nlohmann::json angle_json(const HeapFit& f) {
   return f.ok ? nlohmann::json(f.repose_angle_deg) : nlohmann::json();
 }
 
-int compare_command(const RunOptions& o) {
-  SceneConfig scene = load_for_run(o);
-  const std::string out = o.out.empty() ? fmt::format("out/{}-compare", scene.name) : o.out;
-  prepare_output_dir(out, o.force);
+/// Prepares a comparison folder: OUT is refused when not empty unless `force`, in which case the
+/// earlier comparison (compare.json, dem/, surface/) is removed; OUT/dem and OUT/surface are made.
+void prepare_compare_dir(const std::string& out, bool force) {
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw InputError(fmt::format("{}: the output path exists and is not a folder", out));
+  if (fs::exists(out, ec) && !fs::is_empty(out, ec)) {
+    if (!force)
+      throw InputError(fmt::format(
+          "{}: the output folder is not empty; pass --force to replace its comparison", out));
+    for (const char* name : {"compare.json", "dem", "surface"})
+      fs::remove_all(fs::path(out) / name, ec);
+  }
+  prepare_output_dir((fs::path(out) / "surface").string(), false);
+  prepare_output_dir((fs::path(out) / "dem").string(), false);
+}
+
+/// Both runs of a scene and the figures compared (what compare.json holds).
+struct Comparison {
+  RunResult surface, dem;
+  SurfaceDiff diff;
+  nlohmann::json json;
+};
+
+/// The shared part of `compare` and `table1`: runs `scene` in surface mode into OUT/surface, then
+/// in plain DEM into OUT/dem, compares the two final surfaces and writes OUT/compare.json.
+/// OUT is prepared here (see prepare_compare_dir); `label` prefixes the progress lines.
+Comparison compare_scene(const SceneConfig& scene, const std::string& out, bool force,
+                         const std::string& label = "") {
+  prepare_compare_dir(out, force);
   SceneConfig surface_scene = scene, dem_scene = scene;
   surface_scene.simulation.mode = Mode::Surface;
   dem_scene.simulation.mode = Mode::Dem;
-  const std::string surface_out = (fs::path(out) / "surface").string();
-  const std::string dem_out = (fs::path(out) / "dem").string();
-  prepare_output_dir(surface_out, false);
-  prepare_output_dir(dem_out, false);
-  const RunResult surf = run_scene(surface_scene, surface_out);
-  const RunResult dem = run_scene(dem_scene, dem_out);
+  Comparison c;
+  c.surface = run_scene(surface_scene, (fs::path(out) / "surface").string(), label);
+  c.dem = run_scene(dem_scene, (fs::path(out) / "dem").string(), label);
+  const RunResult& surf = c.surface;
+  const RunResult& dem = c.dem;
 
   // both final surfaces on the surface run's grid, from every grain
   const Geometry geometry = Geometry::from_config(scene.geometry, scene.material);
   const SurfaceParams sp =
       surface_params(surface_scene, geometry, surf.summary["dt_mean"].get<double>());
   const TerrainColumns L = terrain_columns(sp, geometry);
-  const SurfaceDiff diff = compare_surfaces(measure_surface(sp.grid, L, dem.x, dem.r),
-                                            measure_surface(sp.grid, L, surf.x, surf.r));
+  c.diff = compare_surfaces(measure_surface(sp.grid, L, dem.x, dem.r),
+                            measure_surface(sp.grid, L, surf.x, surf.r));
+  const SurfaceDiff& diff = c.diff;
 
   const std::size_t n_frames = surf.frames.size();
-  const double frac_mean = simulated_fraction(surf.frames, 0);
-  const double frac_half = simulated_fraction(surf.frames, n_frames / 2);
   const FrameStats& last = surf.frames.back();
   const double frac_final = static_cast<double>(last.n_active + last.n_interface) /
                             static_cast<double>(std::max<std::int64_t>(last.n_total, 1));
-  const double speedup = dem.wall_seconds / std::max(surf.wall_seconds, 1e-12);
   const double k_dem = dem.summary["k_n"].get<double>(), k_surf = surf.summary["k_n"].get<double>();
-  const bool same_k = k_dem == k_surf;
   const double angle_diff = surf.heap.ok && dem.heap.ok
                                 ? std::abs(surf.heap.repose_angle_deg - dem.heap.repose_angle_deg)
                                 : std::nan("");
-
-  nlohmann::json j = {
+  c.json = {
       {"scene", scene.name},
       {"scene_file", scene.path},
       {"frames", n_frames},
       {"n_total", last.n_total},
-      {"speedup", speedup},
-      {"simulated_fraction_mean", frac_mean},
-      {"simulated_fraction_last_half", frac_half},
+      {"speedup", dem.wall_seconds / std::max(surf.wall_seconds, 1e-12)},
+      {"simulated_fraction_mean", simulated_fraction(surf.frames, 0)},
+      {"simulated_fraction_last_half", simulated_fraction(surf.frames, n_frames / 2)},
       {"simulated_fraction_final", frac_final},
       {"n_simulated_mean", surf.summary["n_simulated_mean"]},
       {"n_simulated_final", last.n_active + last.n_interface},
+      {"n_simulated_mean_dem", dem.summary["n_simulated_mean"]},
       {"seconds_per_frame_dem", dem.wall_seconds / n_frames},
       {"seconds_per_frame_surface", surf.wall_seconds / n_frames},
       {"wall_seconds_dem", dem.wall_seconds},
@@ -346,7 +374,7 @@ int compare_command(const RunOptions& o) {
       {"dt_surface", surf.summary["dt_mean"]},
       {"k_n_dem", k_dem},
       {"k_n_surface", k_surf},
-      {"same_stiffness", same_k},
+      {"same_stiffness", k_dem == k_surf},
       {"repose_angle_dem_deg", angle_json(dem.heap)},
       {"repose_angle_surface_deg", angle_json(surf.heap)},
       {"repose_angle_difference_deg",
@@ -355,9 +383,24 @@ int compare_command(const RunOptions& o) {
       {"surface_rms_rel", diff.rms_rel},
       {"heap_height_dem", diff.heap_height},
       {"surface_columns_compared", diff.columns},
+      {"grains_inside_geometry_dem", dem.summary["grains_inside_geometry"]},
+      {"grains_inside_geometry_surface", surf.summary["grains_inside_geometry"]},
       {"threads", thread_count(scene)},
   };
-  write_file_atomic((fs::path(out) / "compare.json").string(), j.dump(2) + "\n");
+  write_file_atomic((fs::path(out) / "compare.json").string(), c.json.dump(2) + "\n");
+  return c;
+}
+
+int compare_command(const RunOptions& o) {
+  const SceneConfig scene = load_for_run(o);
+  const std::string out = o.out.empty() ? fmt::format("out/{}-compare", scene.name) : o.out;
+  const Comparison c = compare_scene(scene, out, o.force);
+  const RunResult& surf = c.surface;
+  const RunResult& dem = c.dem;
+  const nlohmann::json& j = c.json;
+  const std::size_t n_frames = surf.frames.size();
+  const FrameStats& last = surf.frames.back();
+  const double k_dem = j["k_n_dem"].get<double>(), k_surf = j["k_n_surface"].get<double>();
 
   auto angle = [](const HeapFit& f) {
     return f.ok ? fmt::format("{:.1f} deg", f.repose_angle_deg) : std::string("n/a");
@@ -369,8 +412,10 @@ int compare_command(const RunOptions& o) {
   fmt::print("{:<34}{:>16.0f}{:>16.0f}\n", "simulated grains, mean",
              dem.summary["n_simulated_mean"].get<double>(),
              surf.summary["n_simulated_mean"].get<double>());
-  fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, mean", "100%", 100 * frac_mean);
-  fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, last half", "100%", 100 * frac_half);
+  fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, mean", "100%",
+             100 * j["simulated_fraction_mean"].get<double>());
+  fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, last half", "100%",
+             100 * j["simulated_fraction_last_half"].get<double>());
   fmt::print("{:<34}{:>16}{:>16}\n", "simulated grains, final", dem.frames.back().n_total,
              last.n_active + last.n_interface);
   fmt::print("{:<34}{:>16.3f}{:>16.3f}\n", "seconds per frame", dem.wall_seconds / n_frames,
@@ -382,8 +427,199 @@ int compare_command(const RunOptions& o) {
   fmt::print(
       "speed-up {:.2f}x; surfaces differ by {:.4f} m RMS = {:.1f}% of the heap height "
       "({:.3f} m); {} stiffness in both modes\n",
-      speedup, diff.rms, 100 * diff.rms_rel, diff.heap_height, same_k ? "the same" : "a different");
+      j["speedup"].get<double>(), c.diff.rms, 100 * c.diff.rms_rel, c.diff.heap_height,
+      k_dem == k_surf ? "the same" : "a different");
   fmt::print("output           {}/ (compare.json, dem/, surface/)\n", out);
+  return 0;
+}
+
+struct Table1Options {
+  double scale = 1;
+  int frames = 0;
+  int threads = 0;
+  std::string out = "out/table1";
+  std::string scene_dir;
+  std::vector<std::string> scenes;
+  bool force = false;
+};
+
+/// Where table1 finds scenes/<name>.toml: --scene-dir when given, else ./scenes when the current
+/// folder has one (as `run` and `compare` take paths from the current folder), else the scenes/
+/// of the source tree this binary was built from.
+std::string table1_scene_dir(const std::string& given) {
+  std::error_code ec;
+  if (!given.empty()) {
+    if (!fs::is_directory(given, ec))
+      throw InputError(fmt::format("--scene-dir {}: no such folder", given));
+    return given;
+  }
+  if (fs::is_directory("scenes", ec)) return "scenes";
+  return (fs::path(SANDFLOW_SOURCE_DIR) / "scenes").string();
+}
+
+/// The scenes asked for, checked against the paper's five: unknown or repeated names are refused.
+std::vector<const PaperScene*> table1_scenes(const Table1Options& o) {
+  std::vector<const PaperScene*> list;
+  if (o.scenes.empty())
+    for (const PaperScene& p : kPaperTable1) list.push_back(&p);
+  for (const std::string& name : o.scenes) {
+    const PaperScene* p = find_paper_scene(name);
+    if (!p)
+      throw InputError(fmt::format("--scenes: unknown scene '{}'; the paper's scenes are {}", name,
+                                   known_scene_names()));
+    if (std::find(list.begin(), list.end(), p) != list.end())
+      throw InputError(fmt::format("--scenes: '{}' is listed twice", name));
+    list.push_back(p);
+  }
+  return list;
+}
+
+/// The command line as typed, quoted where a shell would need it.
+std::string command_line(int argc, char** argv) {
+  std::string s;
+  for (int k = 0; k < argc; ++k) {
+    std::string a = argv[k];
+    if (a.empty() || a.find_first_of(" \t'\"$\\*?;&|<>()") != std::string::npos) {
+      std::string q = "'";
+      for (char ch : a) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+      a = q + "'";
+    }
+    s += (k ? " " : "") + a;
+  }
+  return s;
+}
+
+std::string local_date_time() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  localtime_r(&now, &tm);
+  char buf[64];
+  return std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M %Z", &tm) ? buf : "unknown date";
+}
+
+/// The row of a scene that ran, from its comparison.
+Table1Row table1_row(const std::string& name, std::int64_t total, const Comparison& c) {
+  Table1Row r;
+  r.scene = name;
+  r.status = RowStatus::Done;
+  r.total = total;
+  r.emitted = c.surface.frames.back().n_total;
+  r.surface_simulated_mean = c.surface.summary["n_simulated_mean"].get<double>();
+  r.surface_s_per_frame = c.json["seconds_per_frame_surface"].get<double>();
+  r.dem_simulated_mean = c.dem.summary["n_simulated_mean"].get<double>();
+  r.dem_s_per_frame = c.json["seconds_per_frame_dem"].get<double>();
+  r.speedup = c.json["speedup"].get<double>();
+  r.surface_rms_rel = c.diff.rms_rel;
+  r.inside_dem = c.dem.summary["grains_inside_geometry"].get<std::int64_t>();
+  r.inside_surface = c.surface.summary["grains_inside_geometry"].get<std::int64_t>();
+  return r;
+}
+
+int table1_command(const Table1Options& o, const std::string& command) {
+  // everything that can be refused is checked before anything is written
+  if (!(o.scale > 0) || !(o.scale <= 100))
+    throw InputError(fmt::format(
+        "--scale {}: expected a number in (0, 100], the fraction of the paper's grain counts",
+        o.scale));
+  const std::vector<const PaperScene*> scenes = table1_scenes(o);
+  for (const PaperScene* p : scenes)
+    if (scaled_count(*p, o.scale) < 1)
+      throw InputError(fmt::format("--scale {}: gives no grains for {} (round({} x {}) = 0)",
+                                   o.scale, p->name, o.scale, p->total));
+  const std::string scene_dir = table1_scene_dir(o.scene_dir);
+  std::error_code ec;
+  if (fs::exists(o.out, ec) && !fs::is_directory(o.out, ec))
+    throw InputError(fmt::format("{}: the output path exists and is not a folder", o.out));
+  if (fs::exists(o.out, ec) && !fs::is_empty(o.out, ec)) {
+    if (!o.force)
+      throw InputError(fmt::format(
+          "{}: the output folder is not empty; pass --force to replace its table", o.out));
+    for (const char* name : {"table1.csv", "table1.md"}) fs::remove(fs::path(o.out) / name, ec);
+  }
+  fs::create_directories(o.out, ec);
+  if (ec)
+    throw OutputError(fmt::format("{}: cannot create the output folder: {}", o.out, ec.message()));
+
+  std::vector<Table1Row> rows(scenes.size());
+  for (std::size_t k = 0; k < scenes.size(); ++k) rows[k].scene = std::string(scenes[k]->name);
+  Table1Context ctx{command,
+                    local_date_time(),
+                    omp_get_num_procs(),
+                    o.threads > 0 ? o.threads : omp_get_num_procs(),
+                    o.scale,
+                    o.frames};
+  // rewritten after every scene, so an interrupted run keeps the scenes that finished
+  auto write_table = [&] {
+    write_file_atomic((fs::path(o.out) / "table1.csv").string(), table1_csv(rows));
+    write_file_atomic((fs::path(o.out) / "table1.md").string(), table1_markdown(rows, ctx));
+  };
+  write_table();
+
+  int status = 0;  // of the first scene that failed
+  std::size_t ran = 0;
+  for (std::size_t k = 0; k < scenes.size(); ++k) {
+    const PaperScene& p = *scenes[k];
+    Table1Row& row = rows[k];
+    const std::string label = fmt::format("scene {} of {}: ", k + 1, scenes.size());
+    const fs::path file = fs::path(scene_dir) / (std::string(p.name) + ".toml");
+    if (!fs::exists(file, ec)) {
+      row.status = RowStatus::Missing;
+      row.message = fmt::format("no scene file {}", file.string());
+      fmt::print(stderr, "table1: {}{} skipped: {}\n", label, p.name, row.message);
+      write_table();
+      continue;
+    }
+    const std::int64_t total = scaled_count(p, o.scale);
+    auto fail = [&](const std::exception& e, int code) {
+      row.status = RowStatus::Failed;
+      row.message = e.what();
+      if (status == 0) status = code;
+      fmt::print(stderr, "\ntable1: {}{} failed: {}\n", label, p.name, row.message);
+    };
+    try {
+      RunOptions ro;
+      ro.scene = file.string();
+      ro.grains = total;
+      ro.frames = o.frames;
+      ro.threads = o.threads;
+      const SceneConfig full = load_scene(ro.scene);
+      if (full.total_grains() != p.total)
+        fmt::print(stderr,
+                   "warning: {} has {} grains, the paper's {} {}; table1 scales the paper's "
+                   "count\n",
+                   ro.scene, full.total_grains(), p.title, p.total);
+      const SceneConfig scene = load_for_run(ro);
+      if (scene.total_grains() != total)
+        throw InputError(
+            fmt::format("{}: cannot scale its emitters to {} grains", ro.scene, total));
+      ctx.threads = thread_count(scene);
+      fmt::print(stderr, "table1: {}{}, {} grains ({} x {}), surface flow then plain DEM -> {}\n",
+                 label, p.name, total, o.scale, p.total, (fs::path(o.out) / p.name).string());
+      const Comparison c =
+          compare_scene(scene, (fs::path(o.out) / p.name).string(), o.force, label);
+      row = table1_row(std::string(p.name), total, c);
+      ++ran;
+    } catch (const InputError& e) {
+      fail(e, 2);
+    } catch (const SimulationError& e) {
+      fail(e, 3);
+    } catch (const OutputError& e) {
+      fail(e, 4);
+    } catch (const std::exception& e) {
+      fail(e, 1);
+    }
+    write_table();
+  }
+
+  fmt::print("\n{}", table1_text(rows));
+  fmt::print(
+      "output  {}/ (table1.csv, table1.md, SCENE/compare.json, SCENE/dem/, SCENE/surface/)\n",
+      o.out);
+  if (status != 0) return status;
+  if (ran == 0) {
+    fmt::print(stderr, "error: no scene ran: none of the scene files was found in {}\n", scene_dir);
+    return 2;
+  }
   return 0;
 }
 
@@ -481,6 +717,39 @@ int main(int argc, char** argv) {
                     "override a scene key in both runs");
   compare->add_flag("--force", co.force, "replace a comparison in a non-empty output folder");
 
+  Table1Options to;
+  auto* table1 = app.add_subcommand(
+      "table1",
+      "the paper's Table 1: run its scenes in both modes (as compare does) and tabulate them");
+  table1->add_option("--scale", to.scale,
+                     "grains per scene: round(F x the paper's count), F in (0, 100] (default 1)");
+  table1->add_option("--frames", to.frames, "number of frames per run (default: each scene's)")
+      ->check(CLI::PositiveNumber);
+  table1->add_option("--out", to.out, "output folder (default out/table1)");
+  table1
+      ->add_option("--scenes", to.scenes,
+                   "comma-separated subset of floor,terrain,bowl,dragon,armadillo (default: all "
+                   "five)")
+      ->delimiter(',');
+  table1->add_option("--scene-dir", to.scene_dir,
+                     "folder of the scene files NAME.toml (default: ./scenes if there is one, "
+                     "else the source tree's scenes/)");
+  table1->add_option("--threads", to.threads, "OpenMP threads (default: all cores)")
+      ->check(CLI::Range(1, 1024));
+  table1->add_flag("--force", to.force,
+                   "write into a non-empty output folder, replacing its table and the folders of "
+                   "the scenes run");
+  table1->footer(
+      "Writes DIR/table1.csv (one row per scene that ran), DIR/table1.md (every scene, the\n"
+      "command, date, cores and threads, and the paper's figures) and DIR/SCENE/ (compare.json,\n"
+      "dem/, surface/), rewriting both tables after each scene. A scene whose file SCENE.toml is\n"
+      "missing is skipped: listed as missing, and the others still run. A scene that fails is\n"
+      "listed as failed with its error, and the others still run.\n"
+      "Exit status: 0 when every scene whose file was found ran; otherwise that of the first\n"
+      "scene that failed (2 bad input, 3 blow-up, 4 output, 1 other); 2 when no scene file was\n"
+      "found at all (the tables list every scene as missing) or an option is bad (then nothing\n"
+      "is written).");
+
   int width = 1280, height = 720, frame = 0;
   auto* render = app.add_subcommand("render", "render a run's frame with POV-Ray to PNG");
   render->add_option("dir", dir, "run folder")->required();
@@ -498,6 +767,7 @@ int main(int argc, char** argv) {
   try {
     if (*run) return run_command(ro);
     if (*compare) return compare_command(co);
+    if (*table1) return table1_command(to, command_line(argc, argv));
     if (*measure) return measure_command(dir);
     if (*render) return render_command(dir, width, height, frame);
   } catch (const InputError& e) {

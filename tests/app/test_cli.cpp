@@ -9,11 +9,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli_runner.hpp"
 #include "io/ply.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
+
+using sandflow_test::Sandbox;
+using sandflow_test::sandflow;
 
 const char* kTinyScene = R"(
 [scene]
@@ -31,39 +35,6 @@ count = 200
 center = [0.0, 0.0, 0.05]
 size = [0.1, 0.1, 0.06]
 )";
-
-struct Sandbox {
-  fs::path dir;
-  Sandbox() {
-    dir = fs::temp_directory_path() /
-          ("sandflow_cli_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-           "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  ~Sandbox() { fs::remove_all(dir); }
-  fs::path write(const std::string& name, const std::string& text) const {
-    std::ofstream(dir / name) << text;
-    return dir / name;
-  }
-};
-
-// Runs the command; returns its exit status, with stdout+stderr in `output`.
-int sandflow(const std::string& args, std::string* output = nullptr) {
-  // one log per test: ctest runs tests in parallel processes
-  const std::string log =
-      (fs::temp_directory_path() /
-       ("sandflow_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
-        ".log"))
-          .string();
-  const int rc = std::system((std::string(SANDFLOW_BINARY) + " " + args + " > " + log + " 2>&1").c_str());
-  if (output) {
-    std::stringstream ss;
-    ss << std::ifstream(log).rdbuf();
-    *output = ss.str();
-  }
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-}
 
 TEST(Cli, RunWritesStatsSummaryAndFrames) {
   Sandbox box;
@@ -176,6 +147,21 @@ TEST(Cli, NonEmptyOutputFolderNeedsForce) {
   EXPECT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 1 --force --out " +
                      out.string()),
             0);
+}
+
+TEST(Cli, CompareForceReplacesAnEarlierComparison) {
+  Sandbox box;
+  const auto scene = box.write("t.toml", kTinyScene);
+  const std::string args =
+      "compare " + scene.string() + " --frames 2 --out " + (box.dir / "cmp").string();
+  ASSERT_EQ(sandflow(args), 0);
+  std::string log;
+  EXPECT_EQ(sandflow(args, &log), 2);
+  EXPECT_NE(log.find("--force"), std::string::npos) << log;
+  // the earlier dem/ and surface/ are replaced, not refused
+  EXPECT_EQ(sandflow(args + " --force", &log), 0) << log;
+  EXPECT_TRUE(fs::exists(box.dir / "cmp" / "compare.json"));
+  EXPECT_TRUE(fs::exists(box.dir / "cmp" / "surface" / "stats.csv"));
 }
 
 TEST(Cli, CheckValidatesWithoutRunning) {

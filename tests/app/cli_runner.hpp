@@ -1,0 +1,64 @@
+// Running the sandflow binary from a test: a scratch folder per test and the command's exit status
+// with its output. Shared by the tests of the command's subcommands (test_cli.cpp,
+// test_table1.cpp).
+#pragma once
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace sandflow_test {
+
+namespace fs = std::filesystem;
+
+/// The running test's "Suite.Name", for names that must not clash between parallel tests.
+inline std::string test_id() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  return std::string(info->test_suite_name()) + "." + info->name();
+}
+
+/// A scratch folder for one test, removed when the test ends.
+struct Sandbox {
+  fs::path dir;
+  Sandbox() {
+    dir = fs::temp_directory_path() /
+          ("sandflow_cli_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+           "_" + test_id());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  ~Sandbox() { fs::remove_all(dir); }
+  fs::path write(const std::string& name, const std::string& text) const {
+    std::ofstream(dir / name) << text;
+    return dir / name;
+  }
+};
+
+/// Runs the command; returns its exit status, with stdout+stderr in `output`.
+inline int sandflow(const std::string& args, std::string* output = nullptr) {
+  // one log per test: ctest runs tests in parallel processes
+  const std::string log =
+      (fs::temp_directory_path() / ("sandflow_cli_" + test_id() + ".log")).string();
+  const int rc =
+      std::system((std::string(SANDFLOW_BINARY) + " " + args + " > " + log + " 2>&1").c_str());
+  if (output) {
+    std::stringstream ss;
+    ss << std::ifstream(log).rdbuf();
+    *output = ss.str();
+  }
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+/// The whole text of a file ("" when it cannot be read).
+inline std::string read_text(const fs::path& path) {
+  std::stringstream ss;
+  ss << std::ifstream(path).rdbuf();
+  return ss.str();
+}
+
+}  // namespace sandflow_test
