@@ -1,5 +1,7 @@
 #include "geometry/shapes.hpp"
 
+#include "geometry/heightmap.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -108,6 +110,70 @@ void SolidCylinder::bounds(Vec3& lo, Vec3& hi) const {
   oriented_bounds(center_, {radius_, radius_, half_height_}, rot_, lo, hi);
 }
 
+SolidBowl::SolidBowl(const Vec3& center, Real radius, Real thickness, Real depth,
+                     const Mat3& rotation)
+    : center_(center),
+      inner_(radius),
+      outer_(radius + thickness),
+      rim_z_(depth - radius),
+      rim_in_(std::sqrt(std::max(radius * radius - rim_z_ * rim_z_, 0.0))),
+      rim_out_(std::sqrt(outer_ * outer_ - rim_z_ * rim_z_)),
+      rot_(rotation),
+      rot_t_(rotation.transposed()) {}
+
+SurfacePoint SolidBowl::closest(const Vec3& p) const {
+  // The problem is 2D in the half-plane (rho >= 0, z) through the axis and p: the section is the
+  // annulus inner <= r <= outer cut by the rim line z <= rim_z. Its boundary is the inner arc,
+  // the outer arc (both below the rim line) and the flat rim between (rim_in, rim_z) and
+  // (rim_out, rim_z). The section is symmetric in rho, so the nearest boundary point of a point
+  // with rho >= 0 has rho >= 0 too.
+  const Vec3 q = rot_t_ * (p - center_);
+  const Real rho = std::hypot(q.x, q.y), z = q.z;
+  const Real r = std::hypot(rho, z);
+  const Vec3 radial = rho > 0 ? Vec3{q.x / rho, q.y / rho, 0} : Vec3{1, 0, 0};
+
+  // nearest point of an arc of radius a below the rim line: the radial projection when it lies
+  // below the line, else the arc's end on the rim (the nearer end: the one with rho >= 0)
+  struct Candidate {
+    Real rho, z;      // the boundary point
+    Real n_rho, n_z;  // the solid's outward normal there
+  };
+  const auto on_arc = [&](Real a, Real rim_rho, Real side) -> Candidate {
+    const Real u_rho = r > 0 ? rho / r : 0.0, u_z = r > 0 ? z / r : -1.0;
+    if (a * u_z <= rim_z_) return {a * u_rho, a * u_z, side * u_rho, side * u_z};
+    return {rim_rho, rim_z_, side * rim_rho / a, side * rim_z_ / a};
+  };
+  const Candidate cands[3] = {
+      on_arc(inner_, rim_in_, -1.0),   // the inside of the bowl: normal towards the centre
+      on_arc(outer_, rim_out_, 1.0),   // the underside
+      {std::clamp(rho, rim_in_, rim_out_), rim_z_, 0.0, 1.0},  // the rim
+  };
+  Real best = kInf;
+  const Candidate* c = &cands[0];
+  for (const Candidate& k : cands) {
+    const Real d = std::hypot(rho - k.rho, z - k.z);
+    if (d < best) best = d, c = &k;
+  }
+  const bool inside = r >= inner_ && r <= outer_ && z <= rim_z_;
+  // the normal is the direction from the nearest point (away from it outside, towards it inside);
+  // on the surface itself, the normal of the piece
+  Real n_rho = c->n_rho, n_z = c->n_z;
+  if (best > 1e-12 * outer_) {
+    const Real s = inside ? -1.0 : 1.0;
+    n_rho = s * (rho - c->rho) / best;
+    n_z = s * (z - c->z) / best;
+  }
+  return {inside ? -best : best, rot_ * (radial * n_rho + Vec3{0, 0, n_z})};
+}
+
+void SolidBowl::bounds(Vec3& lo, Vec3& hi) const {
+  // below the centre the shell reaches out to the outer radius; a rim below the centre narrows it
+  const Real reach = rim_z_ >= 0 ? outer_ : rim_out_;
+  const Real z_lo = -outer_, z_hi = rim_z_;
+  oriented_bounds(center_ + rot_ * Vec3{0, 0, (z_lo + z_hi) / 2}, {reach, reach, (z_hi - z_lo) / 2},
+                  rot_, lo, hi);
+}
+
 void Geometry::add(std::unique_ptr<Solid> solid, Real friction, Real rolling_friction,
                    int source) {
   obstacles_.push_back({std::move(solid), friction, rolling_friction, source});
@@ -128,6 +194,13 @@ Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
         break;
       case GeometryType::Sphere:
         add(std::make_unique<SolidSphere>(c.center, c.radius));
+        break;
+      case GeometryType::Bowl:
+        add(std::make_unique<SolidBowl>(c.center, c.radius, c.wall_thickness,
+                                        c.depth.value_or(c.radius), rot));
+        break;
+      case GeometryType::Heightmap:
+        add(std::make_unique<SolidHeightmap>(c.heights, c.extent, c.base_thickness));
         break;
       case GeometryType::Box:
         if (!c.container) {

@@ -73,6 +73,27 @@ class SolidCylinder final : public Solid {
   Mat3 rot_, rot_t_;
 };
 
+/// A hemispherical bowl, or any spherical cap of a shell: the solid between the spheres of radius
+/// `radius` (the inside the grains see) and `radius + thickness` around `center`, below the rim
+/// plane. The rim plane is `depth` above the lowest inner point, so it lies at local
+/// z = depth - radius: through the centre for depth = radius (a hemisphere), below it for a
+/// shallower dish, above it for a deeper bowl. `rotation` turns the bowl about its centre.
+class SolidBowl final : public Solid {
+ public:
+  SolidBowl(const Vec3& center, Real radius, Real thickness, Real depth, const Mat3& rotation);
+  /// Exact signed distance: the cross-section in the (radial, axial) half-plane is an annulus cut
+  /// by a line, whose boundary is two arcs and the flat rim.
+  SurfacePoint closest(const Vec3& p) const override;
+  void bounds(Vec3& lo, Vec3& hi) const override;
+
+ private:
+  Vec3 center_;
+  Real inner_, outer_;          ///< radii of the inner and outer spheres [m]
+  Real rim_z_;                  ///< local height of the rim plane above the centre [m]
+  Real rim_in_, rim_out_;       ///< radial extent of the flat rim [m]
+  Mat3 rot_, rot_t_;
+};
+
 /// A solid plus the contact properties of its surface.
 struct Obstacle {
   std::unique_ptr<Solid> solid;

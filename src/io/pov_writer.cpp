@@ -164,6 +164,16 @@ Bounds scene_bounds(const FrameData& f, const std::vector<GeometryConfig>& geome
       case GeometryType::Cylinder:
         b.add(g.center, std::hypot(g.radius + g.wall_thickness, 0.5 * g.height + g.wall_thickness));
         break;
+      case GeometryType::Bowl:
+        b.add(g.center, g.radius + g.wall_thickness);
+        break;
+      case GeometryType::Heightmap:
+        if (!g.heights.z.empty()) {
+          const auto [lo, hi] = std::minmax_element(g.heights.z.begin(), g.heights.z.end());
+          b.add({g.extent[0], g.extent[1], *lo - g.base_thickness}, 0);
+          b.add({g.extent[2], g.extent[3], *hi}, 0);
+        }
+        break;
     }
   }
   if (b.empty) b.add({0, 0, 0}, 0.5);
@@ -307,6 +317,73 @@ std::string material(RenderStyle r) {
                                  : "texture { Solid }";
 }
 
+// A heightmap as one mesh2: the surface through the samples (every stride-th sample, so that at
+// most kMaxDrawnSide a side are drawn), two triangles a cell, closed by vertical sides and a flat
+// bottom. The bilinear surface the grains meet differs from these triangles by at most a quarter
+// of a cell's twist |z00 - z10 - z01 + z11| (with stride 1).
+constexpr int kMaxDrawnSide = 256;
+
+void write_heightmap(std::string& s, const GeometryConfig& g, const std::string& mat) {
+  const HeightGrid& h = g.heights;
+  if (h.nx < 2 || h.ny < 2 || h.z.size() != static_cast<std::size_t>(h.nx) * h.ny) return;
+  const int stride = std::max(1, (std::max(h.nx, h.ny) - 2) / (kMaxDrawnSide - 1) + 1);
+  const auto picks = [stride](int n) {
+    std::vector<int> v;
+    for (int i = 0; i < n - 1; i += stride) v.push_back(i);
+    v.push_back(n - 1);
+    return v;
+  };
+  const std::vector<int> xs = picks(h.nx), ys = picks(h.ny);
+  const int mx = static_cast<int>(xs.size()), my = static_cast<int>(ys.size());
+  const double bottom = *std::min_element(h.z.begin(), h.z.end()) - g.base_thickness;
+  const auto at = [&](int i, int j) {
+    const double x = g.extent[0] + (g.extent[2] - g.extent[0]) * xs[i] / (h.nx - 1);
+    const double y = g.extent[1] + (g.extent[3] - g.extent[1]) * ys[j] / (h.ny - 1);
+    return Vec3{x, y, h.z[static_cast<std::size_t>(ys[j]) * h.nx + xs[i]]};
+  };
+  // the perimeter, counter-clockwise from (x0, y0), as (i, j) pairs
+  std::vector<std::pair<int, int>> rim;
+  for (int i = 0; i < mx; ++i) rim.emplace_back(i, 0);
+  for (int j = 1; j < my; ++j) rim.emplace_back(mx - 1, j);
+  for (int i = mx - 2; i >= 0; --i) rim.emplace_back(i, my - 1);
+  for (int j = my - 2; j >= 1; --j) rim.emplace_back(0, j);
+  const int top_n = mx * my, rim_n = static_cast<int>(rim.size());
+
+  line(s, "mesh2 {");
+  line(s, "  vertex_vectors { ", top_n + rim_n, ",");
+  for (int j = 0; j < my; ++j)
+    for (int i = 0; i < mx; ++i) line(s, "    ", at(i, j), ",");
+  for (const auto& [i, j] : rim) {
+    Vec3 v = at(i, j);
+    v.z = bottom;
+    line(s, "    ", v, ",");
+  }
+  line(s, "  }");
+  const int faces = 2 * (mx - 1) * (my - 1) + 2 * rim_n + 2;
+  line(s, "  face_indices { ", faces, ",");
+  const auto tri = [&s](int a, int c, int d) { line(s, "    <", a, ",", c, ",", d, ">,"); };
+  for (int j = 0; j + 1 < my; ++j)
+    for (int i = 0; i + 1 < mx; ++i) {
+      const int k = j * mx + i;
+      tri(k, k + 1, k + mx + 1);
+      tri(k, k + mx + 1, k + mx);
+    }
+  for (int r = 0; r < rim_n; ++r) {  // the sides: a quad under each perimeter segment
+    const int q = (r + 1) % rim_n;
+    const int ta = rim[r].second * mx + rim[r].first, tb = rim[q].second * mx + rim[q].first;
+    tri(ta, tb, top_n + q);
+    tri(ta, top_n + q, top_n + r);
+  }
+  // the bottom: the four corners of the perimeter
+  const int c0 = top_n, c1 = top_n + mx - 1, c2 = top_n + mx - 1 + my - 1,
+            c3 = top_n + 2 * (mx - 1) + my - 1;
+  tri(c0, c1, c2);
+  tri(c0, c2, c3);
+  line(s, "  }");
+  line(s, "  ", mat);
+  line(s, "}");
+}
+
 void write_geometry(std::string& s, const GeometryConfig& g, const Bounds& b) {
   if (g.render == RenderStyle::Hidden) return;
   const bool glass = g.render == RenderStyle::Glass;
@@ -362,6 +439,18 @@ void write_geometry(std::string& s, const GeometryConfig& g, const Bounds& b) {
            " }");
       break;
     }
+    case GeometryType::Bowl: {
+      // the shell between the two spheres, below the rim plane (POV-Ray's plane { z, h } is the
+      // half-space z <= h)
+      const std::string m = matrix(rotation_xyz_deg(g.rotation_deg), g.center);
+      const double rim = g.depth.value_or(g.radius) - g.radius;
+      line(s, "intersection { difference { sphere { <0,0,0>, ", g.radius + g.wall_thickness,
+           " } sphere { <0,0,0>, ", g.radius, " } } plane { z, ", rim, " } ", mat, " ", m, " }");
+      break;
+    }
+    case GeometryType::Heightmap:
+      write_heightmap(s, g, mat);
+      break;
   }
 }
 

@@ -77,8 +77,18 @@ struct OutputConfig {
   bool write_frames = true;         ///< write frames/NNNN.ply
 };
 
-enum class GeometryType { Plane, Box, Cylinder, Sphere };
+enum class GeometryType { Plane, Box, Cylinder, Sphere, Bowl, Heightmap };
 enum class RenderStyle { Solid, Glass, Hidden };
+/// Where a heightmap's samples came from: written in the scene, a grey PNG, or made by noise.
+enum class HeightSource { Inline, File, Noise };
+
+/// A rectangular grid of heights over a heightmap's extent [x0, y0, x1, y1]: nx samples along x
+/// (one row) by ny rows along y, z[j * nx + i] at x0 + i (x1 - x0)/(nx - 1), y0 + j (y1 - y0)/(ny - 1).
+struct HeightGrid {
+  int nx = 0;
+  int ny = 0;
+  std::vector<Real> z;  ///< [m]
+};
 
 struct GeometryConfig {
   GeometryType type = GeometryType::Plane;
@@ -96,7 +106,19 @@ struct GeometryConfig {
   Real height = 1.0;                ///< cylinder: length along its axis (local z) [m]
   bool container = false;           ///< box, cylinder: grains live inside, behind walls
   bool open_top = true;             ///< container: no lid
-  Real wall_thickness = 0.02;       ///< container walls [m]
+  Real wall_thickness = 0.02;       ///< container walls; bowl: thickness of its shell [m]
+  // bowl: a spherical shell of inner radius `radius` around `center`, cut by the rim plane
+  std::optional<Real> depth;        ///< inner bottom below the rim plane [m]; unset: radius
+  // heightmap: solid from its bottom up to z = f(x, y) over `extent`
+  std::array<Real, 4> extent{0, 0, 1, 1};  ///< [x0, y0, x1, y1] [m]
+  HeightSource height_source = HeightSource::Inline;
+  HeightGrid heights;               ///< the samples, whatever their source (the loader fills it)
+  std::string file;                 ///< height_source File: the PNG, resolved against the scene
+  Real z_min = 0.0;                 ///< File, Noise: height of the lowest grey / noise value [m]
+  Real z_max = 0.1;                 ///< File, Noise: height of the highest grey / noise value [m]
+  Real noise_wavelength = 0.2;      ///< Noise: mean wavelength of its waves [m]
+  std::uint64_t noise_seed = 1;     ///< Noise: seed of the wave directions and phases
+  Real base_thickness = 0.05;       ///< the solid reaches this far below its lowest sample [m]
 };
 
 enum class EmitterType { Pour, Block, Lattice };

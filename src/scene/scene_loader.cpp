@@ -30,6 +30,8 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "geometry/heightmap.hpp"
+#include "io/png_gray.hpp"
 
 namespace sandflow {
 namespace {
@@ -146,7 +148,9 @@ constexpr Choices<Mode> kModes[] = {{"surface", Mode::Surface}, {"dem", Mode::De
 constexpr Choices<GeometryType> kGeometryTypes[] = {{"plane", GeometryType::Plane},
                                                     {"box", GeometryType::Box},
                                                     {"cylinder", GeometryType::Cylinder},
-                                                    {"sphere", GeometryType::Sphere}};
+                                                    {"sphere", GeometryType::Sphere},
+                                                    {"bowl", GeometryType::Bowl},
+                                                    {"heightmap", GeometryType::Heightmap}};
 constexpr Choices<RenderStyle> kRenderStyles[] = {
     {"solid", RenderStyle::Solid}, {"glass", RenderStyle::Glass}, {"hidden", RenderStyle::Hidden}};
 constexpr Choices<EmitterType> kEmitterTypes[] = {
@@ -261,6 +265,51 @@ class TableReader {
     if (const auto e = find(key)) out = numbers<N>(*e, name(key), range, static_cast<int>(N));
   }
 
+  // A grid of heights: an array of at least 2 rows of the same length (at least 2 finite numbers
+  // each), at most max_side rows and max_side numbers a row; sizes are checked before anything is
+  // allocated.
+  void read(std::string_view key, HeightGrid& out, int max_side) {
+    const auto e = find(key);
+    if (!e) return;
+    const std::string n = name(key);
+    const auto* rows = e->node->as_array();
+    if (!rows)
+      fail(place(*e), n + ": expected an array of rows, [[z, z, ...], [z, z, ...], ...], got " +
+                          type_name(*e->node));
+    const auto limit = static_cast<std::size_t>(max_side);
+    if (rows->size() < 2 || rows->size() > limit)
+      fail(place(*e), n + " has " + std::to_string(rows->size()) + " rows: expected 2 to " +
+                          std::to_string(max_side));
+    std::size_t nx = 0;
+    for (std::size_t j = 0; j < rows->size(); ++j) {
+      const toml::node& row = *rows->get(j);
+      const std::string rn = n + "[" + std::to_string(j) + "]";
+      const auto* a = row.as_array();
+      if (!a) fail(places_.of(row.source()), rn + ": expected a row of numbers, got " + type_name(row));
+      if (j == 0) {
+        nx = a->size();
+        if (nx < 2 || nx > limit)
+          fail(places_.of(row.source()), rn + " has " + std::to_string(nx) +
+                                             " values: expected 2 to " + std::to_string(max_side));
+      } else if (a->size() != nx) {
+        fail(places_.of(row.source()),
+             rn + " has " + std::to_string(a->size()) + " values but " + n + "[0] has " +
+                 std::to_string(nx) + ": every row must have the same length");
+      }
+    }
+    out.nx = static_cast<int>(nx);
+    out.ny = static_cast<int>(rows->size());
+    out.z.assign(nx * rows->size(), 0.0);
+    for (std::size_t j = 0; j < rows->size(); ++j) {
+      const auto* a = rows->get(j)->as_array();
+      for (std::size_t i = 0; i < nx; ++i) {
+        const toml::node& c = *a->get(i);
+        out.z[j * nx + i] = number(c, n + "[" + std::to_string(j) + "][" + std::to_string(i) + "]",
+                                   places_.of(c.source()), kAny);
+      }
+    }
+  }
+
   // One of a fixed set of words: mode = "surface" | "dem".
   template <class E, std::size_t N>
   void read(std::string_view key, E& out, const Choices<E> (&choices)[N]) {
@@ -307,6 +356,13 @@ class TableReader {
              n + "[" + std::to_string(i) + "]: expected a table, got " + type_name(item));
     }
     return a;
+  }
+
+  bool has(std::string_view key) const { return table_.contains(key); }
+
+  // A reader of the sub-table `key` = {...} of this table, named "prefix.key" in messages.
+  TableReader nested(std::string_view key, const toml::table& t) const {
+    return {places_, t, name(key)};
   }
 
   // Fails at `key` if the table has it, else at the table itself.
@@ -490,7 +546,82 @@ void read_output(TableReader r, OutputConfig& o) {
   r.finish("[output]");
 }
 
-GeometryConfig read_geometry(TableReader r, std::size_t index) {
+// A heightmap's samples: inline `heights`, a grey PNG `file` or procedural `noise`, exactly one.
+void read_heightmap(TableReader& r, GeometryConfig& g, const std::string& scene_path) {
+  std::optional<std::array<Real, 4>> extent;
+  r.require("extent", "[x0, y0, x1, y1], the rectangle the terrain covers");
+  r.read("extent", extent);
+  const auto& [x0, y0, x1, y1] = *extent;
+  if (!(x1 > x0) || !(y1 > y0))
+    r.fail_at("extent", r.name("extent") + " = [" + format_real(x0) + ", " + format_real(y0) +
+                            ", " + format_real(x1) + ", " + format_real(y1) +
+                            "]: expected [x0, y0, x1, y1] with x1 > x0 and y1 > y0");
+  g.extent = *extent;
+  r.read("base_thickness", g.base_thickness, kPositive);
+
+  const char* sources[] = {"heights", "file", "noise"};
+  std::vector<std::string> given;
+  for (const char* k : sources)
+    if (r.has(k)) given.emplace_back(k);
+  if (given.size() != 1)
+    r.fail_at(given.empty() ? "extent" : given[1],
+              r.name(given.empty() ? "heights" : given[1]) +
+                  ": a heightmap takes exactly one of heights, file, noise" +
+                  (given.empty() ? ", found none" : " (found " + join(given, " and ") + ")"));
+  const auto read_range = [&] {
+    r.read("z_min", g.z_min);
+    r.read("z_max", g.z_max);
+    if (!(g.z_max > g.z_min))
+      r.fail_at("z_max", r.name("z_max") + " = " + format_real(g.z_max) + " is not above " +
+                             r.name("z_min") + " = " + format_real(g.z_min) +
+                             ": expected z_max > z_min");
+  };
+  if (given[0] == "heights") {
+    g.height_source = HeightSource::Inline;
+    r.read("heights", g.heights, kMaxHeightmapSide);
+    r.finish("a heightmap with heights");
+  } else if (given[0] == "noise") {
+    g.height_source = HeightSource::Noise;
+    const toml::table* t = r.table("noise");
+    TableReader n = r.nested("noise", *t);
+    n.read("wavelength", g.noise_wavelength, kPositive);
+    n.read("seed", g.noise_seed, kNonNegative);
+    n.finish("a heightmap's noise");
+    read_range();
+    r.finish("a heightmap with noise");
+    g.heights = noise_heights(g.extent, g.noise_wavelength, g.noise_seed, g.z_min, g.z_max);
+  } else {
+    g.height_source = HeightSource::File;
+    std::string file;
+    r.read("file", file);
+    read_range();
+    r.finish("a heightmap with file");
+    // relative to the scene file; image row 0 (the top) is the far edge, y = y1
+    const std::filesystem::path p(file);
+    g.file = p.is_absolute() ? file : (std::filesystem::path(scene_path).parent_path() / p).string();
+    const std::string what = r.name("file") + " = " + in_quotes(file) + ": ";
+    GrayImage img;
+    try {
+      img = read_gray_png(g.file, kMaxHeightmapSide);
+    } catch (const InputError& e) {
+      r.fail_at("file", what + e.what());
+    }
+    if (img.width < 2 || img.height < 2)
+      r.fail_at("file", what + g.file + " is " + std::to_string(img.width) + " x " +
+                            std::to_string(img.height) +
+                            " pixels: a heightmap needs at least 2 x 2");
+    g.heights.nx = img.width;
+    g.heights.ny = img.height;
+    g.heights.z.resize(img.value.size());
+    for (int j = 0; j < img.height; ++j)
+      for (int i = 0; i < img.width; ++i)
+        g.heights.z[static_cast<std::size_t>(j) * img.width + i] =
+            g.z_min + (g.z_max - g.z_min) *
+                          img.value[static_cast<std::size_t>(img.height - 1 - j) * img.width + i];
+  }
+}
+
+GeometryConfig read_geometry(TableReader r, std::size_t index, const std::string& scene_path) {
   GeometryConfig g;
   g.name = "geometry " + std::to_string(index);
   r.read("type", g.type, kGeometryTypes);
@@ -536,6 +667,21 @@ GeometryConfig read_geometry(TableReader r, std::size_t index) {
       r.read("center", g.center);
       r.read("radius", g.radius, kPositive);
       r.finish("a sphere");
+      break;
+    case GeometryType::Bowl:
+      r.read("center", g.center);
+      r.read("rotation", g.rotation_deg);
+      r.read("radius", g.radius, kPositive);
+      r.read("wall_thickness", g.wall_thickness, kPositive);
+      r.read("depth", g.depth, kPositive);
+      r.finish("a bowl");
+      if (g.depth && !(*g.depth < 2 * g.radius))
+        r.fail_at("depth", r.name("depth") + " = " + format_real(*g.depth) +
+                               " is not below 2 * radius = " + format_real(2 * g.radius) +
+                               ": expected depth in (0, 2 radius), 2 radius being a closed sphere");
+      break;
+    case GeometryType::Heightmap:
+      read_heightmap(r, g, scene_path);
       break;
   }
   return g;
@@ -603,7 +749,7 @@ SceneConfig read_scene(const toml::table& root, const std::string& path) {
   if (const auto* a = doc.array_of_tables("geometry")) {
     for (std::size_t i = 0; i < a->size(); ++i) {
       const std::string prefix = "geometry[" + std::to_string(i) + "]";
-      c.geometry.push_back(read_geometry({places, *a->get(i)->as_table(), prefix}, i));
+      c.geometry.push_back(read_geometry({places, *a->get(i)->as_table(), prefix}, i, path));
     }
   }
   const auto* emitters = doc.array_of_tables("emitter");

@@ -1,0 +1,188 @@
+// libpng reports errors by longjmp. The functions that set a jump point hold only trivially
+// destructible locals (raw buffers freed by hand), so a longjmp never skips a destructor; the C++
+// wrappers below turn the outcome into exceptions.
+#include "io/png_gray.hpp"
+
+#include <png.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <csetjmp>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include "core/error.hpp"
+
+namespace sandflow {
+namespace {
+
+struct ErrorText {
+  char text[256];
+};
+
+void on_error(png_structp png, png_const_charp msg) {
+  auto* e = static_cast<ErrorText*>(png_get_error_ptr(png));
+  std::snprintf(e->text, sizeof e->text, "%s", msg);
+  png_longjmp(png, 1);
+}
+
+void on_warning(png_structp, png_const_charp) {}
+
+enum class ReadStatus { Ok, NotPng, Colour, TooLarge, Corrupt };
+
+struct RawImage {
+  int width = 0, height = 0, color_type = 0;
+  double* value = nullptr;  // malloc'ed, width * height
+};
+
+ReadStatus read_raw(std::FILE* fp, int max_side, RawImage* out, ErrorText* err) {
+  unsigned char sig[8];
+  if (std::fread(sig, 1, 8, fp) != 8 || png_sig_cmp(sig, 0, 8) != 0) return ReadStatus::NotPng;
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, err, on_error, on_warning);
+  if (!png) return ReadStatus::Corrupt;
+  png_infop info = png_create_info_struct(png);
+  unsigned char* volatile row = nullptr;
+  double* volatile value = nullptr;
+  if (!info || setjmp(png_jmpbuf(png))) {
+    std::free(row);
+    std::free(value);
+    png_destroy_read_struct(&png, info ? &info : nullptr, nullptr);
+    return ReadStatus::Corrupt;
+  }
+  png_init_io(png, fp);
+  png_set_sig_bytes(png, 8);
+  png_read_info(png, info);
+  const png_uint_32 w = png_get_image_width(png, info), h = png_get_image_height(png, info);
+  const int depth = png_get_bit_depth(png, info), type = png_get_color_type(png, info);
+  out->width = static_cast<int>(std::min<png_uint_32>(w, 0x7fffffff));
+  out->height = static_cast<int>(std::min<png_uint_32>(h, 0x7fffffff));
+  out->color_type = type;
+  ReadStatus status = ReadStatus::Ok;
+  if (type != PNG_COLOR_TYPE_GRAY && type != PNG_COLOR_TYPE_GRAY_ALPHA)
+    status = ReadStatus::Colour;
+  else if (w > static_cast<png_uint_32>(max_side) || h > static_cast<png_uint_32>(max_side))
+    status = ReadStatus::TooLarge;
+  if (status != ReadStatus::Ok) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    return status;
+  }
+  // samples of 8 or 16 bits, big-endian, the alpha (if any) after the grey; grey of 1, 2 or 4
+  // bits is expanded by scaling onto 0..255
+  if (depth < 8) png_set_expand_gray_1_2_4_to_8(png);
+  png_read_update_info(png, info);
+  const std::size_t rowbytes = png_get_rowbytes(png, info);
+  const int channels = png_get_channels(png, info);
+  const int bytes = depth == 16 ? 2 : 1;
+  const double scale = depth == 16 ? 65535.0 : 255.0;
+  row = static_cast<unsigned char*>(std::malloc(rowbytes));
+  value = static_cast<double*>(std::malloc(sizeof(double) * w * h));
+  if (!row || !value) png_error(png, "out of memory");
+  for (png_uint_32 y = 0; y < h; ++y) {
+    png_read_row(png, row, nullptr);
+    for (png_uint_32 x = 0; x < w; ++x) {
+      const unsigned char* px = row + static_cast<std::size_t>(x) * channels * bytes;
+      const unsigned v = bytes == 2 ? (static_cast<unsigned>(px[0]) << 8) | px[1] : px[0];
+      value[static_cast<std::size_t>(y) * w + x] = v / scale;
+    }
+  }
+  png_read_end(png, nullptr);
+  png_destroy_read_struct(&png, &info, nullptr);
+  std::free(row);
+  out->value = value;
+  return ReadStatus::Ok;
+}
+
+bool write_raw(std::FILE* fp, int width, int height, const double* value, int bit_depth,
+               ErrorText* err) {
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, err, on_error, on_warning);
+  if (!png) return false;
+  png_infop info = png_create_info_struct(png);
+  unsigned char* volatile row = nullptr;
+  if (!info || setjmp(png_jmpbuf(png))) {
+    std::free(row);
+    png_destroy_write_struct(&png, info ? &info : nullptr);
+    return false;
+  }
+  png_init_io(png, fp);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height),
+               bit_depth, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  const int bytes = bit_depth == 16 ? 2 : 1;
+  const double full = bit_depth == 16 ? 65535.0 : 255.0;
+  row = static_cast<unsigned char*>(std::malloc(static_cast<std::size_t>(width) * bytes));
+  if (!row) png_error(png, "out of memory");
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const double v = std::clamp(value[static_cast<std::size_t>(y) * width + x], 0.0, 1.0);
+      const unsigned q = static_cast<unsigned>(v * full + 0.5);
+      if (bytes == 2) {
+        row[2 * x] = static_cast<unsigned char>(q >> 8);
+        row[2 * x + 1] = static_cast<unsigned char>(q & 0xff);
+      } else {
+        row[x] = static_cast<unsigned char>(q);
+      }
+    }
+    png_write_row(png, row);
+  }
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  std::free(row);
+  return true;
+}
+
+std::string reason(int err) { return err ? std::strerror(err) : "unknown error"; }
+
+}  // namespace
+
+GrayImage read_gray_png(const std::string& path, int max_side) {
+  errno = 0;
+  std::FILE* fp = std::fopen(path.c_str(), "rb");
+  if (!fp) throw InputError(path + ": cannot open the image: " + reason(errno));
+  RawImage raw;
+  ErrorText err{};
+  const ReadStatus st = read_raw(fp, max_side, &raw, &err);
+  std::fclose(fp);
+  switch (st) {
+    case ReadStatus::Ok:
+      break;
+    case ReadStatus::NotPng:
+      throw InputError(path + ": not a PNG image");
+    case ReadStatus::Colour:
+      throw InputError(path + ": a colour PNG (" +
+                       std::string(raw.color_type == PNG_COLOR_TYPE_PALETTE ? "palette" : "RGB") +
+                       "): a heightmap must be a grey-scale PNG (8 or 16 bits)");
+    case ReadStatus::TooLarge:
+      throw InputError(path + ": the image is " + std::to_string(raw.width) + " x " +
+                       std::to_string(raw.height) + " pixels: at most " +
+                       std::to_string(max_side) + " x " + std::to_string(max_side));
+    case ReadStatus::Corrupt:
+      throw InputError(path + ": cannot read the PNG: " +
+                       (err.text[0] ? std::string(err.text) : std::string("corrupt data")));
+  }
+  GrayImage img;
+  img.width = raw.width;
+  img.height = raw.height;
+  img.value.assign(raw.value, raw.value + static_cast<std::size_t>(raw.width) * raw.height);
+  std::free(raw.value);
+  return img;
+}
+
+void write_gray_png(const std::string& path, int width, int height,
+                    const std::vector<double>& value, int bit_depth) {
+  if (width < 1 || height < 1 || value.size() != static_cast<std::size_t>(width) * height ||
+      (bit_depth != 8 && bit_depth != 16))
+    throw OutputError(path + ": write_gray_png: bad image size or bit depth");
+  errno = 0;
+  std::FILE* fp = std::fopen(path.c_str(), "wb");
+  if (!fp) throw OutputError(path + ": cannot create: " + reason(errno));
+  ErrorText err{};
+  const bool ok = write_raw(fp, width, height, value.data(), bit_depth, &err);
+  const bool closed = std::fclose(fp) == 0;
+  if (!ok || !closed)
+    throw OutputError(path + ": cannot write the PNG" +
+                      (err.text[0] ? ": " + std::string(err.text) : std::string()));
+}
+
+}  // namespace sandflow
