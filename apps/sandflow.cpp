@@ -105,6 +105,7 @@ struct RunResult {
 RunResult run_scene(const SceneConfig& scene, const std::string& out,
                     const std::string& label = "") {
   World world(scene);
+  for (const std::string& w : world.geometry().warnings()) fmt::print(stderr, "warning: {}\n", w);
   const int frames = world.planned_frames();
   const TimeStep& ts = world.time_step();
   const int threads = thread_count(scene);
@@ -222,7 +223,12 @@ int run_command(const RunOptions& o) {
   const SceneConfig scene = load_for_run(o);
   if (o.check) {
     World world(scene);
+    for (const std::string& w : world.geometry().warnings())
+      fmt::print(stderr, "warning: {}\n", w);
     const TimeStep& ts = world.time_step();
+    if (!world.dem().boundary().x.empty())
+      fmt::print("{}: {} boundary particles of radius {:.3g} m on its meshes\n", scene.path,
+                 world.dem().boundary().size(), world.dem().boundary().radius);
     fmt::print(
         "{}: ok — {} grains, mode {}, {} frames at {} fps, k_n = {:.4g} N/m, dt = {:.3g} s "
         "({} substeps/frame, t_c = {:.3g} s)\n",
@@ -655,11 +661,19 @@ int render_command(const std::string& dir, int width, int height, int frame) {
   const FrameData f = read_ply(ply);
   // the geometry comes from the scene file the run recorded
   std::vector<GeometryConfig> geometry;
+  Geometry placed;  // its meshes, placed
+  std::vector<const TriangleMesh*> meshes;
   std::ifstream in(fs::path(dir) / "summary.json");
   if (in) {
     const auto summary = nlohmann::json::parse(in, nullptr, false);
-    if (!summary.is_discarded() && summary.contains("scene_file"))
-      geometry = load_scene(summary["scene_file"].get<std::string>()).geometry;
+    if (!summary.is_discarded() && summary.contains("scene_file")) {
+      const SceneConfig scene = load_scene(summary["scene_file"].get<std::string>());
+      geometry = scene.geometry;
+      placed = Geometry::from_config(geometry, scene.material, scene.path);
+      std::size_t next = 0;
+      for (const GeometryConfig& g : geometry)
+        meshes.push_back(g.type == GeometryType::Mesh ? &placed.meshes()[next++].mesh : nullptr);
+    }
   }
   if (find_povray().empty())
     throw InputError("povray is not installed: sudo apt-get install povray");
@@ -668,7 +682,7 @@ int render_command(const std::string& dir, int width, int height, int frame) {
   PovOptions opt;
   opt.width = width;
   opt.height = height;
-  write_pov_scene(stem + ".pov", f, geometry, opt);
+  write_pov_scene(stem + ".pov", f, geometry, opt, meshes);
   render_pov(stem + ".pov", stem + ".png", width, height, omp_get_num_procs());
   fmt::print("{}\n", stem + ".png");
   return 0;

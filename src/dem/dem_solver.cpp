@@ -22,6 +22,74 @@ void DemSolver::step(Grains& grains, const Geometry& geometry, Real dt, Profile&
     need_rebuild_ = true;
 }
 
+void DemSolver::set_boundary(BoundaryParticles boundary) {
+  boundary_ = std::move(boundary);
+  boundary_params_.clear();
+  for (std::size_t k = 0; k < boundary_.friction.size(); ++k) {
+    ContactParams p = params_.contact;
+    p.mu = boundary_.friction[k];
+    p.mu_r = boundary_.rolling_friction[k];
+    boundary_params_.push_back(p);
+  }
+  boundary_grid_.build(boundary_.x, 2 * boundary_.radius);
+  need_rebuild_ = true;
+}
+
+void DemSolver::build_boundary_list(const Grains& grains) {
+  const std::size_t n = grains.size();
+  std::swap(bounds_, old_bounds_);
+  bounds_.start.assign(n + 1, 0);
+  bounds_.obstacle.clear();
+  if (boundary_.size() == 0) return;
+  const Real rb = boundary_.radius;
+  const Real inv_cell = 1.0 / boundary_grid_.cell_size();
+  auto each_near = [&](std::size_t i, auto&& f) {
+    if (grains.state[i] != GrainState::Active) return;
+    const Real reach = grains.r[i] + rb + 2 * allow_[i];  // (a particle does not move: spare)
+    const int k = std::max(1, static_cast<int>(std::ceil(reach * inv_cell)));
+    boundary_grid_.for_each_within(grains.x[i], k, [&](std::uint32_t b) {
+      if (norm2(grains.x[i] - boundary_.x[b]) < reach * reach) f(b);
+    });
+  };
+  std::vector<std::vector<std::uint32_t>> buffers;
+#pragma omp parallel if (n >= kParallelMinGrains)
+  {
+#pragma omp single
+    buffers.resize(omp_get_num_threads());
+    std::vector<std::uint32_t>& buf = buffers[omp_get_thread_num()];
+    buf.clear();
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t first = buf.size();
+      each_near(i, [&](std::uint32_t b) { buf.push_back(b); });
+      std::sort(buf.begin() + first, buf.end());
+      bounds_.start[i + 1] = static_cast<std::uint32_t>(buf.size() - first);
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) bounds_.start[i + 1] += bounds_.start[i];
+  for (const auto& buf : buffers) bounds_.obstacle.insert(bounds_.obstacle.end(), buf.begin(), buf.end());
+  const std::size_t slots = bounds_.obstacle.size();
+  bounds_.xi.assign(slots, Vec3{});
+  bounds_.psi.assign(slots, Vec3{});
+  // history by grain id: both rows ascending
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
+  for (std::size_t i = 0; i < n; ++i) {
+    const GrainId id = grains.id[i];
+    const std::uint32_t oi =
+        old_bounds_.start.empty() || id >= slot_of_id_.size() ? kNoSlot : slot_of_id_[id];
+    if (oi == kNoSlot || oi + 1 >= old_bounds_.start.size()) continue;
+    std::uint32_t os = old_bounds_.start[oi];
+    const std::uint32_t oe = old_bounds_.start[oi + 1];
+    for (std::uint32_t s = bounds_.start[i]; s < bounds_.start[i + 1]; ++s) {
+      while (os < oe && old_bounds_.obstacle[os] < bounds_.obstacle[s]) ++os;
+      if (os < oe && old_bounds_.obstacle[os] == bounds_.obstacle[s]) {
+        bounds_.xi[s] = old_bounds_.xi[os];
+        bounds_.psi[s] = old_bounds_.psi[os];
+      }
+    }
+  }
+}
+
 void DemSolver::contacts_of(const Grains& grains, const Geometry& geometry,
                             std::vector<std::uint8_t>& out) const {
   out.assign(grains.size(), 0);
@@ -42,6 +110,10 @@ void DemSolver::contacts_of(const Grains& grains, const Geometry& geometry,
       if (geometry.obstacles()[walls_.obstacle[s]].solid->closest(grains.x[i]).distance <
           grains.r[i])
         out[i] |= kTouches;
+    if (out[i] & kTouches || bounds_.start.size() <= i + 1) continue;
+    const Real reach = grains.r[i] + boundary_.radius;
+    for (std::uint32_t s = bounds_.start[i]; s < bounds_.start[i + 1]; ++s)
+      if (norm2(grains.x[i] - boundary_.x[bounds_.obstacle[s]]) < reach * reach) out[i] |= kTouches;
   }
 }
 
@@ -144,6 +216,8 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
       ++s;
     }
   }
+
+  build_boundary_list(grains);
 
   // remember where each id was, for the next carry-over
   GrainId max_id = 0;
@@ -308,6 +382,29 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
         torque += cf.torque_i(cg);
         ++wall_contacts;
         max_ov = std::max(max_ov, delta / (2 * r_i));
+      }
+      // boundary particles: a grain that never moves, damped as against a wall
+      const Real rb = boundary_.radius;
+      for (std::uint32_t s = bounds_.start[i]; s < bounds_.start[i + 1]; ++s) {
+        const Vec3 d = x[i] - boundary_.x[bounds_.obstacle[s]];
+        const Real dist2 = norm2(d), rsum = r_i + rb;
+        if (dist2 >= rsum * rsum) {
+          bounds_.xi[s] = {};
+          bounds_.psi[s] = {};
+          continue;
+        }
+        const ContactParams& bp = boundary_params_[boundary_.group[bounds_.obstacle[s]]];
+        const Real dist = std::sqrt(dist2);
+        const ContactGeometry cg{d * (1.0 / dist), rsum - dist, r_i, rb,
+                                 normal_damping(bp, grains.m[i]), r_i * rb / rsum};
+        ContactHistory h{bounds_.xi[s], bounds_.psi[s]};
+        const ContactForce cf = contact_force<kRolling>(bp, cg, v[i], w[i], Vec3{}, h, dt);
+        bounds_.xi[s] = h.xi;
+        bounds_.psi[s] = h.psi;
+        f += cf.force_i;
+        torque += cf.torque_i(cg);
+        ++wall_contacts;
+        max_ov = std::max(max_ov, cg.delta / (2 * r_i));
       }
       // symplectic Euler: velocities from the forces, then positions from the new velocities
       v[i] += (f * grains.inv_m[i] + gravity) * dt;

@@ -24,6 +24,16 @@ struct DemParams {
   Vec3 gravity{0, 0, -9.81};
 };
 
+/// Fixed spheres that stand for a mesh's surface (its "particle surface", DESIGN.md §6): ACTIVE
+/// grains collide with them by the grain-grain law, as with a grain that never moves.
+struct BoundaryParticles {
+  std::vector<Vec3> x;                 ///< centres [m]
+  std::vector<std::uint32_t> group;    ///< the mesh each belongs to
+  Real radius = 0;                     ///< [m]
+  std::vector<Real> friction, rolling_friction;  ///< per group [-]
+  std::size_t size() const { return x.size(); }
+};
+
 /// What the last steps saw; reset by the caller when it reads them.
 struct DemCounters {
   std::int64_t contacts = 0;     ///< touching grain-grain pairs, at the last step
@@ -38,6 +48,10 @@ class DemSolver {
 
   /// Advances the ACTIVE grains by dt; INTERFACE grains push but stay put.
   void step(Grains& grains, const Geometry& geometry, Real dt, Profile& profile);
+
+  /// Sets the boundary particles (before the first step).
+  void set_boundary(BoundaryParticles boundary);
+  const BoundaryParticles& boundary() const { return boundary_; }
 
   /// Call after grains were added, removed or changed state: the next step rebuilds the lists.
   void invalidate() { need_rebuild_ = true; }
@@ -62,6 +76,8 @@ class DemSolver {
 
  private:
   void rebuild(Grains& grains, const Geometry& geometry, Real dt);
+  /// Boundary particles within reach of each ACTIVE grain, history carried by grain id.
+  void build_boundary_list(const Grains& grains);
   void sort_by_cell(Grains& grains);
   /// Forces and integration in one sweep; returns whether some grain has moved further than its
   /// allowance since the last rebuild.
@@ -74,6 +90,10 @@ class DemSolver {
   CellGrid grid_;
   PairList pairs_, old_pairs_;
   WallList walls_, old_walls_;
+  BoundaryParticles boundary_;
+  std::vector<ContactParams> boundary_params_;  ///< per group
+  CellGrid boundary_grid_;
+  WallList bounds_, old_bounds_;  ///< per grain: the boundary particles it may touch
   std::vector<std::uint32_t> slot_of_id_;  ///< grain id -> slot at the last rebuild
   std::vector<Vec3> x_at_build_;
   std::vector<Real> allow_, allow2_;  ///< per grain: how far it may move before a rebuild [m, m^2]

@@ -180,7 +180,7 @@ void Geometry::add(std::unique_ptr<Solid> solid, Real friction, Real rolling_fri
 }
 
 Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
-                               const MaterialConfig& material) {
+                               const MaterialConfig& material, const std::string& scene_path) {
   Geometry g;
   for (int k = 0; k < static_cast<int>(configs.size()); ++k) {
     const GeometryConfig& c = configs[k];
@@ -201,6 +201,10 @@ Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
         break;
       case GeometryType::Heightmap:
         add(std::make_unique<SolidHeightmap>(c.heights, c.extent, c.base_thickness));
+        break;
+      case GeometryType::Mesh:
+        g.meshes_.push_back(place_mesh(c, material, scene_path, g.warnings_));
+        g.meshes_.back().source = k;
         break;
       case GeometryType::Box:
         if (!c.container) {
@@ -241,13 +245,22 @@ Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
 }
 
 std::size_t Geometry::count_inside(const std::vector<Vec3>& x) const {
+  std::vector<Vec3> outside;  // of every solid: for the meshes, tested in parallel
   std::size_t n = 0;
-  for (const Vec3& p : x)
-    for (const Obstacle& o : obstacles_)
-      if (o.solid->closest(p).distance < 0) {
-        ++n;
-        break;
-      }
+  for (const Vec3& p : x) {
+    bool in = false;
+    for (const Obstacle& o : obstacles_) in = in || o.solid->closest(p).distance < 0;
+    if (in)
+      ++n;
+    else if (!meshes_.empty())
+      outside.push_back(p);
+  }
+  std::vector<std::uint8_t> inside(outside.size(), 0);
+  for (const MeshObstacle& m : meshes_) {
+    const std::vector<Real> w = m.winding->at(outside);
+    for (std::size_t i = 0; i < w.size(); ++i) inside[i] |= w[i] >= 0.5;
+  }
+  for (std::uint8_t f : inside) n += f;
   return n;
 }
 
@@ -296,7 +309,26 @@ std::vector<std::pair<Real, Real>> Geometry::solid_intervals(Real x, Real y, Rea
     p.z -= last_step;
   }
   if (inside) down.back().first = -std::numeric_limits<Real>::infinity();
-  return {down.rbegin(), down.rend()};
+  std::vector<std::pair<Real, Real>> up(down.rbegin(), down.rend());
+  if (meshes_.empty()) return up;
+  // meshes: the stretches between crossings whose midpoint is inside, grown by the boundary
+  // particles' radius (the grains rest on the particles); then the union with the solids
+  for (const MeshObstacle& m : meshes_) {
+    const std::vector<Real> z = m.winding->vertical_crossings(x, y);
+    for (std::size_t k = 0; k + 1 < z.size(); ++k)
+      if (m.winding->inside({x, y, 0.5 * (z[k] + z[k + 1])}))
+        up.push_back({z[k] - m.particle_radius, z[k + 1] + m.particle_radius});
+  }
+  std::sort(up.begin(), up.end());
+  std::vector<std::pair<Real, Real>> merged;
+  for (const auto& iv : up) {
+    if (iv.second < z_floor || iv.first > z_from) continue;
+    if (!merged.empty() && iv.first <= merged.back().second)
+      merged.back().second = std::max(merged.back().second, iv.second);
+    else
+      merged.push_back(iv);
+  }
+  return merged;
 }
 
 bool Geometry::finite_bounds(Vec3& lo, Vec3& hi) const {
@@ -307,6 +339,14 @@ bool Geometry::finite_bounds(Vec3& lo, Vec3& hi) const {
     if (!is_finite(a) || !is_finite(b)) continue;
     lo = any ? min(lo, a) : a;
     hi = any ? max(hi, b) : b;
+    any = true;
+  }
+  for (const MeshObstacle& m : meshes_) {
+    const Aabb box = mesh_bounds(m.mesh);
+    if (box.empty()) continue;
+    const Vec3 pad{m.particle_radius, m.particle_radius, m.particle_radius};
+    lo = any ? min(lo, box.lo - pad) : box.lo - pad;
+    hi = any ? max(hi, box.hi + pad) : box.hi + pad;
     any = true;
   }
   return any;

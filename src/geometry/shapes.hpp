@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "core/vec3.hpp"
+#include "geometry/mesh.hpp"
+#include "geometry/winding_number.hpp"
 #include "scene/scene_config.hpp"
 
 namespace sandflow {
@@ -102,11 +104,30 @@ struct Obstacle {
   int source = 0;               ///< index of the [[geometry]] entry it came from
 };
 
+/// A mesh obstacle, placed. Grains collide with its boundary particles (DemSolver), spheres of
+/// `particle_radius` sampled over its surface; its winding number counts grains that got inside.
+struct MeshObstacle {
+  std::string name;
+  TriangleMesh mesh;
+  std::unique_ptr<WindingNumber> winding;
+  Real particle_radius = 0;  ///< [m]
+  Real friction = 0.6, rolling_friction = 0.1;
+  int source = 0;
+};
+
+/// Loads, places and checks the mesh of a `type = "mesh"` entry (see Geometry::from_config for
+/// where its file is looked for); a missing file gives the entry's fallback box, with a warning.
+MeshObstacle place_mesh(const GeometryConfig& c, const MaterialConfig& material,
+                        const std::string& scene_path, std::vector<std::string>& warnings);
+
 /// Every solid of a scene. Containers expand into several wall slabs.
 class Geometry {
  public:
+  /// Mesh files are looked for beside the scene file `scene_path`, then in the folder named by
+  /// the environment variable SANDFLOW_MESH_DIR, then in .cache/meshes/ beside the scene's
+  /// folder (where scripts/fetch_meshes.sh puts them).
   static Geometry from_config(const std::vector<GeometryConfig>& configs,
-                              const MaterialConfig& material);
+                              const MaterialConfig& material, const std::string& scene_path = "");
 
   void add(std::unique_ptr<Solid> solid, Real friction, Real rolling_friction, int source);
 
@@ -124,11 +145,17 @@ class Geometry {
   /// Union of the bounds of the finite solids; false when every solid is infinite (or none).
   bool finite_bounds(Vec3& lo, Vec3& hi) const;
 
-  /// Number of grains whose centre lies inside a solid (should be 0).
+  /// Number of grains whose centre lies inside a solid or a mesh (should be 0).
   std::size_t count_inside(const std::vector<Vec3>& x) const;
+
+  const std::vector<MeshObstacle>& meshes() const { return meshes_; }
+  /// What the user should know (a mesh replaced by its fallback, an open mesh).
+  const std::vector<std::string>& warnings() const { return warnings_; }
 
  private:
   std::vector<Obstacle> obstacles_;
+  std::vector<MeshObstacle> meshes_;
+  std::vector<std::string> warnings_;
 };
 
 }  // namespace sandflow

@@ -144,15 +144,21 @@ struct Bounds {
 };
 
 // What the picture should show: the grains, or without grains the finite geometry.
-Bounds scene_bounds(const FrameData& f, const std::vector<GeometryConfig>& geometry) {
+Bounds scene_bounds(const FrameData& f, const std::vector<GeometryConfig>& geometry,
+                    const std::vector<const TriangleMesh*>& meshes) {
   Bounds b;
   for (std::size_t i = 0; i < f.size(); ++i) {
     if (is_finite(f.position[i])) b.add(f.position[i], f.radius[i]);
   }
   if (!b.empty) return b;
-  for (const auto& g : geometry) {
+  for (std::size_t k = 0; k < geometry.size(); ++k) {
+    const GeometryConfig& g = geometry[k];
     if (g.render == RenderStyle::Hidden) continue;
     switch (g.type) {
+      case GeometryType::Mesh:
+        if (k < meshes.size() && meshes[k])
+          for (const Vec3& v : meshes[k]->vertices) b.add(v, 0);
+        break;
       case GeometryType::Plane:
         break;  // infinite: not framed
       case GeometryType::Sphere:
@@ -384,7 +390,21 @@ void write_heightmap(std::string& s, const GeometryConfig& g, const std::string&
   line(s, "}");
 }
 
-void write_geometry(std::string& s, const GeometryConfig& g, const Bounds& b) {
+// A placed mesh as one mesh2, its vertices in world coordinates.
+void write_mesh(std::string& s, const TriangleMesh& m, const std::string& mat) {
+  line(s, "mesh2 {");
+  line(s, "  vertex_vectors { ", m.vertices.size(), ",");
+  for (const Vec3& v : m.vertices) line(s, "    ", v, ",");
+  line(s, "  }");
+  line(s, "  face_indices { ", m.triangles.size(), ",");
+  for (const auto& t : m.triangles) line(s, "    <", t[0], ",", t[1], ",", t[2], ">,");
+  line(s, "  }");
+  line(s, "  ", mat);
+  line(s, "}");
+}
+
+void write_geometry(std::string& s, const GeometryConfig& g, const Bounds& b,
+                    const TriangleMesh* mesh) {
   if (g.render == RenderStyle::Hidden) return;
   const bool glass = g.render == RenderStyle::Glass;
   const std::string mat = material(g.render);
@@ -451,6 +471,9 @@ void write_geometry(std::string& s, const GeometryConfig& g, const Bounds& b) {
     case GeometryType::Heightmap:
       write_heightmap(s, g, mat);
       break;
+    case GeometryType::Mesh:
+      if (mesh) write_mesh(s, *mesh, mat);
+      break;
   }
 }
 
@@ -506,17 +529,19 @@ std::string tail_of(const std::string& path, std::size_t max_chars) {
 }  // namespace
 
 void write_pov_scene(const std::string& path, const FrameData& f,
-                     const std::vector<GeometryConfig>& geometry, const PovOptions& opt) {
+                     const std::vector<GeometryConfig>& geometry, const PovOptions& opt,
+                     const std::vector<const TriangleMesh*>& meshes) {
   if (f.radius.size() != f.size() || (!f.id.empty() && f.id.size() != f.size())) {
     throw std::invalid_argument("write_pov_scene: FrameData arrays have different lengths");
   }
-  const Bounds b = scene_bounds(f, geometry);
+  const Bounds b = scene_bounds(f, geometry, meshes);
   const Camera cam = opt.auto_camera ? auto_camera(framing_points(f, b), b, opt)
                                      : Camera{opt.camera_position, opt.camera_look_at};
   std::string s;
   s.reserve(2048 + 48 * f.size());
   write_header(s, cam, b, opt, f.size());
-  for (const auto& g : geometry) write_geometry(s, g, b);
+  for (std::size_t k = 0; k < geometry.size(); ++k)
+    write_geometry(s, geometry[k], b, k < meshes.size() ? meshes[k] : nullptr);
   line(s, "");
   write_grains(s, f);
   write_text_atomically(path, s);

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "core/vec3.hpp"
+#include "geometry/mesh.hpp"
 #include "io/frame.hpp"
 #include "scene/scene_config.hpp"
 
@@ -41,8 +42,11 @@ struct PovOptions {
 /// Writes a self-contained POV-Ray 3.7 scene of frame `f` with its `geometry` to `path`
 /// (atomically: a temporary file renamed over `path`). Throws OutputError naming the path;
 /// std::invalid_argument if f.radius (or a non-empty f.id) does not match f.position in length.
+/// `meshes`, when given, holds one entry per geometry entry: the placed mesh of a mesh entry
+/// (drawn as a mesh2), nullptr for the others; a mesh entry without one is not drawn.
 void write_pov_scene(const std::string& path, const FrameData& f,
-                     const std::vector<GeometryConfig>& geometry, const PovOptions& opt);
+                     const std::vector<GeometryConfig>& geometry, const PovOptions& opt,
+                     const std::vector<const TriangleMesh*>& meshes = {});
 
 /// Full path of the `povray` executable found on PATH, or "" when there is none.
 std::string find_povray();

@@ -77,7 +77,7 @@ struct OutputConfig {
   bool write_frames = true;         ///< write frames/NNNN.ply
 };
 
-enum class GeometryType { Plane, Box, Cylinder, Sphere, Bowl, Heightmap };
+enum class GeometryType { Plane, Box, Cylinder, Sphere, Bowl, Heightmap, Mesh };
 enum class RenderStyle { Solid, Glass, Hidden };
 /// Where a heightmap's samples came from: written in the scene, a grey PNG, or made by noise.
 enum class HeightSource { Inline, File, Noise };
@@ -119,6 +119,14 @@ struct GeometryConfig {
   Real noise_wavelength = 0.2;      ///< Noise: mean wavelength of its waves [m]
   std::uint64_t noise_seed = 1;     ///< Noise: seed of the wave directions and phases
   Real base_thickness = 0.05;       ///< the solid reaches this far below its lowest sample [m]
+  // mesh
+  std::string mesh_file;            ///< OBJ, PLY or OFF (maybe .gz), as written (key `file`)
+  std::optional<Real> scale;        ///< multiplies the file's coordinates [-]
+  std::optional<Real> mesh_size;    ///< or: the largest extent after scaling [m] (key `size`)
+  Vec3 position{0, 0, 0};           ///< where the centre of the bottom of its bounds goes [m]
+  bool fallback_box = false;        ///< a missing file gives a box of fallback_size (warned)
+  Vec3 fallback_size{0.3, 0.3, 0.3};  ///< [m]
+  std::optional<Real> particle_radius;  ///< boundary particles [m]; unset: half the smallest d
 };
 
 enum class EmitterType { Pour, Block, Lattice };

@@ -150,7 +150,8 @@ constexpr Choices<GeometryType> kGeometryTypes[] = {{"plane", GeometryType::Plan
                                                     {"cylinder", GeometryType::Cylinder},
                                                     {"sphere", GeometryType::Sphere},
                                                     {"bowl", GeometryType::Bowl},
-                                                    {"heightmap", GeometryType::Heightmap}};
+                                                    {"heightmap", GeometryType::Heightmap},
+                                                    {"mesh", GeometryType::Mesh}};
 constexpr Choices<RenderStyle> kRenderStyles[] = {
     {"solid", RenderStyle::Solid}, {"glass", RenderStyle::Glass}, {"hidden", RenderStyle::Hidden}};
 constexpr Choices<EmitterType> kEmitterTypes[] = {
@@ -683,6 +684,26 @@ GeometryConfig read_geometry(TableReader r, std::size_t index, const std::string
     case GeometryType::Heightmap:
       read_heightmap(r, g, scene_path);
       break;
+    case GeometryType::Mesh: {
+      r.read("file", g.mesh_file);
+      if (g.mesh_file.empty()) r.fail_at("type", r.name("file") + ": a mesh needs its file");
+      r.read("scale", g.scale, kPositive);
+      r.read("size", g.mesh_size, kPositive);
+      if (g.scale && g.mesh_size)
+        r.fail_at("size", r.name("size") + ": give either scale or size, not both");
+      r.read("rotation", g.rotation_deg);
+      r.read("position", g.position);
+      std::string fallback = "none";
+      r.read("fallback", fallback);
+      if (fallback != "none" && fallback != "box")
+        r.fail_at("fallback", r.name("fallback") + " = \"" + fallback +
+                                  "\": expected \"none\" or \"box\"");
+      g.fallback_box = fallback == "box";
+      r.read("fallback_size", g.fallback_size, kPositive);
+      r.read("particle_radius", g.particle_radius, kPositive);
+      r.finish("a mesh");
+      break;
+    }
   }
   return g;
 }

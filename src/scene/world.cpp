@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "core/hash.hpp"
+#include "geometry/mesh_sampling.hpp"
 
 namespace sandflow {
 
@@ -75,6 +76,25 @@ DemParams dem_params(const SceneConfig& scene) {
   return p;
 }
 
+// The meshes' particle surfaces: spheres spaced sqrt(2) r_b apart at most, so that no grain can
+// touch a mesh without touching one of them (geometry/mesh_sampling.hpp).
+BoundaryParticles boundary_particles(const Geometry& geometry) {
+  BoundaryParticles b;
+  for (std::uint32_t k = 0; k < geometry.meshes().size(); ++k) {
+    const MeshObstacle& m = geometry.meshes()[k];
+    if (b.radius > 0 && m.particle_radius != b.radius)
+      throw InputError(m.name + ": particle_radius must be the same for every mesh of a scene");
+    b.radius = m.particle_radius;
+    for (const Vec3& p : sample_surface(m.mesh, std::sqrt(2.0) * m.particle_radius)) {
+      b.x.push_back(p);
+      b.group.push_back(k);
+    }
+    b.friction.push_back(m.friction);
+    b.rolling_friction.push_back(m.rolling_friction);
+  }
+  return b;
+}
+
 SceneConfig with_stiffness(SceneConfig scene, const Stiffness& s) {
   scene.material.k_n = s.k_n;
   return scene;
@@ -82,12 +102,13 @@ SceneConfig with_stiffness(SceneConfig scene, const Stiffness& s) {
 }  // namespace
 
 World::World(const SceneConfig& scene)
-    : geometry_(Geometry::from_config(scene.geometry, scene.material)),
+    : geometry_(Geometry::from_config(scene.geometry, scene.material, scene.path)),
       stiffness_(choose_stiffness(scene, scene.simulation.mode, geometry_)),
       scene_(with_stiffness(scene, stiffness_)),
       ts_(choose_time_step(scene_)),
       dem_(dem_params(scene_)),
       rng_(scene.simulation.seed) {
+  if (!geometry_.meshes().empty()) dem_.set_boundary(boundary_particles(geometry_));
   if (scene_.simulation.mode == Mode::Surface)
     surface_ = std::make_unique<SurfaceFlow>(surface_params(scene_, geometry_, ts_.dt), geometry_);
   for (std::size_t k = 0; k < scene.emitters.size(); ++k)
