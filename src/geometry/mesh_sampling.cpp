@@ -78,12 +78,12 @@ void check_sample_count(const TriangleMesh& mesh, Real spacing) {
 
 }  // namespace
 
-std::vector<Vec3> sample_surface(const TriangleMesh& mesh, Real spacing) {
+std::vector<Vec3> sample_surface(const TriangleMesh& mesh, Real spacing, Real merge) {
   if (!(spacing > 0) || !std::isfinite(spacing))
     throw std::invalid_argument("sample_surface: spacing must be positive and finite");
   check_sample_count(mesh, spacing);
   std::vector<Vec3> samples;
-  MergeGrid grid(spacing / 8);
+  MergeGrid grid(merge > 0 ? merge : spacing / 8);
   for (const auto& t : mesh.triangles) {
     const Vec3 &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]], &c = mesh.vertices[t[2]];
     const std::uint64_t n = subdivisions(a, b, c, spacing);

@@ -44,6 +44,9 @@ constexpr Real covering_radius(Real spacing) {
 /// Samples covering every triangle (edges and vertices included), in a deterministic order.
 /// spacing must be positive and finite (std::invalid_argument); InputError when the mesh would
 /// need more than kMaxSurfaceSamples points at that spacing (refused before allocating).
-std::vector<Vec3> sample_surface(const TriangleMesh& mesh, Real spacing);
+/// `merge` (default, when 0: spacing / 8) replaces spacing / 8 above: every surface point is then
+/// within spacing / sqrt(3) + merge of a sample, and no two samples are closer than merge. A
+/// large merge with a small spacing thins a mesh finer than the spacing (a scan's vertices).
+std::vector<Vec3> sample_surface(const TriangleMesh& mesh, Real spacing, Real merge = 0);
 
 }  // namespace sandflow

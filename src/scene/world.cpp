@@ -76,8 +76,10 @@ DemParams dem_params(const SceneConfig& scene) {
   return p;
 }
 
-// The meshes' particle surfaces: spheres spaced sqrt(2) r_b apart at most, so that no grain can
-// touch a mesh without touching one of them (geometry/mesh_sampling.hpp).
+// The meshes' particle surfaces: every surface point within 0.99 r_b of a particle's centre
+// (spacing r_b / 2, merged within 0.7 r_b: geometry/mesh_sampling.hpp), so that no grain can touch
+// a mesh without overlapping one of them; the merge keeps a fine scan from giving a particle per
+// vertex.
 BoundaryParticles boundary_particles(const Geometry& geometry) {
   BoundaryParticles b;
   for (std::uint32_t k = 0; k < geometry.meshes().size(); ++k) {
@@ -85,7 +87,8 @@ BoundaryParticles boundary_particles(const Geometry& geometry) {
     if (b.radius > 0 && m.particle_radius != b.radius)
       throw InputError(m.name + ": particle_radius must be the same for every mesh of a scene");
     b.radius = m.particle_radius;
-    for (const Vec3& p : sample_surface(m.mesh, std::sqrt(2.0) * m.particle_radius)) {
+    const Real rb = m.particle_radius;
+    for (const Vec3& p : sample_surface(m.mesh, 0.5 * rb, 0.7 * rb)) {
       b.x.push_back(p);
       b.group.push_back(k);
     }
