@@ -143,14 +143,13 @@ struct Bounds {
   Real radius() const { return std::max(0.5 * norm(hi - lo), Real(1e-6)); }
 };
 
-// What the picture should show: the grains, or without grains the finite geometry.
+// What the picture should show: the grains and the finite geometry (a bowl, a box, a mesh).
 Bounds scene_bounds(const FrameData& f, const std::vector<GeometryConfig>& geometry,
                     const std::vector<const TriangleMesh*>& meshes) {
   Bounds b;
   for (std::size_t i = 0; i < f.size(); ++i) {
     if (is_finite(f.position[i])) b.add(f.position[i], f.radius[i]);
   }
-  if (!b.empty) return b;
   for (std::size_t k = 0; k < geometry.size(); ++k) {
     const GeometryConfig& g = geometry[k];
     if (g.render == RenderStyle::Hidden) continue;
@@ -203,11 +202,10 @@ Framed framing_points(const FrameData& f, const Bounds& b) {
     out.p.push_back(f.position[i]);
     out.r.push_back(f.radius[i]);
   }
-  if (out.p.empty()) {
-    for (int k = 0; k < 8; ++k) {
-      out.p.push_back({k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z});
-      out.r.push_back(0);
-    }
+  // the corners of the bounds too: the camera stays outside a container or an obstacle
+  for (int k = 0; k < 8; ++k) {
+    out.p.push_back({k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z});
+    out.r.push_back(0);
   }
   return out;
 }
@@ -216,7 +214,8 @@ Framed framing_points(const FrameData& f, const Bounds& b) {
 // its radius) to fit the field of view with a 10 % border, and re-aimed at the middle of what the
 // picture shows (the bounding box's centre leaves the empty corners above a heap on screen).
 Camera auto_camera(const Framed& pts, const Bounds& b, const PovOptions& opt) {
-  const Vec3 view = normalized({1.0, -1.4, 0.8});  // from the target towards the camera
+  // from the target towards the camera: 35 degrees up, so that it sees into a bowl or a box
+  const Vec3 view = normalized({1.0, -1.4, 1.2});
   const Vec3 fwd = -view;
   const Vec3 right = normalized(cross(fwd, {0, 0, 1}));
   const Vec3 up = cross(right, fwd);
