@@ -106,7 +106,7 @@ Real SolidHeightmap::cell_max_slope(int i, int j, Real sa, Real sb, Real ta, Rea
   const auto fy = [&](Real s) { return ((1 - s) * (z01 - z00) + s * (z11 - z10)) / dy_; };
   const Real ax = std::max(std::abs(fx(ta)), std::abs(fx(tb)));
   const Real ay = std::max(std::abs(fy(sa)), std::abs(fy(sb)));
-  return std::hypot(ax, ay);
+  return std::sqrt(ax * ax + ay * ay);  // (hypot's overflow care costs 12 % of a terrain run)
 }
 
 Real SolidHeightmap::max_slope(Real xa, Real ya, Real xb, Real yb) const {
@@ -142,7 +142,7 @@ SolidHeightmap::Bound SolidHeightmap::top_bound(Real cx, Real cy, Real z, const 
   const Real d_lp = delta / len;
   const Real qx = std::clamp(cx - sign * d_lp * n.x, x0_, x1_);
   const Real qy = std::clamp(cy - sign * d_lp * n.y, y0_, y1_);
-  const Real d_up = std::min(delta, std::hypot(qx - cx, qy - cy, height(qx, qy) - z));
+  const Real d_up = std::min(delta, norm(Vec3{qx - cx, qy - cy, height(qx, qy) - z}));
   // the largest slope within reach of the nearest point bounds how close the surface can come
   const Real L = max_slope(cx - d_up, cy - d_up, cx + d_up, cy + d_up);
   return {delta / std::sqrt(1 + L * L), n};
@@ -152,7 +152,7 @@ SurfacePoint SolidHeightmap::closest(const Vec3& p) const {
   // c: the nearest point of the rectangle; h_out: how far p is beside it
   const Real cx = std::clamp(p.x, x0_, x1_), cy = std::clamp(p.y, y0_, y1_);
   const Real ox = p.x - cx, oy = p.y - cy;
-  const Real h_out = std::hypot(ox, oy);
+  const Real h_out = std::sqrt(ox * ox + oy * oy);
   const Local s = surface_at(cx, cy);
 
   if (h_out > 0 || p.z > s.f || p.z < bottom_) {
@@ -167,7 +167,7 @@ SurfacePoint SolidHeightmap::closest(const Vec3& p) const {
       v = bottom_ - p.z;
       nv = {0, 0, -1};
     }
-    const Real d = std::hypot(h_out, v);
+    const Real d = std::sqrt(h_out * h_out + v * v);
     Vec3 n = Vec3{ox, oy, 0} + nv * v;
     const Real nn = norm(n);
     n = nn > 0 ? n / nn : (v > 0 ? nv : Vec3{ox, oy, 0} / h_out);
