@@ -362,6 +362,17 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
 
       const Real r_i = r[i];
       Vec3 torque = tr + q * (-r_i);
+      // a contact with something that never moves (a wall, a boundary particle): i alone feels it
+      auto touch_fixed = [&](const ContactParams& p, const ContactGeometry& cg, Vec3& xi, Vec3& psi) {
+        ContactHistory h{xi, psi};
+        const ContactForce cf = contact_force<kRolling>(p, cg, v[i], w[i], Vec3{}, h, dt);
+        xi = h.xi;
+        psi = h.psi;
+        f += cf.force_i;
+        torque += cf.torque_i(cg);
+        ++wall_contacts;
+        max_ov = std::max(max_ov, cg.delta / (2 * r_i));
+      };
       // walls: the same law, the obstacle an immovable body with no radius
       for (std::uint32_t s = walls_.start[i]; s < walls_.start[i + 1]; ++s) {
         const std::uint32_t k = walls_.obstacle[s];
@@ -373,15 +384,8 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
           continue;
         }
         const ContactParams& wp = wall_params_[k];
-        const ContactGeometry cg{sp.normal, delta, r_i, 0.0, normal_damping(wp, grains.m[i]), r_i};
-        ContactHistory h{walls_.xi[s], walls_.psi[s]};
-        const ContactForce cf = contact_force<kRolling>(wp, cg, v[i], w[i], Vec3{}, h, dt);
-        walls_.xi[s] = h.xi;
-        walls_.psi[s] = h.psi;
-        f += cf.force_i;
-        torque += cf.torque_i(cg);
-        ++wall_contacts;
-        max_ov = std::max(max_ov, delta / (2 * r_i));
+        touch_fixed(wp, {sp.normal, delta, r_i, 0.0, normal_damping(wp, grains.m[i]), r_i},
+                    walls_.xi[s], walls_.psi[s]);
       }
       // boundary particles: a grain that never moves, damped as against a wall
       const Real rb = boundary_.radius;
@@ -395,16 +399,9 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
         }
         const ContactParams& bp = boundary_params_[boundary_.group[bounds_.obstacle[s]]];
         const Real dist = std::sqrt(dist2);
-        const ContactGeometry cg{d * (1.0 / dist), rsum - dist, r_i, rb,
-                                 normal_damping(bp, grains.m[i]), r_i * rb / rsum};
-        ContactHistory h{bounds_.xi[s], bounds_.psi[s]};
-        const ContactForce cf = contact_force<kRolling>(bp, cg, v[i], w[i], Vec3{}, h, dt);
-        bounds_.xi[s] = h.xi;
-        bounds_.psi[s] = h.psi;
-        f += cf.force_i;
-        torque += cf.torque_i(cg);
-        ++wall_contacts;
-        max_ov = std::max(max_ov, cg.delta / (2 * r_i));
+        touch_fixed(bp, {d * (1.0 / dist), rsum - dist, r_i, rb, normal_damping(bp, grains.m[i]),
+                         r_i * rb / rsum},
+                    bounds_.xi[s], bounds_.psi[s]);
       }
       // symplectic Euler: velocities from the forces, then positions from the new velocities
       v[i] += (f * grains.inv_m[i] + gravity) * dt;
