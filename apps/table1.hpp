@@ -1,6 +1,6 @@
 // `sandflow table1`: the paper's Table 1 (Zhu & Yang 2010) measured again, each scene run in both
 // modes by the same code as `sandflow compare`. This header holds the paper's figures and the
-// formatting of the table (CSV, Markdown, text); running the scenes is in sandflow.cpp.
+// formatting of the table (CSV, Markdown, text); running the scenes is in table1.cpp.
 //
 // The rows of the CSV are the scenes that ran, numbers only, so it reads as data; the Markdown
 // and the printed table also list the scenes that were skipped (no scene file), failed (with

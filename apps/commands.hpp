@@ -1,0 +1,89 @@
+// The commands of `sandflow`, one file each (run.cpp, compare.cpp, table1.cpp, render.cpp), and
+// what they share: the options of a run, the run driver and the comparison of two runs.
+// main() in sandflow.cpp parses the command line and maps the errors to exit codes.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "analysis/heap.hpp"
+#include "analysis/surface_diff.hpp"
+#include "scene/world.hpp"
+
+namespace sandflow {
+
+struct RunOptions {
+  std::string scene;
+  std::string mode;
+  std::string out;
+  int frames = 0;
+  std::int64_t grains = 0;
+  int threads = 0;
+  std::vector<std::string> sets;
+  bool check = false;
+  bool force = false;
+  bool profile = false;
+};
+
+struct Table1Options {
+  double scale = 1;
+  int frames = 0;
+  int threads = 0;
+  std::string out = "out/table1";
+  std::string scene_dir;
+  std::vector<std::string> scenes;
+  bool force = false;
+};
+
+struct RenderOptions {
+  std::string dir;
+  int width = 1280, height = 720;
+  int frame = 0;  ///< 0: the last
+};
+
+std::string mode_name(Mode m);
+/// The scene of a run: the file, its --set overrides, --mode, --grains, --frames, --threads.
+SceneConfig load_for_run(const RunOptions& o);
+int thread_count(const SceneConfig& scene);
+
+/// What a finished run leaves for the caller: its summary and its final grains.
+struct RunResult {
+  nlohmann::json summary;
+  std::vector<FrameStats> frames;
+  std::vector<Vec3> x;  ///< every grain's centre at the end
+  std::vector<Real> r;
+  double wall_seconds = 0;
+  HeapFit heap;
+};
+
+/// Runs a scene into `out` (prepared by the caller), writing stats.csv, frames and summary.json.
+/// `label` prefixes the progress line (table1's "scene k of n: ").
+RunResult run_scene(const SceneConfig& scene, const std::string& out, const std::string& label = "");
+
+/// Both runs of a scene and the figures compared (what compare.json holds).
+struct Comparison {
+  RunResult surface, dem;
+  SurfaceDiff diff;
+  nlohmann::json json;
+};
+
+/// The shared part of `compare` and `table1`: runs `scene` in surface mode into OUT/surface, then
+/// in plain DEM into OUT/dem, compares the two final surfaces and writes OUT/compare.json.
+/// OUT is prepared here (see prepare_compare_dir); `label` prefixes the progress lines.
+Comparison compare_scene(const SceneConfig& scene, const std::string& out, bool force,
+                         const std::string& label = "");
+
+/// The last frame file of a run folder (InputError when it has none).
+std::string last_frame(const std::string& dir);
+
+int run_command(const RunOptions& o);
+int measure_command(const std::string& dir);
+int compare_command(const RunOptions& o);
+/// `command`: the command line as typed, recorded in table1.md.
+int table1_command(const Table1Options& o, const std::string& command);
+int render_command(const RenderOptions& o);
+
+}  // namespace sandflow

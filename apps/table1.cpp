@@ -1,0 +1,191 @@
+// `sandflow table1`: the paper's scenes, each compared as `sandflow compare` does, tabulated.
+#include <omp.h>
+
+#include <algorithm>
+#include <ctime>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "commands.hpp"
+#include "core/error.hpp"
+#include "io/run_output.hpp"
+#include "scene/scene_loader.hpp"
+#include "table1.hpp"
+
+namespace fs = std::filesystem;
+
+namespace sandflow {
+
+namespace {
+
+/// Where table1 finds scenes/<name>.toml: --scene-dir when given, else ./scenes when the current
+/// folder has one (as `run` and `compare` take paths from the current folder), else the scenes/
+/// of the source tree this binary was built from.
+std::string table1_scene_dir(const std::string& given) {
+  std::error_code ec;
+  if (!given.empty()) {
+    if (!fs::is_directory(given, ec))
+      throw InputError(fmt::format("--scene-dir {}: no such folder", given));
+    return given;
+  }
+  if (fs::is_directory("scenes", ec)) return "scenes";
+  return (fs::path(SANDFLOW_SOURCE_DIR) / "scenes").string();
+}
+
+/// The scenes asked for, checked against the paper's five: unknown or repeated names are refused.
+std::vector<const PaperScene*> table1_scenes(const Table1Options& o) {
+  std::vector<const PaperScene*> list;
+  if (o.scenes.empty())
+    for (const PaperScene& p : kPaperTable1) list.push_back(&p);
+  for (const std::string& name : o.scenes) {
+    const PaperScene* p = find_paper_scene(name);
+    if (!p)
+      throw InputError(fmt::format("--scenes: unknown scene '{}'; the paper's scenes are {}", name,
+                                   known_scene_names()));
+    if (std::find(list.begin(), list.end(), p) != list.end())
+      throw InputError(fmt::format("--scenes: '{}' is listed twice", name));
+    list.push_back(p);
+  }
+  return list;
+}
+
+std::string local_date_time() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  localtime_r(&now, &tm);
+  char buf[64];
+  return std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M %Z", &tm) ? buf : "unknown date";
+}
+
+/// The row of a scene that ran, from its comparison.
+Table1Row table1_row(const std::string& name, std::int64_t total, const Comparison& c) {
+  Table1Row r;
+  r.scene = name;
+  r.status = RowStatus::Done;
+  r.total = total;
+  r.emitted = c.surface.frames.back().n_total;
+  r.surface_simulated_mean = c.surface.summary["n_simulated_mean"].get<double>();
+  r.surface_s_per_frame = c.json["seconds_per_frame_surface"].get<double>();
+  r.dem_simulated_mean = c.dem.summary["n_simulated_mean"].get<double>();
+  r.dem_s_per_frame = c.json["seconds_per_frame_dem"].get<double>();
+  r.speedup = c.json["speedup"].get<double>();
+  r.surface_rms_rel = c.diff.rms_rel;
+  r.inside_dem = c.dem.summary["grains_inside_geometry"].get<std::int64_t>();
+  r.inside_surface = c.surface.summary["grains_inside_geometry"].get<std::int64_t>();
+  return r;
+}
+
+}  // namespace
+
+int table1_command(const Table1Options& o, const std::string& command) {
+  // everything that can be refused is checked before anything is written
+  if (!(o.scale > 0) || !(o.scale <= 100))
+    throw InputError(fmt::format(
+        "--scale {}: expected a number in (0, 100], the fraction of the paper's grain counts",
+        o.scale));
+  const std::vector<const PaperScene*> scenes = table1_scenes(o);
+  for (const PaperScene* p : scenes)
+    if (scaled_count(*p, o.scale) < 1)
+      throw InputError(fmt::format("--scale {}: gives no grains for {} (round({} x {}) = 0)",
+                                   o.scale, p->name, o.scale, p->total));
+  const std::string scene_dir = table1_scene_dir(o.scene_dir);
+  std::error_code ec;
+  if (fs::exists(o.out, ec) && !fs::is_directory(o.out, ec))
+    throw InputError(fmt::format("{}: the output path exists and is not a folder", o.out));
+  if (fs::exists(o.out, ec) && !fs::is_empty(o.out, ec)) {
+    if (!o.force)
+      throw InputError(fmt::format(
+          "{}: the output folder is not empty; pass --force to replace its table", o.out));
+    for (const char* name : {"table1.csv", "table1.md"}) fs::remove(fs::path(o.out) / name, ec);
+  }
+  fs::create_directories(o.out, ec);
+  if (ec)
+    throw OutputError(fmt::format("{}: cannot create the output folder: {}", o.out, ec.message()));
+
+  std::vector<Table1Row> rows(scenes.size());
+  for (std::size_t k = 0; k < scenes.size(); ++k) rows[k].scene = std::string(scenes[k]->name);
+  Table1Context ctx{command,
+                    local_date_time(),
+                    omp_get_num_procs(),
+                    o.threads > 0 ? o.threads : omp_get_num_procs(),
+                    o.scale,
+                    o.frames};
+  // rewritten after every scene, so an interrupted run keeps the scenes that finished
+  auto write_table = [&] {
+    write_file_atomic((fs::path(o.out) / "table1.csv").string(), table1_csv(rows));
+    write_file_atomic((fs::path(o.out) / "table1.md").string(), table1_markdown(rows, ctx));
+  };
+  write_table();
+
+  int status = 0;  // of the first scene that failed
+  std::size_t ran = 0;
+  for (std::size_t k = 0; k < scenes.size(); ++k) {
+    const PaperScene& p = *scenes[k];
+    Table1Row& row = rows[k];
+    const std::string label = fmt::format("scene {} of {}: ", k + 1, scenes.size());
+    const fs::path file = fs::path(scene_dir) / (std::string(p.name) + ".toml");
+    if (!fs::exists(file, ec)) {
+      row.status = RowStatus::Missing;
+      row.message = fmt::format("no scene file {}", file.string());
+      fmt::print(stderr, "table1: {}{} skipped: {}\n", label, p.name, row.message);
+      write_table();
+      continue;
+    }
+    const std::int64_t total = scaled_count(p, o.scale);
+    auto fail = [&](const std::exception& e, int code) {
+      row.status = RowStatus::Failed;
+      row.message = e.what();
+      if (status == 0) status = code;
+      fmt::print(stderr, "\ntable1: {}{} failed: {}\n", label, p.name, row.message);
+    };
+    try {
+      RunOptions ro;
+      ro.scene = file.string();
+      ro.grains = total;
+      ro.frames = o.frames;
+      ro.threads = o.threads;
+      const SceneConfig full = load_scene(ro.scene);
+      if (full.total_grains() != p.total)
+        fmt::print(stderr,
+                   "warning: {} has {} grains, the paper's {} {}; table1 scales the paper's "
+                   "count\n",
+                   ro.scene, full.total_grains(), p.title, p.total);
+      const SceneConfig scene = load_for_run(ro);
+      if (scene.total_grains() != total)
+        throw InputError(
+            fmt::format("{}: cannot scale its emitters to {} grains", ro.scene, total));
+      ctx.threads = thread_count(scene);
+      fmt::print(stderr, "table1: {}{}, {} grains ({} x {}), surface flow then plain DEM -> {}\n",
+                 label, p.name, total, o.scale, p.total, (fs::path(o.out) / p.name).string());
+      const Comparison c =
+          compare_scene(scene, (fs::path(o.out) / p.name).string(), o.force, label);
+      row = table1_row(std::string(p.name), total, c);
+      ++ran;
+    } catch (const InputError& e) {
+      fail(e, 2);
+    } catch (const SimulationError& e) {
+      fail(e, 3);
+    } catch (const OutputError& e) {
+      fail(e, 4);
+    } catch (const std::exception& e) {
+      fail(e, 1);
+    }
+    write_table();
+  }
+
+  fmt::print("\n{}", table1_text(rows));
+  fmt::print(
+      "output  {}/ (table1.csv, table1.md, SCENE/compare.json, SCENE/dem/, SCENE/surface/)\n",
+      o.out);
+  if (status != 0) return status;
+  if (ran == 0) {
+    fmt::print(stderr, "error: no scene ran: none of the scene files was found in {}\n", scene_dir);
+    return 2;
+  }
+  return 0;
+}
+
+}  // namespace sandflow
