@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "geometry/shapes.hpp"
 #include "scene/world.hpp"
+#include "support/test_scenes.hpp"
 
 namespace sandflow {
 namespace {
@@ -36,18 +37,12 @@ GeometryConfig cube_entry() {
   return g;
 }
 
-GeometryConfig floor_entry() {
-  GeometryConfig g;
-  g.type = GeometryType::Plane;
-  return g;
-}
-
 TEST(MeshObstacle, IsScaledAndSetDownOnItsPosition) {
   const fs::path dir = cube_folder();
   MaterialConfig mat;
   mat.diameter = 0.02;
   const Geometry geo =
-      Geometry::from_config({floor_entry(), cube_entry()}, mat, (dir / "scene.toml").string());
+      Geometry::from_config({test::floor_plane(), cube_entry()}, mat, (dir / "scene.toml").string());
   ASSERT_EQ(geo.meshes().size(), 1u);
   const Aabb box = mesh_bounds(geo.meshes()[0].mesh);
   EXPECT_NEAR(box.lo.x, -0.1, 1e-12);
@@ -89,23 +84,11 @@ TEST(MeshObstacle, MissingFileIsAnErrorOrItsFallbackBox) {
 // and none may get inside it or through the floor.
 TEST(MeshObstacle, BoundaryParticlesHoldAPourAndNoGrainGetsIn) {
   const fs::path dir = cube_folder();
-  SceneConfig s;
-  s.path = (dir / "scene.toml").string();
-  s.name = "cube";
-  s.simulation.mode = Mode::Dem;
-  s.material.diameter = 0.02;
-  s.material.diameter_spread = 0.1;
-  s.material.k_n = 1e4;
+  SceneConfig s = test::grains_on_floor("cube", Mode::Dem, 0.02);
+  s.path = (dir / "scene.toml").string();  // the mesh file is looked for beside it
   s.material.rolling_friction = 0.3;
-  s.geometry = {floor_entry(), cube_entry()};
-  EmitterConfig e;
-  e.type = EmitterType::Pour;
-  e.center = {0, 0, 0.5};
-  e.radius = 0.06;
-  e.rate = 400;
-  e.count = 300;
-  e.velocity = {0, 0, -1};
-  s.emitters = {e};
+  s.geometry.push_back(cube_entry());
+  s.emitters = {test::disk_pour({0, 0, 0.5}, 0.06, 400, 300, {0, 0, -1})};
   World w(s);
   ASSERT_GT(w.dem().boundary().size(), 100u);
   for (int f = 0; f < 45; ++f) w.advance_frame();

@@ -8,30 +8,15 @@
 
 #include "core/error.hpp"
 #include "scene/world.hpp"
+#include "support/test_scenes.hpp"
 
 namespace sandflow {
 namespace {
 
 SceneConfig small_pour(std::int64_t count) {
-  SceneConfig s;
-  s.path = "test";
-  s.name = "small_pour";
-  s.simulation.mode = Mode::Dem;  // the DEM engine's own invariants; tests/surface has the rest
-  s.material.diameter = 0.01;
-  s.material.diameter_spread = 0.1;
-  s.material.k_n = 1e4;
-  s.output.fps = 30;
-  GeometryConfig floor;
-  floor.type = GeometryType::Plane;
-  s.geometry = {floor};
-  EmitterConfig e;
-  e.type = EmitterType::Pour;
-  e.center = {0, 0, 0.2};
-  e.radius = 0.06;
-  e.rate = 2000;
-  e.count = count;
-  e.velocity = {0, 0, -1};
-  s.emitters = {e};
+  // the DEM engine's own invariants; tests/surface has the rest
+  SceneConfig s = test::grains_on_floor("small_pour", Mode::Dem, 0.01);
+  s.emitters = {test::disk_pour({0, 0, 0.2}, 0.06, 2000, count, {0, 0, -1})};
   return s;
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "scene/stiffness.hpp"
+#include "support/test_scenes.hpp"
 #include "surface/surface_params.hpp"
 
 namespace sandflow {
@@ -14,9 +15,7 @@ SceneConfig pour_scene(Real height, Real speed) {
   s.path = "stiffness";
   s.material.diameter = 0.01;
   s.material.density = 2600;
-  GeometryConfig floor;
-  floor.type = GeometryType::Plane;
-  s.geometry = {floor};
+  s.geometry = {test::floor_plane()};
   EmitterConfig e;
   e.type = EmitterType::Pour;
   e.center = {0, 0, height};

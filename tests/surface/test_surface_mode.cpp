@@ -10,32 +10,16 @@
 
 #include "analysis/surface_diff.hpp"
 #include "scene/world.hpp"
+#include "support/test_scenes.hpp"
 
 namespace sandflow {
 namespace {
 
 // 2 cm grains (dt ~ 1.2e-4 s) keep these runs short.
 SceneConfig coarse_pour(std::int64_t count, Real rate) {
-  SceneConfig s;
-  s.path = "test";
-  s.name = "coarse_pour";
-  s.simulation.mode = Mode::Surface;
-  s.material.diameter = 0.02;
-  s.material.diameter_spread = 0.1;
-  s.material.k_n = 1e4;
+  SceneConfig s = test::grains_on_floor("coarse_pour", Mode::Surface, 0.02);
   s.material.rolling_friction = 0.3;
-  s.output.fps = 30;
-  GeometryConfig floor;
-  floor.type = GeometryType::Plane;
-  s.geometry = {floor};
-  EmitterConfig e;
-  e.type = EmitterType::Pour;
-  e.center = {0, 0, 0.4};
-  e.radius = 0.1;
-  e.rate = rate;
-  e.count = count;
-  e.velocity = {0, 0, -2};
-  s.emitters = {e};
+  s.emitters = {test::disk_pour({0, 0, 0.4}, 0.1, rate, count, {0, 0, -2})};
   return s;
 }
 

@@ -8,6 +8,7 @@
 
 #include "geometry/shapes.hpp"
 #include "scene/world.hpp"
+#include "support/test_scenes.hpp"
 #include "surface/height_field.hpp"
 
 namespace sandflow {
@@ -17,24 +18,12 @@ constexpr Real kInf = std::numeric_limits<Real>::infinity();
 // solid_intervals steps at least 0.1 mm near a surface: tops and bottoms are found to that
 constexpr Real kTraceTol = 1e-4;
 
-GeometryConfig plane_at(Real z) {
-  GeometryConfig g;
-  g.type = GeometryType::Plane;
-  g.point = {0, 0, z};
-  return g;
-}
-
-GeometryConfig box(const Vec3& center, const Vec3& size) {
-  GeometryConfig g;
-  g.type = GeometryType::Box;
-  g.center = center;
-  g.size = size;
-  return g;
-}
+using test::box_entry;
+using test::floor_plane;
 
 TEST(TerrainIntervals, FloorAndAShelfAboveIt) {
   const Geometry geo = Geometry::from_config(
-      {plane_at(0), box({0, 0, 0.3}, {0.2, 0.2, 0.1})}, MaterialConfig{});
+      {floor_plane(0), box_entry({0, 0, 0.3}, {0.2, 0.2, 0.1})}, MaterialConfig{});
   const auto under = geo.solid_intervals(0.05, 0.0, 1.0, -1.0);
   ASSERT_EQ(under.size(), 2u);
   EXPECT_EQ(under[0].first, -kInf);  // the floor goes on down
@@ -54,7 +43,7 @@ TEST(TerrainIntervals, OpenContainerHoldsItsFloorAboveTheGround) {
   cup.radius = 0.1;
   cup.height = 0.1;
   cup.wall_thickness = 0.02;
-  const Geometry geo = Geometry::from_config({plane_at(0), cup}, MaterialConfig{});
+  const Geometry geo = Geometry::from_config({floor_plane(0), cup}, MaterialConfig{});
   const auto inside = geo.solid_intervals(0, 0, 1.0, -1.0);
   ASSERT_EQ(inside.size(), 2u);
   EXPECT_NEAR(inside[1].first, 0.13, kTraceTol);   // the cup's bottom plate, 2 cm thick
@@ -122,24 +111,10 @@ TEST(TerrainLevels, SandOnTheShelfWinsAndItsStaticLayerStartsThere) {
 // floor, some of it under the shelf. The height field must keep every grain under the shelf moving
 // (it cannot see them), no grain may end inside the shelf, and none may be lost.
 TEST(TerrainLevels, PourOverAShelfEdgeKeepsTheGrainsUnderItActive) {
-  SceneConfig s;
-  s.path = "test";
-  s.name = "shelf";
-  s.simulation.mode = Mode::Surface;
-  s.material.diameter = 0.02;
-  s.material.diameter_spread = 0.1;
-  s.material.k_n = 1e4;
+  SceneConfig s = test::grains_on_floor("shelf", Mode::Surface, 0.02);
   s.material.rolling_friction = 0.3;
-  s.output.fps = 30;
-  s.geometry = {plane_at(0), box({-0.15, 0, 0.15}, {0.3, 0.3, 0.04})};  // shelf x in [-0.3, 0]
-  EmitterConfig e;
-  e.type = EmitterType::Pour;
-  e.center = {0.0, 0, 0.45};
-  e.radius = 0.08;
-  e.rate = 1000;
-  e.count = 900;
-  e.velocity = {0, 0, -1};
-  s.emitters = {e};
+  s.geometry.push_back(box_entry({-0.15, 0, 0.15}, {0.3, 0.3, 0.04}));  // shelf x in [-0.3, 0]
+  s.emitters = {test::disk_pour({0.0, 0, 0.45}, 0.08, 1000, 900, {0, 0, -1})};
   World w(s);
   const HeightField& hf = w.surface()->height_field();
   bool shelf_held_sand = false, floor_held_sand = false;
