@@ -43,7 +43,7 @@ void prepare_compare_dir(const std::string& out, bool force) {
     if (!force)
       throw InputError(fmt::format(
           "{}: the output folder is not empty; pass --force to replace its comparison", out));
-    for (const char* name : {"compare.json", "dem", "surface"})
+    for (const char* name : {"compare.json", "dem", "surface", "report.html"})
       fs::remove_all(fs::path(out) / name, ec);
   }
   prepare_output_dir((fs::path(out) / "surface").string(), false);

@@ -132,7 +132,9 @@ int main(int argc, char** argv) {
       "simulated, interface and static; seconds per frame; dt; transitions) and a contact sheet.\n"
       "A compare folder: both modes on shared axes, the speed-up and the two final frames side by\n"
       "side (and each run's own page). A table1 folder: each scene's page and an index.\n"
-      "Frames without a picture in DIR/render/ are rendered with POV-Ray (480x270 for the sheet).");
+      "Frames without a picture in DIR/render/ are rendered with POV-Ray: 480x270 for the\n"
+      "contact sheet; the final frames of a comparison at 640x360, or at the size of the one\n"
+      "already rendered. `run` and `compare` write the page without pictures.");
 
   try {
     app.parse(argc, argv);

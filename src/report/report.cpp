@@ -1,5 +1,6 @@
 #include "report/report.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -64,10 +65,13 @@ std::string fixed(const json& j, std::initializer_list<const char*> path, int de
   return v ? fmt::format("{:.{}f}{}", *v, decimals, unit) : kDash;
 }
 
+/// 3 significant digits; small values as 1.01e-04 rather than 0.000101
 std::string general(const json& j, std::initializer_list<const char*> path,
                     const std::string& unit = "") {
   const auto v = number(j, path);
-  return v ? fmt::format("{:.3g}{}", *v, unit) : kDash;
+  if (!v) return kDash;
+  const bool sci = *v != 0 && std::abs(*v) < 1e-3;
+  return sci ? fmt::format("{:.2e}{}", *v, unit) : fmt::format("{:.3g}{}", *v, unit);
 }
 
 std::string percent(const json& j, std::initializer_list<const char*> path) {
@@ -100,6 +104,7 @@ th { color: #444; }
 .plots { display: grid; grid-template-columns: repeat(auto-fill, minmax(560px, 1fr)); gap: 1em; }
 svg.plot { width: 100%; height: auto; max-width: 640px; }
 .sheet { display: grid; grid-template-columns: repeat(auto-fill, minmax(280px, 1fr)); gap: 0.8em; }
+.wide { overflow-x: auto; }
 .pair { display: grid; grid-template-columns: 1fr 1fr; gap: 1em; }
 figure { margin: 0; }
 figure img { width: 100%; height: auto; border: 1px solid #ccc; display: block; }
@@ -535,22 +540,58 @@ std::string compare_report_html(const CompareReportData& c) {
               body, c.dir);
 }
 
+/// table1.csv's columns as the page heads them, and how their numbers read
+struct Table1Column {
+  const char* name;
+  const char* head;
+  std::string (*format)(double);
+};
+const Table1Column kTable1Columns[] = {
+    {"total", "grains", [](double v) { return count(v); }},
+    {"surface_simulated_mean", "surface flow: simulated grains (mean)",
+     [](double v) { return count(v); }},
+    {"surface_s_per_frame", "surface flow: s/frame",
+     [](double v) { return fmt::format("{:.3f}", v); }},
+    {"dem_simulated_mean", "plain DEM: simulated grains (mean)", [](double v) { return count(v); }},
+    {"dem_s_per_frame", "plain DEM: s/frame", [](double v) { return fmt::format("{:.3f}", v); }},
+    {"speedup", "speed-up", [](double v) { return fmt::format("{:.2f}\u00d7", v); }},
+    {"surface_rms_rel", "surfaces apart (RMS / heap height)",
+     [](double v) { return fmt::format("{:.1f} %", 100 * v); }},
+    {"grains_inside_geometry", "grains inside geometry", [](double v) { return count(v); }},
+};
+
 std::string table1_report_html(const Table1ReportData& t) {
-  std::string tab = "<table>\n<tr>";
-  for (const std::string& c : t.columns) tab += "<th>" + html_escape(c) + "</th>";
+  auto column = [](const std::string& name) -> const Table1Column* {
+    for (const Table1Column& c : kTable1Columns)
+      if (name == c.name) return &c;
+    return nullptr;
+  };
+  std::string tab = "<div class=\"wide\"><table>\n<tr>";
+  for (const std::string& c : t.columns)
+    tab += "<th>" + html_escape(column(c) ? column(c)->head : c) + "</th>";
   tab += "</tr>\n";
   for (const auto& r : t.rows) {
     tab += "<tr>";
     for (std::size_t k = 0; k < r.size(); ++k) {
-      const bool link = k == 0 && std::find(t.linked.begin(), t.linked.end(), r[0]) != t.linked.end();
-      tab += std::string(k ? "<td class=\"num\">" : "<td>") +
-             (link ? "<a href=\"" + html_escape(r[0]) + "/report.html\">" + html_escape(r[0]) + "</a>"
-                   : html_escape(r[k])) +
-             "</td>";
+      if (k == 0) {
+        const bool link = std::find(t.linked.begin(), t.linked.end(), r[0]) != t.linked.end();
+        tab += "<td>" + (link ? "<a href=\"" + html_escape(r[0]) + "/report.html\">" +
+                                    html_escape(r[0]) + "</a>"
+                              : html_escape(r[0])) +
+               "</td>";
+        continue;
+      }
+      // a number of a known column formatted, anything else as written
+      std::string v = r[k];
+      double x = 0;
+      const auto [end, ec] = std::from_chars(r[k].data(), r[k].data() + r[k].size(), x);
+      const Table1Column* c = k < t.columns.size() ? column(t.columns[k]) : nullptr;
+      if (c && ec == std::errc() && end == r[k].data() + r[k].size()) v = c->format(x);
+      tab += "<td class=\"num\">" + html_escape(v) + "</td>";
     }
     tab += "</tr>\n";
   }
-  tab += "</table>\n";
+  tab += "</table></div>\n";
   if (t.rows.empty()) tab += note("table1.csv has no rows: no scene has finished yet.");
   std::string body = section("summary", "Table 1 (table1.csv)", tab);
   std::string scenes;

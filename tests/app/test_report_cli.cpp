@@ -163,3 +163,28 @@ TEST(ReportCli, ContactSheetIsRenderedWithPovray) {
   ASSERT_EQ(sandflow("report " + out.string() + " --no-render", &log), 0) << log;
   EXPECT_EQ(sandflow_test::occurrences(read_text(out / "report.html"), "<img "), 1u);
 }
+
+TEST(ReportCli, Table1FolderGetsAnIndexOfTheScenesReports) {
+  Sandbox box;
+  const auto out = box.dir / "t1";
+  std::string log;
+  // the floor at a hundredth of the paper's count (1,077 grains), two frames per mode
+  ASSERT_EQ(sandflow("table1 --scale 0.01 --frames 2 --scenes floor --out " + out.string() +
+                         " --scene-dir " + SANDFLOW_SOURCE_DIR + "/scenes",
+                     &log),
+            0)
+      << log;
+  EXPECT_TRUE(fs::exists(out / "floor" / "report.html"));  // compare_scene writes it
+  ASSERT_EQ(sandflow("report " + out.string() + " --no-render", &log), 0) << log;
+  const std::string html = read_text(out / "report.html");
+  EXPECT_EQ(html_problem(html), "");
+  for (const char* id : {"summary", "scenes"})
+    EXPECT_NE(html.find(std::string("<section id=\"") + id + "\">"), std::string::npos) << id;
+  EXPECT_NE(html.find("<a href=\"floor/report.html\">floor</a>"), std::string::npos);
+  EXPECT_NE(html.find("1,077"), std::string::npos);
+  EXPECT_EQ(html_problem(read_text(out / "floor" / "report.html")), "");
+  // a row of table1.csv cut short: the file and the line
+  box.write("t1/table1.csv", read_text(out / "table1.csv") + "bowl,3181,12\n");
+  EXPECT_EQ(sandflow("report " + out.string() + " --no-render", &log), 2) << log;
+  EXPECT_NE(log.find((out / "table1.csv").string() + ":3: 3 fields"), std::string::npos) << log;
+}
