@@ -63,14 +63,15 @@ std::string why_no_render(const std::string& dir, bool render) {
 }
 
 /// The contact sheet: `n` frames evenly spaced, rendered when missing and `render`; otherwise the
-/// PNGs already in DIR/render/.
-void fill_contact_sheet(RunReportData& run, int n, bool render) {
+/// PNGs already in DIR/render/. `top`: the folder to name in `sandflow report TOP` (a
+/// comparison's, for its runs).
+void fill_contact_sheet(RunReportData& run, int n, bool render, const std::string& top) {
   if (n <= 0) {
     run.sheet_note = "No contact sheet asked for (--contact-sheet 0).";
     return;
   }
   const std::vector<int> frames = list_frames(run.dir);
-  const std::string cannot = why_no_render(run.dir, render);
+  const std::string cannot = why_no_render(top, render);
   std::vector<int> chosen;
   if (cannot.empty()) {
     if (frames.empty()) {
@@ -129,7 +130,7 @@ void fill_final_frames(CompareReportData& c, bool render) {
 
 std::string write_run_report(const std::string& dir, const ReportOptions& o) {
   RunReportData run = load_run_report_data(dir);
-  fill_contact_sheet(run, o.contact_sheet, o.render);
+  fill_contact_sheet(run, o.contact_sheet, o.render, dir);
   const std::string path = (fs::path(dir) / "report.html").string();
   write_file_atomic(path, run_report_html(run));
   return path;
@@ -138,8 +139,8 @@ std::string write_run_report(const std::string& dir, const ReportOptions& o) {
 std::string write_compare_report(const std::string& dir, const ReportOptions& o) {
   CompareReportData c = load_compare_report_data(dir);
   fill_final_frames(c, o.render);
-  fill_contact_sheet(c.surface, o.contact_sheet, o.render);
-  fill_contact_sheet(c.dem, o.contact_sheet, o.render);
+  fill_contact_sheet(c.surface, o.contact_sheet, o.render, dir);
+  fill_contact_sheet(c.dem, o.contact_sheet, o.render, dir);
   // each run's own page too (its pictures are rendered already)
   write_file_atomic((fs::path(c.surface.dir) / "report.html").string(), run_report_html(c.surface));
   write_file_atomic((fs::path(c.dem.dir) / "report.html").string(), run_report_html(c.dem));

@@ -93,6 +93,9 @@ TEST(ReportCli, TinyCompareReportHasBothModes) {
     dem += l.series.rfind("plain DEM: ", 0) == 0;
     surface += l.series.rfind("surface flow: ", 0) == 0;
   }
+  // no picture yet: the page names the command that adds them, for the comparison as a whole
+  EXPECT_NE(section_of(html, "contact-sheet").find("sandflow report " + out.string() + "`"),
+            std::string::npos);
   EXPECT_EQ(dem, 3);       // simulated, seconds, dt
   EXPECT_EQ(surface, 10);  // 4 counts, seconds, dt, 4 transitions
   EXPECT_EQ(html.find("http"), std::string::npos);
@@ -187,4 +190,25 @@ TEST(ReportCli, Table1FolderGetsAnIndexOfTheScenesReports) {
   box.write("t1/table1.csv", read_text(out / "table1.csv") + "bowl,3181,12\n");
   EXPECT_EQ(sandflow("report " + out.string() + " --no-render", &log), 2) << log;
   EXPECT_NE(log.find((out / "table1.csv").string() + ":3: 3 fields"), std::string::npos) << log;
+}
+
+TEST(ReportCli, WithoutPovrayTheSheetSaysHowToGetIt) {
+  Sandbox box;
+  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto out = box.dir / "run";
+  std::string log;
+  ASSERT_EQ(sandflow("run " + scene.string() + " --frames 2 --grains 50 --out " + out.string(),
+                     &log),
+            0)
+      << log;
+  // a PATH without povray (the binary itself is called by its full path)
+  const std::string path = std::getenv("PATH") ? std::getenv("PATH") : "";
+  setenv("PATH", (box.dir / "no-such-bin").c_str(), 1);
+  const int rc = sandflow("report " + out.string(), &log);
+  setenv("PATH", path.c_str(), 1);
+  ASSERT_EQ(rc, 0) << log;
+  const std::string sheet = section_of(read_text(out / "report.html"), "contact-sheet");
+  EXPECT_NE(sheet.find("POV-Ray is not installed"), std::string::npos) << sheet;
+  EXPECT_NE(sheet.find("sudo apt-get install povray"), std::string::npos) << sheet;
+  EXPECT_FALSE(fs::exists(out / "render"));
 }
