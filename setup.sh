@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # sandflow set-up: installs what is missing (Debian 12 packages), builds in Release, then
-#   ./setup.sh demo   runs the default scene (floor, 20,000 grains) and renders its last frame
+#   ./setup.sh demo   runs the default scene (floor, 20,000 grains), renders its last frame and
+#                     writes its report (out/floor-demo/report.html)
 #   ./setup.sh test   runs the whole test suite
 # Options (environment): SANDFLOW_DEMO_GRAINS (default 20000; the full scene has 107687),
 #   SANDFLOW_BUILD (build folder, default build), SANDFLOW_SANITIZE=1 (ASan + UBSan build).
@@ -53,5 +54,9 @@ elif [ "$what" = demo ]; then
   "./$build/sandflow" run scenes/floor.toml --grains "$grains" --out "$out" --force
   echo "==> rendering the last frame with POV-Ray"
   png=$("./$build/sandflow" render "$out" --width 1280 --height 720)
-  echo "==> done: picture $png, summary $out/summary.json, statistics $out/stats.csv"
+  echo "==> writing the report: summary, plots, and a contact sheet of frames rendered with POV-Ray"
+  "./$build/sandflow" report "$out" > /dev/null
+  echo "==> done: summary $out/summary.json, statistics $out/stats.csv"
+  echo "picture  $png"
+  echo "report   $out/report.html"
 fi

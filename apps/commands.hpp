@@ -44,6 +44,13 @@ struct RenderOptions {
   int frame = 0;  ///< 0: the last
 };
 
+/// `sandflow report` (report.cpp)
+struct ReportOptions {
+  std::string dir;
+  int contact_sheet = 6;  ///< frames on the contact sheet (0: none)
+  bool render = true;     ///< render the frames the page shows that have no PNG yet
+};
+
 std::string mode_name(Mode m);
 /// The scene of a run: the file, its --set overrides, --mode, --grains, --frames, --threads.
 SceneConfig load_for_run(const RunOptions& o);
@@ -85,5 +92,8 @@ int compare_command(const RunOptions& o);
 /// `command`: the command line as typed, recorded in table1.md.
 int table1_command(const Table1Options& o, const std::string& command);
 int render_command(const RenderOptions& o);
+/// Writes DIR/report.html for a run, compare or table1 folder and returns its path.
+std::string write_report(const ReportOptions& o);
+int report_command(const ReportOptions& o);
 
 }  // namespace sandflow

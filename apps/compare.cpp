@@ -43,7 +43,7 @@ void prepare_compare_dir(const std::string& out, bool force) {
     if (!force)
       throw InputError(fmt::format(
           "{}: the output folder is not empty; pass --force to replace its comparison", out));
-    for (const char* name : {"compare.json", "dem", "surface"})
+    for (const char* name : {"compare.json", "dem", "surface", "report.html"})
       fs::remove_all(fs::path(out) / name, ec);
   }
   prepare_output_dir((fs::path(out) / "surface").string(), false);
@@ -118,6 +118,8 @@ Comparison compare_scene(const SceneConfig& scene, const std::string& out, bool 
       {"threads", thread_count(scene)},
   };
   write_file_atomic((fs::path(out) / "compare.json").string(), c.json.dump(2) + "\n");
+  // the page of both runs (and each run's own), without pictures: `sandflow report` adds them
+  write_report({out, 6, false});
   return c;
 }
 
@@ -160,6 +162,8 @@ int compare_command(const RunOptions& o) {
       j["speedup"].get<double>(), c.diff.rms, 100 * c.diff.rms_rel, c.diff.heap_height,
       k_dem == k_surf ? "the same" : "a different");
   fmt::print("output           {}/ (compare.json, dem/, surface/)\n", out);
+  fmt::print("report           {} (plots; `sandflow report {}` adds pictures)\n",
+             (fs::path(out) / "report.html").string(), out);
   return 0;
 }
 

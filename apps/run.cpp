@@ -245,6 +245,8 @@ int run_command(const RunOptions& o) {
   fmt::print("max overlap      {:.2f} % of a diameter\n", 100 * s["max_overlap_rel"].get<double>());
   fmt::print("state hash       {}\n", s["state_hash"].get<std::string>());
   fmt::print("output           {}/ (stats.csv, summary.json, frames/)\n", out);
+  fmt::print("report           {} (plots; `sandflow report {}` adds pictures)\n",
+             write_report({out, 6, false}), out);
   if (o.profile) {
     fmt::print("stage seconds   ");
     for (const auto& [k, v] : s["stage_seconds"].items())

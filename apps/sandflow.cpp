@@ -115,6 +115,27 @@ int main(int argc, char** argv) {
   render->add_option("--frame", rdo.frame, "frame number (default: the last)")
       ->check(CLI::PositiveNumber);
 
+  ReportOptions rpo;
+  auto* report = app.add_subcommand(
+      "report", "write DIR/report.html: summary, plots, contact sheet (both modes for compare)");
+  report->add_option("dir", rpo.dir, "run, compare or table1 folder")->required();
+  report->add_option("--contact-sheet", rpo.contact_sheet,
+                     "frames on the contact sheet, evenly spaced, ending with the last (default "
+                     "6; 0: none)")
+      ->check(CLI::Range(0, 100));
+  bool no_render = false;
+  report->add_flag("--no-render", no_render,
+                   "do not run POV-Ray: show only the frames already in DIR/render/");
+  report->footer(
+      "Writes DIR/report.html, one self-contained page (inline CSS and SVG plots, pictures\n"
+      "embedded; no network, no JavaScript). A run folder: the summary, plots per frame (grains\n"
+      "simulated, interface and static; seconds per frame; dt; transitions) and a contact sheet.\n"
+      "A compare folder: both modes on shared axes, the speed-up and the two final frames side by\n"
+      "side (and each run's own page). A table1 folder: each scene's page and an index.\n"
+      "Frames without a picture in DIR/render/ are rendered with POV-Ray: 480x270 for the\n"
+      "contact sheet; the final frames of a comparison at 640x360, or at the size of the one\n"
+      "already rendered. `run` and `compare` write the page without pictures.");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -127,6 +148,10 @@ int main(int argc, char** argv) {
     if (*table1) return table1_command(to, command_line(argc, argv));
     if (*measure) return measure_command(dir);
     if (*render) return render_command(rdo);
+    if (*report) {
+      rpo.render = !no_render;
+      return report_command(rpo);
+    }
   } catch (const InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return 2;

@@ -21,7 +21,7 @@ void prepare_output_dir(const std::string& dir, bool force) {
     if (!force)
       throw InputError(fmt::format(
           "{}: the output folder is not empty; pass --force to replace its run", dir));
-    for (const char* name : {"frames", "stats.csv", "summary.json", "render"})
+    for (const char* name : {"frames", "stats.csv", "summary.json", "render", "report.html"})
       fs::remove_all(fs::path(dir) / name, ec);
   }
   fs::create_directories(fs::path(dir) / "frames", ec);
