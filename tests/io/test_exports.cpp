@@ -533,6 +533,8 @@ TEST(HeightSidecar, RecordsTheGridAndTheRange) {
   EXPECT_DOUBLE_EQ(j["cell_size"].get<double>(), 0.02);
   EXPECT_DOUBLE_EQ(j["extent"][0].get<double>(), -0.04);  // the first column's centre
   EXPECT_DOUBLE_EQ(j["extent"][3].get<double>(), 0.1 + 3.5 * 0.02);
+  EXPECT_EQ(j["png"]["z_min"].get<double>(), 0.0);
+  EXPECT_EQ(j["png"]["z_max"].get<double>(), 0.65535);
   EXPECT_DOUBLE_EQ(j["png"]["metres_per_level"].get<double>(), 1e-5);
   EXPECT_EQ(j["obj"]["up_axis"], "y");
 }
