@@ -208,6 +208,15 @@ int run_command(const RunOptions& o) {
         "({} substeps/frame, t_c = {:.3g} s)\n",
         scene.path, scene.total_grains(), mode_name(scene.simulation.mode), world.planned_frames(),
         scene.output.fps, world.scene().material.k_n, ts.dt, ts.substeps, ts.t_c);
+    std::vector<std::string> exports;
+    std::vector<ExportFormat> dropped;
+    for (const ExportFormat f : run_exports(scene.output, scene.simulation.mode, &dropped))
+      exports.emplace_back(export_name(f));
+    if (!dropped.empty())
+      fmt::print(stderr, "warning: {}\n", dropped_exports_warning(scene.path, dropped));
+    fmt::print("{}: exports {} each frame (up axis {})\n", scene.path,
+               exports.empty() ? "nothing" : fmt::format("{}", fmt::join(exports, ", ")),
+               up_axis_name(scene.output.up_axis));
     return 0;
   }
   const std::string out =
@@ -273,7 +282,10 @@ std::string last_frame(const std::string& dir) {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(fs::path(dir) / "frames", ec))
     if (e.path().extension() == ".ply" && e.path().string() > best) best = e.path().string();
-  if (best.empty()) throw InputError(fmt::format("{}: no frames/NNNN.ply in this folder", dir));
+  if (best.empty())
+    throw InputError(fmt::format(
+        "{}: no frames/NNNN.ply in this folder (a run writes them unless --export leaves out ply)",
+        dir));
   return best;
 }
 

@@ -117,11 +117,31 @@ std::vector<ExportFormat> parse_export_list(const std::string& list, const std::
   return out;
 }
 
-std::vector<ExportFormat> run_exports(const OutputConfig& o, Mode mode) {
-  if (o.exports) return *o.exports;
+std::vector<ExportFormat> run_exports(const OutputConfig& o, Mode mode,
+                                      std::vector<ExportFormat>* dropped) {
   // The static bulk of a surface-mode heap is in the height field, not in the PLY frames.
-  if (mode == Mode::Surface) return {ExportFormat::Ply, ExportFormat::Height};
-  return {ExportFormat::Ply};
+  if (!o.exports)
+    return mode == Mode::Surface ? std::vector{ExportFormat::Ply, ExportFormat::Height}
+                                 : std::vector{ExportFormat::Ply};
+  std::vector<ExportFormat> out;
+  for (const ExportFormat f : *o.exports) {
+    const bool height = f == ExportFormat::Height || f == ExportFormat::HeightObj;
+    if (height && mode == Mode::Dem) {
+      if (dropped) dropped->push_back(f);
+    } else {
+      out.push_back(f);
+    }
+  }
+  return out;
+}
+
+std::string dropped_exports_warning(const std::string& scene_path,
+                                    const std::vector<ExportFormat>& dropped) {
+  std::string names;
+  for (const ExportFormat f : dropped)
+    names += (names.empty() ? "" : " and ") + std::string(export_name(f));
+  return scene_path + ": export " + names +
+         " skipped: height fields exist only in surface mode, this run is plain DEM";
 }
 
 bool has_export(const std::vector<ExportFormat>& list, ExportFormat f) {

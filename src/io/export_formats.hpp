@@ -39,7 +39,12 @@ std::string export_names();
 /// files. Throws InputError starting with `where` and listing the known names.
 std::vector<ExportFormat> parse_export_list(const std::string& list, const std::string& where);
 /// The exports of a run: the scene's choice, else the default: ply, and height in surface mode.
-std::vector<ExportFormat> run_exports(const OutputConfig& o, Mode mode);
+/// A DEM run has no height field: height and height_obj are left out and listed in `dropped`.
+std::vector<ExportFormat> run_exports(const OutputConfig& o, Mode mode,
+                                      std::vector<ExportFormat>* dropped = nullptr);
+/// The warning for exports dropped by run_exports, naming the scene file.
+std::string dropped_exports_warning(const std::string& scene_path,
+                                    const std::vector<ExportFormat>& dropped);
 bool has_export(const std::vector<ExportFormat>& list, ExportFormat f);
 
 std::string_view up_axis_name(UpAxis up);

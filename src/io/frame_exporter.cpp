@@ -6,7 +6,6 @@
 #include <limits>
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 
 #include "core/error.hpp"
 #include "io/ply.hpp"
@@ -107,20 +106,10 @@ PovOptions fixed_pov_camera(const World& world) {
 FrameExporter::FrameExporter(const World& world, const std::string& dir)
     : dir_(dir), up_(world.scene().output.up_axis) {
   const SceneConfig& scene = world.scene();
-  if (scene.output.write_frames) formats_ = run_exports(scene.output, scene.simulation.mode);
-  if (!world.surface()) {
-    std::vector<std::string> dropped;
-    for (const ExportFormat f : {ExportFormat::Height, ExportFormat::HeightObj})
-      if (has(f)) dropped.emplace_back(export_name(f));
-    if (!dropped.empty()) {
-      warnings_.push_back(fmt::format(
-          "{}: export {} skipped: height fields exist only in surface mode, this run is plain DEM",
-          scene.path, fmt::join(dropped, " and ")));
-      std::erase_if(formats_, [](ExportFormat f) {
-        return f == ExportFormat::Height || f == ExportFormat::HeightObj;
-      });
-    }
-  }
+  std::vector<ExportFormat> dropped;
+  if (scene.output.write_frames)
+    formats_ = run_exports(scene.output, scene.simulation.mode, &dropped);
+  if (!dropped.empty()) warnings_.push_back(dropped_exports_warning(scene.path, dropped));
   if (has(ExportFormat::Height) || has(ExportFormat::HeightObj)) {
     const fs::path hdir = fs::path(dir_) / "heightfield";
     std::error_code ec;
