@@ -74,8 +74,9 @@ PovOptions fixed_pov_camera(const World& world) {
   for (const EmitterConfig& e : scene.emitters) {
     const EmitterBox b = emitter_box(e, d);
     const Real bottom = b.centre.z - b.half.z;
-    const Real ground =
-        geometry.top_below(b.centre.x, b.centre.y, bottom, bottom - heap.height - d);
+    const Real deepest = bottom - 1000;  // [m] a ground further down is not framed
+    Real ground = geometry.top_below(b.centre.x, b.centre.y, bottom, deepest);
+    if (ground <= deepest) ground = bottom - heap.height - d;
     const Vec3 spread{heap.radius, heap.radius, 0};
     grow(Vec3{b.centre.x, b.centre.y, ground} - Vec3{b.half.x, b.half.y, 0} - spread,
          b.centre + b.half + spread);

@@ -25,11 +25,14 @@
 
 #include "core/error.hpp"
 #include "io/export_formats.hpp"
+#include "io/frame_exporter.hpp"
 #include "io/height_export.hpp"
 #include "io/ply.hpp"
 #include "io/png_gray.hpp"
 #include "io/pov_writer.hpp"
 #include "scene/scene_loader.hpp"
+#include "scene/world.hpp"
+#include "surface/surface_params.hpp"
 
 namespace sandflow {
 namespace {
@@ -426,6 +429,41 @@ TEST(PovGrains, FrameLinesAreTheSceneWritersLines) {
   const std::string lines = pov_grain_lines(f);
   EXPECT_NE(scene.find(lines), std::string::npos);
   EXPECT_EQ(std::count(lines.begin(), lines.end(), '\n'), 4);  // a comment and 3 grains
+}
+
+// The POV-Ray frames' fixed camera keeps in view the pour and the ground under it, with the width
+// of the largest heap around it (a pour above a floor: the floor is infinite, so only the emitter
+// and the ground found under it say where to look).
+TEST(PovCamera, FramesThePourAndTheGroundUnderIt) {
+  const SceneConfig scene = load_scene_from_string(R"(
+[material]
+diameter = 0.01
+[[geometry]]
+type = "plane"
+[[emitter]]
+type = "pour"
+count = 3000
+center = [0.2, -0.1, 0.45]
+radius = 0.06
+rate = 1000
+)",
+                                                   "pour.toml");
+  const World world(scene);
+  const PovOptions opt = fixed_pov_camera(world);
+  EXPECT_FALSE(opt.auto_camera);
+  const Vec3 fwd = (opt.camera_look_at - opt.camera_position) / norm(opt.camera_look_at - opt.camera_position);
+  const Vec3 right = cross(fwd, Vec3{0, 0, 1}) / norm(cross(fwd, Vec3{0, 0, 1}));
+  const Vec3 up = cross(right, fwd);
+  const double tan_h = std::tan(deg_to_rad(opt.fov_deg) / 2);
+  const double tan_v = tan_h * opt.height / opt.width;
+  const Real r = largest_heap(scene).radius;
+  for (const Vec3 p : {Vec3{0.2, -0.1, 0.45}, Vec3{0.2, -0.1, 0}, Vec3{0.2 + r, -0.1, 0},
+                       Vec3{0.2 - r, -0.1, 0}, Vec3{0.2, -0.1 + r, 0}, Vec3{0.2, -0.1 - r, 0}}) {
+    const Vec3 d = p - opt.camera_position;
+    ASSERT_GT(dot(d, fwd), 0);
+    EXPECT_LT(std::abs(dot(d, right)) / dot(d, fwd), tan_h) << p.x << " " << p.y << " " << p.z;
+    EXPECT_LT(std::abs(dot(d, up)) / dot(d, fwd), tan_v) << p.x << " " << p.y << " " << p.z;
+  }
 }
 
 // ---- Height fields ------------------------------------------------------------------------------
