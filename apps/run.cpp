@@ -265,7 +265,8 @@ int run_command(const RunOptions& o) {
   fmt::print("output           {}/ (stats.csv, summary.json, frames/)\n", out);
   std::vector<std::string> exports;
   for (const auto& f : s["exports"]["formats"]) exports.push_back(f.get<std::string>());
-  fmt::print("exports          {} (up axis {})\n", exports.empty() ? "none" : fmt::format("{}", fmt::join(exports, ", ")),
+  fmt::print("exports          {} (up axis {})\n",
+             exports.empty() ? "none" : fmt::format("{}", fmt::join(exports, ", ")),
              s["exports"]["up_axis"].get<std::string>());
   if (o.profile) {
     fmt::print("stage seconds   ");

@@ -45,8 +45,7 @@ struct Grain {
 Grain grain(const FrameData& f, std::size_t i, UpAxis up) {
   return {to_up_axis(f.position[i], up),
           f.velocity.empty() ? Vec3{} : to_up_axis(f.velocity[i], up),
-          static_cast<float>(f.radius[i]),
-          f.id.empty() ? static_cast<std::uint32_t>(i) : f.id[i],
+          static_cast<float>(f.radius[i]), f.id.empty() ? static_cast<std::uint32_t>(i) : f.id[i],
           f.state.empty() ? std::uint8_t{0} : f.state[i]};
 }
 
@@ -197,13 +196,27 @@ void write_vtp(const std::string& path, const FrameData& f, UpAxis up) {
     put(data, static_cast<std::uint64_t>(bytes), le);
     fill();
   };
-  block(12 * n, [&] { for (std::size_t i = 0; i < n; ++i) put3(data, grain(f, i, up).x, le); });
-  block(4 * n, [&] { for (std::size_t i = 0; i < n; ++i) put(data, grain(f, i, up).r, le); });
-  block(12 * n, [&] { for (std::size_t i = 0; i < n; ++i) put3(data, grain(f, i, up).v, le); });
-  block(n, [&] { for (std::size_t i = 0; i < n; ++i) put(data, grain(f, i, up).state, le); });
-  block(4 * n, [&] { for (std::size_t i = 0; i < n; ++i) put(data, grain(f, i, up).id, le); });
-  block(4 * n, [&] { for (std::size_t i = 0; i < n; ++i) put(data, static_cast<std::int32_t>(i), le); });
-  block(4 * n, [&] { for (std::size_t i = 0; i < n; ++i) put(data, static_cast<std::int32_t>(i + 1), le); });
+  block(12 * n, [&] {
+    for (std::size_t i = 0; i < n; ++i) put3(data, grain(f, i, up).x, le);
+  });
+  block(4 * n, [&] {
+    for (std::size_t i = 0; i < n; ++i) put(data, grain(f, i, up).r, le);
+  });
+  block(12 * n, [&] {
+    for (std::size_t i = 0; i < n; ++i) put3(data, grain(f, i, up).v, le);
+  });
+  block(n, [&] {
+    for (std::size_t i = 0; i < n; ++i) put(data, grain(f, i, up).state, le);
+  });
+  block(4 * n, [&] {
+    for (std::size_t i = 0; i < n; ++i) put(data, grain(f, i, up).id, le);
+  });
+  block(4 * n, [&] {
+    for (std::size_t i = 0; i < n; ++i) put(data, static_cast<std::int32_t>(i), le);
+  });
+  block(4 * n, [&] {
+    for (std::size_t i = 0; i < n; ++i) put(data, static_cast<std::int32_t>(i + 1), le);
+  });
 
   std::string s;
   s.reserve(2048 + data.size());

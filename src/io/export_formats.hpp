@@ -29,7 +29,8 @@ namespace sandflow {
 
 // ---- Choosing exports ----
 
-/// "ply", "vtk", "geo", "pov", "csv", "height", "height_obj": the names of scene files and --export.
+/// "ply", "vtk", "geo", "pov", "csv", "height", "height_obj": the names of scene files and
+/// --export.
 std::string_view export_name(ExportFormat f);
 /// The format of a name, or nullopt.
 std::optional<ExportFormat> export_format(std::string_view name);

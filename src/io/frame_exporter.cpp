@@ -115,11 +115,13 @@ FrameExporter::FrameExporter(const World& world, const std::string& dir)
     const fs::path hdir = fs::path(dir_) / "heightfield";
     std::error_code ec;
     fs::create_directories(hdir, ec);
-    if (ec) throw OutputError(fmt::format("{}: cannot create the folder: {}", hdir.string(), ec.message()));
+    if (ec)
+      throw OutputError(
+          fmt::format("{}: cannot create the folder: {}", hdir.string(), ec.message()));
     range_ = run_height_range(world);
-    write_file_atomic((hdir / "heightfield.json").string(),
-                      height_sidecar(world.surface()->height_field().params(), range_, up_).dump(2) +
-                          "\n");
+    write_file_atomic(
+        (hdir / "heightfield.json").string(),
+        height_sidecar(world.surface()->height_field().params(), range_, up_).dump(2) + "\n");
   }
   if (has(ExportFormat::Pov)) {
     // camera, lights, textures and the geometry, once: a scene with no grains
@@ -127,8 +129,8 @@ FrameExporter::FrameExporter(const World& world, const std::string& dir)
     for (const MeshObstacle& m : world.geometry().meshes())
       if (m.source >= 0 && static_cast<std::size_t>(m.source) < meshes.size())
         meshes[static_cast<std::size_t>(m.source)] = &m.mesh;
-    write_pov_scene((fs::path(dir_) / "frames" / kPovInclude).string(), FrameData{},
-                    scene.geometry, fixed_pov_camera(world), meshes);
+    write_pov_scene((fs::path(dir_) / "frames" / kPovInclude).string(), FrameData{}, scene.geometry,
+                    fixed_pov_camera(world), meshes);
   }
 }
 
@@ -138,8 +140,8 @@ void FrameExporter::write(const World& world) {
   const double t = world.time();
   const fs::path frames = fs::path(dir_) / "frames";
   const auto frame_file = [&](const char* ext) { return (frames / frame_name(n, ext)).string(); };
-  const bool grains = has(ExportFormat::Ply) || has(ExportFormat::Vtk) ||
-                      has(ExportFormat::Geo) || has(ExportFormat::Csv) || has(ExportFormat::Pov);
+  const bool grains = has(ExportFormat::Ply) || has(ExportFormat::Vtk) || has(ExportFormat::Geo) ||
+                      has(ExportFormat::Csv) || has(ExportFormat::Pov);
   const FrameData f = grains ? world.visible_frame() : FrameData{};
   if (has(ExportFormat::Ply)) write_ply(frame_file(".ply"), f, up_);
   if (has(ExportFormat::Vtk)) {
@@ -153,25 +155,27 @@ void FrameExporter::write(const World& world) {
   if (has(ExportFormat::Geo)) write_houdini_geo(frame_file(".geo"), f, up_);
   if (has(ExportFormat::Csv)) write_grains_csv(frame_file(".csv"), f, up_);
   if (has(ExportFormat::Pov))
-    write_file_atomic(frame_file(".pov"),
-                      fmt::format("// sandflow {} frame {}, t = {} s: {} visible grains. Render in "
-                                  "this folder, 16:9: povray +I{} +W1280 +H720\n#version 3.7;\n"
-                                  "#include \"{}\"\n",
-                                  world.scene().name, n, t, f.size(), frame_name(n, ".pov"),
-                                  kPovInclude) +
-                          pov_grain_lines(f));
+    write_file_atomic(
+        frame_file(".pov"),
+        fmt::format("// sandflow {} frame {}, t = {} s: {} visible grains. Render in "
+                    "this folder, 16:9: povray +I{} +W1280 +H720\n#version 3.7;\n"
+                    "#include \"{}\"\n",
+                    world.scene().name, n, t, f.size(), frame_name(n, ".pov"), kPovInclude) +
+            pov_grain_lines(f));
   if (has(ExportFormat::Height) || has(ExportFormat::HeightObj)) {
     const HeightField& hf = world.surface()->height_field();
     const fs::path hdir = fs::path(dir_) / "heightfield";
-    for (const auto& [name, z] : {std::pair<const char*, const std::vector<Real>*>{"H", &hf.surface()},
-                                  {"h", &hf.static_top()}}) {
+    for (const auto& [name, z] :
+         {std::pair<const char*, const std::vector<Real>*>{"H", &hf.surface()},
+          {"h", &hf.static_top()}}) {
       const std::string stem = (hdir / fmt::format("{}_{:04d}", name, n)).string();
       if (has(ExportFormat::Height))
-        clamped_ += static_cast<std::int64_t>(write_height_png(stem + ".png", hf.params(), *z, range_));
+        clamped_ +=
+            static_cast<std::int64_t>(write_height_png(stem + ".png", hf.params(), *z, range_));
       if (has(ExportFormat::HeightObj))
-        write_height_obj(stem + ".obj", hf.params(), *z, up_,
-                         fmt::format("sandflow {} {} frame {}, t = {} s", world.scene().name, name,
-                                     n, t));
+        write_height_obj(
+            stem + ".obj", hf.params(), *z, up_,
+            fmt::format("sandflow {} {} frame {}, t = {} s", world.scene().name, name, n, t));
     }
   }
 }

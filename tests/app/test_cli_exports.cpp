@@ -76,8 +76,7 @@ TEST(CliExports, EveryFormatForEveryFrame) {
   // the height field was not asked for
   EXPECT_FALSE(fs::exists(out / "heightfield"));
   const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
-  EXPECT_EQ(summary["exports"]["formats"],
-            nlohmann::json({"ply", "vtk", "geo", "pov", "csv"}));
+  EXPECT_EQ(summary["exports"]["formats"], nlohmann::json({"ply", "vtk", "geo", "pov", "csv"}));
   // no temporary file is left behind
   for (const auto& e : fs::recursive_directory_iterator(out))
     EXPECT_NE(e.path().extension(), ".tmp") << e.path();
@@ -139,10 +138,11 @@ TEST(CliExports, UpAxisYRotatesFramesAndMeasureStillSeesTheSceneFrame) {
   const auto scene = box.write("tiny.toml", kTinyScene);
   std::string log_z, log_y;
   const auto z = box.dir / "z", y = box.dir / "y";
-  ASSERT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 2 --out " + z.string(), &log_z), 0)
+  ASSERT_EQ(
+      sandflow("run " + scene.string() + " --mode dem --frames 2 --out " + z.string(), &log_z), 0)
       << log_z;
-  ASSERT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 2 --up-axis y --export ply,csv --out " +
-                         y.string(),
+  ASSERT_EQ(sandflow("run " + scene.string() +
+                         " --mode dem --frames 2 --up-axis y --export ply,csv --out " + y.string(),
                      &log_y),
             0)
       << log_y;
@@ -171,7 +171,8 @@ TEST(CliExports, UnknownExportIsRefusedListingTheKnownOnesAndWritesNothing) {
   const auto scene = box.write("tiny.toml", kTinyScene);
   const auto out = box.dir / "out";
   std::string log;
-  EXPECT_EQ(sandflow("run " + scene.string() + " --export ply,vtkk --out " + out.string(), &log), 2);
+  EXPECT_EQ(sandflow("run " + scene.string() + " --export ply,vtkk --out " + out.string(), &log),
+            2);
   EXPECT_NE(log.find("--export ply,vtkk: unknown export \"vtkk\""), std::string::npos) << log;
   EXPECT_NE(log.find("ply, vtk, geo, pov, csv, height, height_obj"), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(out));

@@ -68,7 +68,9 @@ FrameData sample_frame() {
   return f;
 }
 
-float as_float(double v) { return static_cast<float>(v); }
+float as_float(double v) {
+  return static_cast<float>(v);
+}
 
 // ---- A reader of legacy VTK (binary POLYDATA) -------------------------------------------------
 
@@ -153,10 +155,14 @@ VtkData read_vtk(const std::string& path) {
     }
     auto& a = d.arrays[name];
     for (std::size_t i = 0; i < n * comps; ++i) {
-      if (type == "float") a.push_back(big_endian<float>(s, p));
-      else if (type == "unsigned_char") a.push_back(big_endian<std::uint8_t>(s, p));
-      else if (type == "unsigned_int") a.push_back(big_endian<std::uint32_t>(s, p));
-      else throw std::runtime_error("vtk: type " + type);
+      if (type == "float")
+        a.push_back(big_endian<float>(s, p));
+      else if (type == "unsigned_char")
+        a.push_back(big_endian<std::uint8_t>(s, p));
+      else if (type == "unsigned_int")
+        a.push_back(big_endian<std::uint32_t>(s, p));
+      else
+        throw std::runtime_error("vtk: type " + type);
     }
   }
   return d;
@@ -386,7 +392,8 @@ TEST(UpAxis, YUpIsARightHandedRotationTakingZToY) {
 
 TEST_F(ExportTest, YUpRotatesEveryGrainFormatAndPlyReadsBack) {
   const FrameData f = sample_frame();
-  const Vec3 up_x = to_up_axis(f.position[1], UpAxis::Y), up_v = to_up_axis(f.velocity[1], UpAxis::Y);
+  const Vec3 up_x = to_up_axis(f.position[1], UpAxis::Y),
+             up_v = to_up_axis(f.velocity[1], UpAxis::Y);
   write_vtk_legacy(path("f.vtk"), f, UpAxis::Y, "y");
   const VtkData d = read_vtk(path("f.vtk"));
   write_grains_csv(path("f.csv"), f, UpAxis::Y);
@@ -406,7 +413,8 @@ TEST_F(ExportTest, YUpRotatesEveryGrainFormatAndPlyReadsBack) {
   const std::size_t body = raw.find("end_header\n") + 11;
   float first[3];
   std::memcpy(first, raw.data() + body, 12);
-  for (int c = 0; c < 3; ++c) EXPECT_EQ(first[c], as_float(to_up_axis(f.position[0], UpAxis::Y)[c]));
+  for (int c = 0; c < 3; ++c)
+    EXPECT_EQ(first[c], as_float(to_up_axis(f.position[0], UpAxis::Y)[c]));
   const FrameData back = read_ply(path("f.ply"));
   for (std::size_t i = 0; i < 3; ++i)
     for (int c = 0; c < 3; ++c) {
@@ -422,7 +430,8 @@ TEST_F(ExportTest, YUpRotatesEveryGrainFormatAndPlyReadsBack) {
 TEST(PovGrains, FrameLinesAreTheSceneWritersLines) {
   // the lines a frame file holds are those write_pov_scene writes for the same grains
   const FrameData f = sample_frame();
-  const fs::path p = fs::temp_directory_path() / ("sandflow_pov_lines_" + std::to_string(::getpid()) + ".pov");
+  const fs::path p =
+      fs::temp_directory_path() / ("sandflow_pov_lines_" + std::to_string(::getpid()) + ".pov");
   write_pov_scene(p.string(), f, {}, PovOptions{});
   const std::string scene = read_bytes(p.string());
   fs::remove(p);
@@ -451,7 +460,8 @@ rate = 1000
   const World world(scene);
   const PovOptions opt = fixed_pov_camera(world);
   EXPECT_FALSE(opt.auto_camera);
-  const Vec3 fwd = (opt.camera_look_at - opt.camera_position) / norm(opt.camera_look_at - opt.camera_position);
+  const Vec3 fwd =
+      (opt.camera_look_at - opt.camera_position) / norm(opt.camera_look_at - opt.camera_position);
   const Vec3 right = cross(fwd, Vec3{0, 0, 1}) / norm(cross(fwd, Vec3{0, 0, 1}));
   const Vec3 up = cross(right, fwd);
   const double tan_h = std::tan(deg_to_rad(opt.fov_deg) / 2);
@@ -497,7 +507,8 @@ TEST_F(ExportTest, HeightPngRecoversHeightsWithinOneStep) {
   EXPECT_LT(range.step(), 1e-5);
   for (int j = 0; j < g.ny; ++j)
     for (int i = 0; i < g.nx; ++i) {
-      const double grey = img.value[static_cast<std::size_t>(g.ny - 1 - j) * g.nx + i];  // row 0: top y
+      const double grey =
+          img.value[static_cast<std::size_t>(g.ny - 1 - j) * g.nx + i];  // row 0: top y
       const double back = range.z_min + grey * (range.z_max - range.z_min);
       EXPECT_NEAR(back, z[static_cast<std::size_t>(j) * g.nx + i], 0.5 * range.step() + 1e-12)
           << i << " " << j;
@@ -591,7 +602,8 @@ TEST(ExportList, ParsesNamesAndRefusesUnknownOnesListingTheKnown) {
       const std::string msg = e.what();
       EXPECT_EQ(msg.rfind("--export", 0), 0u) << msg;
       if (std::string(bad) != "none,ply") {
-        EXPECT_NE(msg.find("ply, vtk, geo, pov, csv, height, height_obj"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("ply, vtk, geo, pov, csv, height, height_obj"), std::string::npos)
+            << msg;
       }
     }
   }
