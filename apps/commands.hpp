@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,8 @@ struct RunOptions {
   bool check = false;
   bool force = false;
   bool profile = false;
+  std::optional<std::string> exports;  ///< --export LIST (overrides output.export)
+  std::string up_axis;                 ///< --up-axis z|y (overrides output.up_axis)
 };
 
 struct Table1Options {
@@ -52,7 +55,8 @@ struct ReportOptions {
 };
 
 std::string mode_name(Mode m);
-/// The scene of a run: the file, its --set overrides, --mode, --grains, --frames, --threads.
+/// The scene of a run: the file, its --set overrides, --mode, --grains, --frames, --threads,
+/// --export, --up-axis.
 SceneConfig load_for_run(const RunOptions& o);
 int thread_count(const SceneConfig& scene);
 

@@ -7,10 +7,13 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "io/export_formats.hpp"
+#include "io/frame_exporter.hpp"
 #include "io/ply.hpp"
 #include "io/run_output.hpp"
 #include "progress.hpp"
@@ -32,6 +35,8 @@ SceneConfig load_for_run(const RunOptions& o) {
   if (o.grains > 0) scale_grain_count(scene, o.grains);
   if (o.frames > 0) scene.output.frames = o.frames;
   if (o.threads > 0) scene.simulation.threads = o.threads;
+  if (o.exports) scene.output.exports = parse_export_list(*o.exports, "--export");
+  if (!o.up_axis.empty()) scene.output.up_axis = o.up_axis == "y" ? UpAxis::Y : UpAxis::Z;
   return scene;
 }
 
@@ -83,6 +88,8 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out,
 
   RunResult res;
   StatsWriter stats(fs::path(out) / "stats.csv");
+  FrameExporter exporter(world, out);  // the per-frame files of --export
+  for (const std::string& w : exporter.warnings()) fmt::print(stderr, "warning: {}\n", w);
   Progress progress(fmt::format("{}{} [{}]", label, scene.name, mode_name(scene.simulation.mode)),
                     frames);
   double simulated_sum = 0;
@@ -91,7 +98,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out,
   for (int f = 0; f < frames; ++f) {
     FrameStats st = world.advance_frame();
     Stopwatch io;
-    if (scene.output.write_frames) write_ply(frame_path(out, st.frame), world.visible_frame());
+    exporter.write(world);
     st.wall_seconds += io.seconds();
     stats.write(st);
     simulated_sum += static_cast<double>(st.n_active + st.n_interface);
@@ -105,7 +112,8 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out,
   // the heap of the final state, and what ended up where it must not be
   world.all_grains(res.x, res.r);
   // every grain of the final state, the static ones too (state 2): nothing is lost with the run
-  write_ply((fs::path(out) / "final_grains.ply").string(), world.all_grains_frame());
+  write_ply((fs::path(out) / "final_grains.ply").string(), world.all_grains_frame(),
+            scene.output.up_axis);
   res.heap = measure_heap(res.x, res.r);
   const HeapFit& fit = res.heap;
   const auto inside = world.geometry().count_inside(res.x);
@@ -136,6 +144,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out,
       {"heap", heap_json(fit)},
       {"grains_inside_geometry", inside},
       {"state_hash", fmt::format("{:016x}", world.state_hash())},
+      {"exports", exporter.summary()},
   };
   if (const SurfaceFlow* sf = world.surface()) {
     const HeightField& hf = sf->height_field();
@@ -199,6 +208,15 @@ int run_command(const RunOptions& o) {
         "({} substeps/frame, t_c = {:.3g} s)\n",
         scene.path, scene.total_grains(), mode_name(scene.simulation.mode), world.planned_frames(),
         scene.output.fps, world.scene().material.k_n, ts.dt, ts.substeps, ts.t_c);
+    std::vector<std::string> exports;
+    std::vector<ExportFormat> dropped;
+    for (const ExportFormat f : run_exports(scene.output, scene.simulation.mode, &dropped))
+      exports.emplace_back(export_name(f));
+    if (!dropped.empty())
+      fmt::print(stderr, "warning: {}\n", dropped_exports_warning(scene.path, dropped));
+    fmt::print("{}: exports {} each frame (up axis {})\n", scene.path,
+               exports.empty() ? "nothing" : fmt::format("{}", fmt::join(exports, ", ")),
+               up_axis_name(scene.output.up_axis));
     return 0;
   }
   const std::string out =
@@ -245,6 +263,11 @@ int run_command(const RunOptions& o) {
   fmt::print("max overlap      {:.2f} % of a diameter\n", 100 * s["max_overlap_rel"].get<double>());
   fmt::print("state hash       {}\n", s["state_hash"].get<std::string>());
   fmt::print("output           {}/ (stats.csv, summary.json, frames/)\n", out);
+  std::vector<std::string> exports;
+  for (const auto& f : s["exports"]["formats"]) exports.push_back(f.get<std::string>());
+  fmt::print("exports          {} (up axis {})\n",
+             exports.empty() ? "none" : fmt::format("{}", fmt::join(exports, ", ")),
+             s["exports"]["up_axis"].get<std::string>());
   fmt::print("report           {} (plots; `sandflow report {}` adds pictures)\n",
              write_report({out, 6, false}), out);
   if (o.profile) {
@@ -262,7 +285,10 @@ std::string last_frame(const std::string& dir) {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(fs::path(dir) / "frames", ec))
     if (e.path().extension() == ".ply" && e.path().string() > best) best = e.path().string();
-  if (best.empty()) throw InputError(fmt::format("{}: no frames/NNNN.ply in this folder", dir));
+  if (best.empty())
+    throw InputError(fmt::format(
+        "{}: no frames/NNNN.ply in this folder (a run writes them unless --export leaves out ply)",
+        dir));
   return best;
 }
 

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "io/export_formats.hpp"
 
 namespace sandflow {
 namespace {
@@ -151,6 +152,7 @@ enum class Format { Ascii, BinaryLE };
 
 struct Header {
   Format format = Format::Ascii;
+  UpAxis up = UpAxis::Z;  // "comment up_axis y": written by write_ply with UpAxis::Y
   std::vector<Element> elements;
   std::size_t body_offset = 0;  // first byte after "end_header\n"
 };
@@ -169,7 +171,13 @@ class Reader {
     const unsigned char* p = bytes() + h.body_offset;
     const unsigned char* end = bytes() + data_.size();
     for (const Element& e : h.elements) {
-      if (e.name == "vertex") return read_vertices(h.format, e, p, end);
+      if (e.name == "vertex") {
+        FrameData f = read_vertices(h.format, e, p, end);
+        // back to the scene's frame, z up
+        for (Vec3& x : f.position) x = from_up_axis(x, h.up);
+        for (Vec3& v : f.velocity) v = from_up_axis(v, h.up);
+        return f;
+      }
       skip_element(h.format, e, p, end);
     }
     fail("no 'vertex' element");
@@ -215,6 +223,7 @@ class Reader {
       const auto w = split(line);
       if (line_no == 1) continue;  // "ply", checked above
       if (w.empty()) continue;
+      if (w[0] == "comment" && w.size() == 3 && w[1] == "up_axis" && w[2] == "y") h.up = UpAxis::Y;
       if (w[0] == "comment" || w[0] == "obj_info") continue;
       if (w[0] == "end_header") {
         if (!have_format) fail(where + "no 'format' line before 'end_header'");
@@ -449,13 +458,16 @@ std::string read_file(const std::string& path) {
 
 }  // namespace
 
-void write_ply(const std::string& path, const FrameData& f) {
+void write_ply(const std::string& path, const FrameData& f, UpAxis up) {
   check_sizes(f);
   const std::size_t n = f.size();
   const std::string header =
       "ply\n"
       "format binary_little_endian 1.0\n"
-      "comment sandflow frame: visible grains (state 0 ACTIVE, 1 INTERFACE)\n"
+      "comment sandflow grains (state 0 ACTIVE, 1 INTERFACE, 2 STATIC)\n"
+      "comment up_axis " +
+      std::string(up_axis_name(up)) +
+      "\n"
       "element vertex " +
       std::to_string(n) +
       "\n"
@@ -481,8 +493,8 @@ void write_ply(const std::string& path, const FrameData& f) {
     const std::size_t last = std::min(n, first + kChunkGrains);
     unsigned char* p = buf.data();
     for (std::size_t i = first; i < last; ++i) {
-      const Vec3& x = f.position[i];
-      const Vec3 v = f.velocity.empty() ? Vec3{} : f.velocity[i];
+      const Vec3 x = to_up_axis(f.position[i], up);
+      const Vec3 v = f.velocity.empty() ? Vec3{} : to_up_axis(f.velocity[i], up);
       put_le(p, static_cast<float>(x.x));
       put_le(p, static_cast<float>(x.y));
       put_le(p, static_cast<float>(x.z));

@@ -3,7 +3,10 @@
 // Written as binary_little_endian PLY 1.0 with the vertex properties
 //   float x, y, z, radius, vx, vy, vz; uint id; uchar state
 // (33 bytes a grain), which ParaView, Blender and Houdini read as they are. The file is written
-// to `path + ".tmp"` and renamed over `path`, so a reader never sees half a frame.
+// to `path + ".tmp"` and renamed over `path`, so a reader never sees half a frame. A header line
+// `comment up_axis z` (or `y`) says which way is up: with y, positions and velocities are written
+// rotated, (x, y, z) -> (x, z, -y) (export_formats.hpp), and read_ply rotates them back, so that
+// `sandflow measure` and `render` see the scene's frame whichever way a run wrote its frames.
 //
 // The reader is lenient about layout and strict about content: it accepts binary_little_endian
 // or ascii files, any property order, any numeric property types and extra properties or
@@ -15,16 +18,17 @@
 #include <string>
 
 #include "io/frame.hpp"
+#include "scene/scene_config.hpp"
 
 namespace sandflow {
 
 /// Writes `f` to `path` atomically. Throws OutputError naming the path and the system's reason.
 /// The velocity, id and state arrays may be empty (written as 0, the index, 0); otherwise every
 /// array must have f.size() entries (std::invalid_argument if not: a bug in the caller).
-void write_ply(const std::string& path, const FrameData& f);
+void write_ply(const std::string& path, const FrameData& f, UpAxis up = UpAxis::Z);
 
-/// Reads a PLY point cloud written by write_ply (or any PLY described above). Throws InputError
-/// naming the file and what is wrong with it.
+/// Reads a PLY point cloud written by write_ply (or any PLY described above), in the scene's frame
+/// (z up). Throws InputError naming the file and what is wrong with it.
 FrameData read_ply(const std::string& path);
 
 }  // namespace sandflow

@@ -634,4 +634,13 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
   }
 }
 
+std::string pov_grain_lines(const FrameData& f) {
+  if (f.radius.size() != f.size() || (!f.id.empty() && f.id.size() != f.size()))
+    throw std::invalid_argument("pov_grain_lines: FrameData arrays have different lengths");
+  std::string s;
+  s.reserve(48 * f.size() + 64);
+  write_grains(s, f);
+  return s;
+}
+
 }  // namespace sandflow

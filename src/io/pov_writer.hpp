@@ -58,4 +58,9 @@ std::string find_povray();
 void render_pov(const std::string& pov_path, const std::string& png_path, int width, int height,
                 int threads);
 
+/// The grains of frame `f` exactly as write_pov_scene draws them, one `G(x,y,z,r,c)` line each:
+/// the body of a frame file that #includes the rest (camera, lights, the macro G, the geometry)
+/// from a scene written once by write_pov_scene with no grains (`--export pov`).
+std::string pov_grain_lines(const FrameData& f);
+
 }  // namespace sandflow

@@ -1,6 +1,7 @@
 #include "io/run_output.hpp"
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -21,7 +22,8 @@ void prepare_output_dir(const std::string& dir, bool force) {
     if (!force)
       throw InputError(fmt::format(
           "{}: the output folder is not empty; pass --force to replace its run", dir));
-    for (const char* name : {"frames", "stats.csv", "summary.json", "render", "report.html"})
+    for (const char* name : {"frames", "stats.csv", "summary.json", "final_grains.ply", "render",
+                             "report.html", "frames.pvd", "heightfield"})
       fs::remove_all(fs::path(dir) / name, ec);
   }
   fs::create_directories(fs::path(dir) / "frames", ec);
@@ -34,12 +36,19 @@ void write_file_atomic(const std::string& path, const std::string& text) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out << text;
     out.close();
-    if (!out)
-      throw OutputError(fmt::format("{}: cannot write: {}", tmp, std::strerror(errno)));
+    if (!out) {
+      const std::string reason = std::strerror(errno);
+      std::remove(tmp.c_str());  // no half-written file left behind
+      throw OutputError(fmt::format("{}: cannot write: {}", tmp, reason));
+    }
   }
   std::error_code ec;
   fs::rename(tmp, path, ec);
-  if (ec) throw OutputError(fmt::format("{}: cannot write: {}", path, ec.message()));
+  if (ec) {
+    const std::string reason = ec.message();
+    fs::remove(tmp, ec);
+    throw OutputError(fmt::format("{}: cannot write: {}", path, reason));
+  }
 }
 
 std::string frame_path(const std::string& dir, int frame) {

@@ -69,12 +69,20 @@ struct SimulationConfig {
   int threads = 0;                  ///< 0: all cores
 };
 
+/// The files a run writes each frame (output.export, --export; docs/scenes.md "Exports").
+enum class ExportFormat { Ply, Vtk, Geo, Pov, Csv, Height, HeightObj };
+/// The up axis of exported coordinates: the scene's z, or y (the scene's z becomes y).
+enum class UpAxis { Z, Y };
+
 struct OutputConfig {
   Real fps = 30.0;                  ///< frames per simulated second [1/s]
   std::optional<Real> duration;     ///< simulated time [s]; unset: end of emission + settle_time
   Real settle_time = 1.5;           ///< [s] after the last grain is emitted (duration unset)
   std::optional<int> frames;        ///< explicit frame count (from --frames)
-  bool write_frames = true;         ///< write frames/NNNN.ply
+  bool write_frames = true;         ///< write the per-frame files of `exports`
+  /// unset: the default, ply (and height in surface mode); empty: no per-frame files
+  std::optional<std::vector<ExportFormat>> exports;
+  UpAxis up_axis = UpAxis::Z;       ///< of PLY, VTK, geo, CSV and OBJ files
 };
 
 enum class GeometryType { Plane, Box, Cylinder, Sphere, Bowl, Heightmap, Mesh };

@@ -31,6 +31,7 @@
 
 #include "core/error.hpp"
 #include "geometry/heightmap.hpp"
+#include "io/export_formats.hpp"
 #include "io/png_gray.hpp"
 
 namespace sandflow {
@@ -157,6 +158,7 @@ constexpr Choices<RenderStyle> kRenderStyles[] = {
 constexpr Choices<EmitterType> kEmitterTypes[] = {
     {"pour", EmitterType::Pour}, {"block", EmitterType::Block}, {"lattice", EmitterType::Lattice}};
 constexpr Choices<PourShape> kPourShapes[] = {{"disk", PourShape::Disk}, {"rect", PourShape::Rect}};
+constexpr Choices<UpAxis> kUpAxes[] = {{"z", UpAxis::Z}, {"y", UpAxis::Y}};
 
 // ---- Places -------------------------------------------------------------------------------------
 
@@ -249,6 +251,26 @@ class TableReader {
     const auto* s = e->node->as_string();
     if (!s) fail(place(*e), name(key) + ": expected a string, got " + type_name(*e->node));
     out = s->get();
+  }
+
+  // An array of strings, each with the place it came from (for messages about one of them).
+  struct Word {
+    std::string text, place, name;
+  };
+  void read(std::string_view key, std::optional<std::vector<Word>>& out) {
+    const auto e = find(key);
+    if (!e) return;
+    const std::string n = name(key);
+    const auto* a = e->node->as_array();
+    if (!a) fail(place(*e), n + ": expected an array of strings, got " + type_name(*e->node));
+    out.emplace();
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const toml::node& item = *a->get(i);
+      const std::string in = n + "[" + std::to_string(i) + "]";
+      const auto* s = item.as_string();
+      if (!s) fail(places_.of(item.source()), in + ": expected a string, got " + type_name(item));
+      out->push_back({s->get(), places_.of(item.source()), in});
+    }
   }
 
   // A vector: an array of exactly 3 finite numbers. Only the first `checked` components are held
@@ -544,7 +566,20 @@ void read_output(TableReader r, OutputConfig& o) {
   r.read("fps", o.fps, kPositive);
   r.read("duration", o.duration, kPositive);
   r.read("settle_time", o.settle_time, kNonNegative);
+  std::optional<std::vector<TableReader::Word>> exports;
+  r.read("export", exports);
+  r.read("up_axis", o.up_axis, kUpAxes);
   r.finish("[output]");
+  if (exports) {
+    o.exports.emplace();
+    for (const auto& w : *exports) {
+      const auto f = export_format(w.text);
+      if (!f)
+        fail(w.place, w.name + " = " + in_quotes(w.text) + " is not an export: expected one of " +
+                          export_names() + " (an empty array [] writes no per-frame files)");
+      if (!has_export(*o.exports, *f)) o.exports->push_back(*f);
+    }
+  }
 }
 
 // A heightmap's samples: inline `heights`, a grey PNG `file` or procedural `noise`, exactly one.

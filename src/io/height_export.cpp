@@ -1,0 +1,115 @@
+#include "io/height_export.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iterator>
+
+#include <fmt/format.h>
+
+#include "core/error.hpp"
+#include "io/export_formats.hpp"
+#include "io/png_gray.hpp"
+#include "io/run_output.hpp"
+
+namespace sandflow {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+void check_size(const HeightFieldParams& grid, const std::vector<Real>& z, const char* who) {
+  if (grid.nx < 1 || grid.ny < 1 ||
+      z.size() != static_cast<std::size_t>(grid.nx) * static_cast<std::size_t>(grid.ny))
+    throw std::invalid_argument(std::string(who) + ": the heights do not match the grid");
+}
+
+}  // namespace
+
+std::size_t write_height_png(const std::string& path, const HeightFieldParams& grid,
+                             const std::vector<Real>& z, const HeightRange& range) {
+  check_size(grid, z, "write_height_png");
+  const int nx = grid.nx, ny = grid.ny;
+  std::vector<double> value(z.size());
+  std::size_t clamped = 0;
+  for (int row = 0; row < ny; ++row) {
+    const int j = ny - 1 - row;  // row 0: the highest y
+    for (int i = 0; i < nx; ++i) {
+      const Real h = z[static_cast<std::size_t>(j) * nx + i];
+      double v = std::isfinite(h) ? (h - range.z_min) / (range.z_max - range.z_min) : 0.0;
+      if (!(v >= 0.0 && v <= 1.0)) {
+        ++clamped;
+        v = std::clamp(std::isfinite(v) ? v : 0.0, 0.0, 1.0);
+      }
+      value[static_cast<std::size_t>(row) * nx + i] = v;
+    }
+  }
+  const std::string tmp = path + ".tmp";
+  std::error_code ec;
+  try {
+    write_gray_png(tmp, nx, ny, value, 16);
+  } catch (const OutputError&) {
+    fs::remove(tmp, ec);
+    throw;
+  }
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    const std::string reason = ec.message();
+    fs::remove(tmp, ec);
+    throw OutputError(path + ": cannot write: " + reason);
+  }
+  return clamped;
+}
+
+void write_height_obj(const std::string& path, const HeightFieldParams& grid,
+                      const std::vector<Real>& z, UpAxis up, const std::string& comment) {
+  check_size(grid, z, "write_height_obj");
+  const int nx = grid.nx, ny = grid.ny;
+  std::string s;
+  s.reserve(64 + 40 * z.size() + 2 * 30 * z.size());
+  fmt::format_to(std::back_inserter(s), "# {}\n# {} x {} columns of {} m, up axis {}\n",
+                 comment.substr(0, comment.find('\n')), nx, ny, grid.cell, up_axis_name(up));
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const Real h = z[static_cast<std::size_t>(j) * nx + i];
+      const Vec3 c{grid.x0 + (i + 0.5) * grid.cell, grid.y0 + (j + 0.5) * grid.cell,
+                   std::isfinite(h) ? h : 0.0};
+      const Vec3 v = to_up_axis(c, up);
+      fmt::format_to(std::back_inserter(s), "v {:.7g} {:.7g} {:.7g}\n", v.x, v.y, v.z);
+    }
+  // a rotation keeps the winding, so the normals point up in either frame
+  for (int j = 0; j + 1 < ny; ++j)
+    for (int i = 0; i + 1 < nx; ++i) {
+      const long k = 1L + static_cast<long>(j) * nx + i;
+      fmt::format_to(std::back_inserter(s), "f {} {} {}\nf {} {} {}\n", k, k + 1, k + nx + 1, k,
+                     k + nx + 1, k + nx);
+    }
+  write_file_atomic(path, s);
+}
+
+nlohmann::json height_sidecar(const HeightFieldParams& grid, const HeightRange& range, UpAxis up) {
+  const Real c = grid.cell;
+  return {
+      {"nx", grid.nx},
+      {"ny", grid.ny},
+      {"cell_size", c},
+      {"origin", {grid.x0, grid.y0}},
+      {"extent",
+       {grid.x0 + 0.5 * c, grid.y0 + 0.5 * c, grid.x0 + (grid.nx - 0.5) * c,
+        grid.y0 + (grid.ny - 0.5) * c}},
+      {"png",
+       {{"bit_depth", 16},
+        {"z_min", range.z_min},
+        {"z_max", range.z_max},
+        {"metres_per_level", range.step()},
+        {"height", "z = z_min + grey / 65535 * (z_max - z_min)"},
+        {"rows", "row 0 holds the columns of highest y; column 0 those of lowest x"}}},
+      {"obj", {{"up_axis", std::string(up_axis_name(up))}}},
+      {"files",
+       {{"H_NNNN", "H, the top of the sand (the terrain where there is none)"},
+        {"h_NNNN", "h, the top of the static layer"}}},
+      {"units", "metres, scene frame (z up) for origin, extent and the z range"},
+  };
+}
+
+}  // namespace sandflow

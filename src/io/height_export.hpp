@@ -1,0 +1,49 @@
+// The height field of a surface-mode run as files: a 16-bit grey PNG of one height per column
+// (H, the top of the sand, or h, the top of the static layer), an OBJ mesh through the column
+// centres, and the sidecar JSON that says how to turn the PNG's greys back into metres.
+//
+// The PNG maps [z_min, z_max] linearly onto the greys 0..65535, grey = round(65535 (z - z_min) /
+// (z_max - z_min)), so a height comes back as z = z_min + grey / 65535 (z_max - z_min) within half
+// a level. The range is chosen once for a run (FrameExporter), so that frames are comparable and
+// an animation's greys do not jump. Image row 0 is the row of columns with the highest y and
+// column 0 the lowest x: the picture is a map seen from above with y up the page, the convention
+// of a heightmap's PNG in a scene file, so an exported H_NNNN.png with the sidecar's z range and
+// `extent` is itself a heightmap (docs/scenes.md).
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "scene/scene_config.hpp"
+#include "surface/height_field.hpp"
+
+namespace sandflow {
+
+/// The fixed z range of a run's height images [m], z_min < z_max.
+struct HeightRange {
+  Real z_min = 0, z_max = 1;
+  /// Metres per grey level.
+  Real step() const { return (z_max - z_min) / 65535.0; }
+};
+
+/// Writes `z` (one value per column of `grid`, row-major with x fastest) as a 16-bit grey PNG,
+/// atomically. Values outside the range are clamped (non-finite ones written as z_min); returns
+/// how many were. Throws OutputError naming the path.
+std::size_t write_height_png(const std::string& path, const HeightFieldParams& grid,
+                             const std::vector<Real>& z, const HeightRange& range);
+
+/// Writes `z` as an OBJ mesh, atomically: one vertex per column centre (the vertex of column
+/// (i, j) is number 1 + j nx + i), two triangles per cell between four centres, counter-clockwise
+/// seen from above so that their normals point up; in the `up` frame (export_formats.hpp).
+/// `comment` goes on a first `#` line. Throws OutputError naming the path.
+void write_height_obj(const std::string& path, const HeightFieldParams& grid,
+                      const std::vector<Real>& z, UpAxis up, const std::string& comment);
+
+/// What heightfield.json holds: the grid (origin, cell size, nx, ny), the extent of the column
+/// centres, the PNG's range and formula, and the OBJ files' up axis.
+nlohmann::json height_sidecar(const HeightFieldParams& grid, const HeightRange& range, UpAxis up);
+
+}  // namespace sandflow
