@@ -107,7 +107,7 @@ std::vector<std::string> run_folders(const std::string& dir) {
   return runs;
 }
 
-// ---- The scene: geometry, camera, fps ------------------------------------------------------------
+// ---- The scene: geometry, camera, fps -------------------------------------------------------
 
 struct RenderScene {
   std::vector<GeometryConfig> geometry;
@@ -337,8 +337,12 @@ int render_command(const RenderOptions& o) {
   std::fflush(stdout);
   if (!failed.empty()) {
     std::vector<std::string> names;
-    for (std::size_t k = 0; k < failed.size() && k < 10; ++k)
-      names.push_back(frame_path(tasks[failed[k]].run, tasks[failed[k]].frame));
+    for (std::size_t k = 0; k < failed.size() && k < 10; ++k) {
+      const Task& t = tasks[failed[k]];
+      names.push_back(runs.size() > 1
+                          ? fmt::format("{} frame {}", fs::path(t.run).filename().string(), t.frame)
+                          : fmt::format("frame {}", t.frame));
+    }
     if (failed.size() > names.size())
       names.push_back(fmt::format("and {} more", failed.size() - names.size()));
     throw OutputError(fmt::format(

@@ -129,8 +129,9 @@ int main(int argc, char** argv) {
                              : std::string();
           },
           "FRAMES"));
-  render->add_option("--quality", rdo.quality,
-                     "final (antialiased, soft light; the default) or draft (fast previews)")
+  render
+      ->add_option("--quality", rdo.quality,
+                   "final (antialiased, soft light; the default) or draft (fast previews)")
       ->check(CLI::IsMember({"draft", "final"}));
   render->add_option("--jobs", rdo.jobs, "frames rendered at once (default: one per core)")
       ->check(CLI::Range(1, 1024));

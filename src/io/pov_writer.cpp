@@ -624,7 +624,8 @@ std::string run_logged(std::vector<std::string> args, const std::string& work_di
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
-  if (WIFSIGNALED(status)) return what + " was killed by signal " + std::to_string(WTERMSIG(status));
+  if (WIFSIGNALED(status))
+    return what + " was killed by signal " + std::to_string(WTERMSIG(status));
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
     return what + " failed with exit status " + std::to_string(WEXITSTATUS(status));
   return "";
@@ -661,14 +662,16 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
   std::string problem = run_logged(args, pov_abs.parent_path().string(), log_path, "povray");
   if (problem.empty() && (!fs::exists(partial, ec) || fs::file_size(partial, ec) == 0))
     problem = "povray wrote no image";
-  if (problem.empty()) {
-    fs::rename(partial, png_path, ec);
-    if (ec) problem = "cannot rename " + partial + ": " + ec.message();
-  }
   if (!problem.empty()) {
     fs::remove(partial, ec);
     throw OutputError(png_path + ": " + problem + "; end of " + log_path + ":\n" +
                       tail_of(log_path, 1500));
+  }
+  fs::rename(partial, png_path, ec);
+  if (ec) {
+    const std::string reason = ec.message();
+    fs::remove(partial, ec);
+    throw OutputError(png_path + ": cannot rename " + partial + " to it: " + reason);
   }
 }
 
@@ -676,8 +679,9 @@ void encode_movie(const std::string& folder, int first, int count, double fps,
                   const std::string& mp4_path) {
   const std::string exe = find_program("ffmpeg");
   if (exe.empty())
-    throw OutputError(mp4_path + ": cannot encode: ffmpeg is not on PATH (sudo apt-get install "
-                                 "ffmpeg)");
+    throw OutputError(mp4_path +
+                      ": cannot encode: ffmpeg is not on PATH (sudo apt-get install "
+                      "ffmpeg)");
   std::error_code ec;
   const std::string log_path = fs::absolute(mp4_path + ".log", ec).string();
   const std::string partial = fs::absolute(mp4_path + ".partial", ec).string();
@@ -712,14 +716,16 @@ void encode_movie(const std::string& folder, int first, int count, double fps,
   std::string problem = run_logged(args, folder, log_path, "ffmpeg");
   if (problem.empty() && (!fs::exists(partial, ec) || fs::file_size(partial, ec) == 0))
     problem = "ffmpeg wrote no movie";
-  if (problem.empty()) {
-    fs::rename(partial, mp4_path, ec);
-    if (ec) problem = "cannot rename " + partial + ": " + ec.message();
-  }
   if (!problem.empty()) {
     fs::remove(partial, ec);
     throw OutputError(mp4_path + ": " + problem + "; end of " + log_path + ":\n" +
                       tail_of(log_path, 1500));
+  }
+  fs::rename(partial, mp4_path, ec);
+  if (ec) {
+    const std::string reason = ec.message();
+    fs::remove(partial, ec);
+    throw OutputError(mp4_path + ": cannot rename " + partial + " to it: " + reason);
   }
 }
 
