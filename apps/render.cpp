@@ -369,6 +369,10 @@ int render_command(const RenderOptions& o) {
           folder, fps, first, folder, last - first + 1,
           o.width % 2 || o.height % 2 ? " -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2'" : "", mp4));
     encode_movie(folder, first, last - first + 1, fps, mp4);
+    if (!o.keep_pov) {
+      std::error_code ec;
+      fs::remove(mp4 + ".log", ec);
+    }
     fmt::print("{}\n", mp4);
   }
   return 0;

@@ -138,7 +138,8 @@ int main(int argc, char** argv) {
   render->add_flag("--movie", rdo.movie,
                    "also encode the frames to DIR/render/movie.mp4 (H.264) with ffmpeg");
   render->add_flag("--keep-pov", rdo.keep_pov,
-                   "keep each picture's POV-Ray scene (NNNN.pov) and log (NNNN.png.log)");
+                   "keep each picture's POV-Ray scene (NNNN.pov) and the logs of POV-Ray "
+                   "(NNNN.png.log) and ffmpeg (movie.mp4.log)");
   render->add_option("--scene", rdo.scene,
                      "scene file for the geometry and [camera] (default: the one the run's "
                      "summary.json names)");
