@@ -561,10 +561,12 @@ void write_pov_scene(const std::string& path, const FrameData& f,
   write_header(s, cam, b, opt, f.size());
   for (std::size_t k = 0; k < geometry.size(); ++k)
     write_geometry(s, geometry[k], b, k < meshes.size() ? meshes[k] : nullptr);
-  if (opt.floor && !has_visible_plane(geometry)) {
-    // below everything drawn, by a hair so that it does not touch a flat bottom
+  // below everything drawn, by a hair so that it does not touch a flat bottom; not when the
+  // camera is under it (it would hide everything)
+  const double floor_z = b.lo.z - 1e-3 * b.radius();
+  if (opt.floor && !has_visible_plane(geometry) && cam.location.z > floor_z) {
     line(s, "// floor (the scene has no plane): for looks only");
-    line(s, "plane { z, ", b.lo.z - 1e-3 * b.radius(), " texture { Floor } }");
+    line(s, "plane { z, ", floor_z, " texture { Floor } }");
   }
   line(s, "");
   write_grains(s, f);

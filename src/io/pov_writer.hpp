@@ -19,7 +19,7 @@
 // Lighting: for the final look a soft key light (a 3x3 adaptive area light), a shadowless fill
 // light and a little ambient light, with a pale sky behind; the draft look replaces the area light
 // by a point light (several times faster, hard shadows). A scene without a plane gets a floor
-// under its lowest point, for looks only.
+// under its lowest point, for looks only (unless the camera is below it).
 //
 // An animation must not jitter: everything sized from the scene's extent (the automatic camera,
 // the lights, the floor's squares, a glass plane's slab) is sized from PovOptions::bounds when it
@@ -67,7 +67,8 @@ struct PovOptions {
   /// the geometry. An empty box is taken as unset.
   ViewBounds bounds;
   bool soft_light = true;  ///< an area light (soft shadows); false: a point light (draft)
-  bool floor = true;       ///< draw a floor under the scene when its geometry has no plane
+  bool floor = true;       ///< draw a floor under the scene when its geometry has no plane (and the
+                           ///< camera is above it)
 };
 
 /// The automatic camera's position and look-at point for `bounds` (what write_pov_scene uses
