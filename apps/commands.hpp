@@ -48,6 +48,7 @@ struct RenderOptions {
   bool movie = false;             ///< also encode DIR/render/movie.mp4 with ffmpeg
   bool keep_pov = false;          ///< keep each picture's .pov scene and the logs
   std::string scene;              ///< scene file; "": the one DIR/summary.json names
+  std::vector<std::string> sets;  ///< --set camera.KEY=... or geometry.N.render=...
 };
 
 std::string mode_name(Mode m);

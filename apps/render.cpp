@@ -16,6 +16,7 @@
 #include <functional>
 #include <mutex>
 #include <optional>
+#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -124,9 +125,27 @@ nlohmann::json read_summary(const std::string& run) {
   return j.is_discarded() || !j.is_object() ? nlohmann::json() : j;
 }
 
+/// The --set overrides of render: only what changes the picture, not what the grains met (the
+/// camera and how each geometry entry is drawn).
+std::vector<Override> look_overrides(const std::vector<std::string>& sets) {
+  static const std::regex kLookKey(R"(camera\.\w+|geometry(\.\d+|\[\d+\])\.render)");
+  std::vector<Override> out;
+  for (const std::string& s : sets) {
+    Override o = parse_override(s);
+    if (!std::regex_match(o.key, kLookKey))
+      throw InputError(fmt::format(
+          "--set {}: render takes only camera.KEY and geometry.N.render (how the picture looks, "
+          "not what the grains met)",
+          s));
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
 /// The scene from --scene, else from the scene file the first run's summary.json names. Without
 /// either only the grains are drawn.
-RenderScene load_render_scene(const std::string& scene_option, const std::string& run) {
+RenderScene load_render_scene(const std::string& scene_option,
+                              const std::vector<Override>& overrides, const std::string& run) {
   RenderScene rs;
   const nlohmann::json summary = read_summary(run);
   if (summary.contains("fps") && summary["fps"].is_number()) rs.fps = summary["fps"].get<double>();
@@ -142,6 +161,11 @@ RenderScene load_render_scene(const std::string& scene_option, const std::string
             "another folder): pass it with --scene FILE",
             summary_path, file));
     } else {
+      if (!overrides.empty())
+        throw InputError(
+            fmt::format("--set {}={}: {} is missing or names no scene file: pass "
+                        "--scene FILE",
+                        overrides.front().key, overrides.front().value, summary_path));
       fmt::print(stderr,
                  "warning: {} is missing or names no scene file (an unfinished run?): drawing "
                  "the grains without the geometry; pass --scene FILE to draw it\n",
@@ -149,7 +173,7 @@ RenderScene load_render_scene(const std::string& scene_option, const std::string
       return rs;
     }
   }
-  const SceneConfig scene = load_scene(file);
+  const SceneConfig scene = load_scene(file, overrides);
   rs.geometry = scene.geometry;
   rs.camera = scene.camera;
   if (!rs.fps) rs.fps = scene.output.fps;
@@ -225,6 +249,7 @@ int render_command(const RenderOptions& o) {
     spec = {o.frame, o.frame};
     frames_option = fmt::format("--frame {}", o.frame);
   }
+  const std::vector<Override> overrides = look_overrides(o.sets);
   const bool movie_tool = !o.movie || !find_program("ffmpeg").empty();
 
   // The frames of each run (a comparison's two runs have the same)
@@ -267,7 +292,7 @@ int render_command(const RenderOptions& o) {
                "warning: ffmpeg is not installed: the frames will be rendered, but no movie made "
                "(sudo apt-get install ffmpeg)\n");
 
-  const RenderScene scene = load_render_scene(o.scene, runs.front());
+  const RenderScene scene = load_render_scene(o.scene, overrides, runs.front());
   const int cores = std::max(1, omp_get_num_procs());
   const int jobs = std::min(o.jobs > 0 ? o.jobs : cores, static_cast<int>(tasks.size()));
   // the cores shared out: each povray gets its share of them as render threads

@@ -143,6 +143,9 @@ int main(int argc, char** argv) {
   render->add_option("--scene", rdo.scene,
                      "scene file for the geometry and [camera] (default: the one the run's "
                      "summary.json names)");
+  render->add_option("--set", rdo.sets,
+                     "change the look: --set camera.fov=30, --set geometry.1.render=glass "
+                     "(camera.KEY and geometry.N.render only)");
   render->footer(
       "Every frame of a run gets the same camera and light: the scene file's [camera], or an\n"
       "automatic one framing the geometry and the grains of all the run's frames. A comparison\n"

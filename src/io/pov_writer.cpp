@@ -462,6 +462,17 @@ ViewBounds grain_bounds(const FrameData& f) {
   return b;
 }
 
+namespace {
+
+// The corners of the box [lo, hi] in a shape's own frame, rotated and moved as drawn.
+void add_local_box(ViewBounds& b, const GeometryConfig& g, const Vec3& lo, const Vec3& hi) {
+  const Mat3 m = rotation_xyz_deg(g.rotation_deg);
+  for (int k = 0; k < 8; ++k)
+    b.add(g.center + m * Vec3{k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z}, 0);
+}
+
+}  // namespace
+
 ViewBounds geometry_bounds(const std::vector<GeometryConfig>& geometry,
                            const std::vector<const TriangleMesh*>& meshes) {
   ViewBounds b;
@@ -478,15 +489,24 @@ ViewBounds geometry_bounds(const std::vector<GeometryConfig>& geometry,
       case GeometryType::Sphere:
         b.add(g.center, g.radius);
         break;
-      case GeometryType::Box:
-        b.add(g.center, 0.5 * norm(g.size) + g.wall_thickness);
+      case GeometryType::Box: {
+        const double t = g.container ? g.wall_thickness : 0;
+        const Vec3 h = g.size * 0.5 + Vec3{t, t, t};
+        add_local_box(b, g, -h, h);
         break;
-      case GeometryType::Cylinder:
-        b.add(g.center, std::hypot(g.radius + g.wall_thickness, 0.5 * g.height + g.wall_thickness));
+      }
+      case GeometryType::Cylinder: {
+        const double t = g.container ? g.wall_thickness : 0;
+        const double r = g.radius + t, hz = 0.5 * g.height + t;
+        add_local_box(b, g, {-r, -r, -hz}, {r, r, hz});
         break;
-      case GeometryType::Bowl:
-        b.add(g.center, g.radius + g.wall_thickness);
+      }
+      case GeometryType::Bowl: {
+        // the shell below its rim plane
+        const double r = g.radius + g.wall_thickness;
+        add_local_box(b, g, {-r, -r, -r}, {r, r, g.depth.value_or(g.radius) - g.radius});
         break;
+      }
       case GeometryType::Heightmap:
         if (!g.heights.z.empty()) {
           const auto [lo, hi] = std::minmax_element(g.heights.z.begin(), g.heights.z.end());

@@ -213,6 +213,31 @@ TEST_F(Render, SceneCameraIsUsed) {
   EXPECT_NE(pov.find("angle 30"), std::string::npos);
 }
 
+TEST_F(Render, SetChangesTheLookOnly) {
+  const fs::path run = tiny_run(1);
+  std::string log;
+  ASSERT_EQ(sandflow("render " + run.string() +
+                         " --width 32 --height 24 --quality draft "
+                         "--keep-pov --set camera.fov=25 --set geometry.0.render=hidden",
+                     &log),
+            0)
+      << log;
+  const std::string pov = read_text(run / "render" / "0001.pov");
+  EXPECT_NE(pov.find("angle 25"), std::string::npos);
+  EXPECT_EQ(pov.find("// geometry 0"), std::string::npos);  // the floor plane, hidden
+  // what the grains met is not render's to change
+  EXPECT_EQ(sandflow("render " + run.string() + " --set material.friction=1", &log), 2) << log;
+  EXPECT_NE(log.find("--set material.friction=1: render takes only camera.KEY and "
+                     "geometry.N.render"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(sandflow("render " + run.string() + " --set geometry.0.point=[0,0,1]", &log), 2) << log;
+  // and a bad look value is a scene error, named
+  EXPECT_EQ(sandflow("render " + run.string() + " --set camera.fov=0", &log), 2) << log;
+  EXPECT_NE(log.find("--set camera.fov: camera.fov = 0 is outside (0, 180)"), std::string::npos)
+      << log;
+}
+
 TEST_F(Render, ComparisonFolderGetsOneCameraForBothRuns) {
   const auto scene = box.write("tiny.toml", kTinyScene);
   const auto out = box.dir / "cmp";
