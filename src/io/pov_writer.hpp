@@ -18,7 +18,7 @@
 // open_top; spheres as spheres. RenderStyle::Glass draws clear glass, Hidden draws nothing.
 // Lighting: for the final look a soft key light (a 3x3 adaptive area light), a shadowless fill
 // light and a little ambient light, with a pale sky behind; the draft look replaces the area light
-// by a point light (several times faster, hard shadows). A scene without a plane gets a floor
+// by a point light (faster, hard shadows). A scene without a plane gets a floor
 // under its lowest point, for looks only (unless the camera is below it).
 //
 // An animation must not jitter: everything sized from the scene's extent (the automatic camera,
