@@ -211,6 +211,8 @@ ViewBounds run_bounds(const std::vector<std::string>& runs, int jobs) {
   std::vector<std::string> files;
   for (const std::string& run : runs)
     for (int f : frame_numbers(run)) files.push_back(frame_path(run, f));
+  if (files.size() > 30)  // seconds for a large run: say what the wait is for
+    fmt::print(stderr, "framing the camera: reading the grains of {} frames\n", files.size());
   std::vector<ViewBounds> part(files.size());
   std::vector<std::string> errors(files.size());
   parallel_tasks(static_cast<int>(files.size()), jobs, [&](int i) {
@@ -228,7 +230,7 @@ ViewBounds run_bounds(const std::vector<std::string>& runs, int jobs) {
   return b;
 }
 
-std::string quoted_list(const std::vector<std::string>& v) {
+std::string comma_list(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
   return s;
@@ -373,7 +375,7 @@ int render_command(const RenderOptions& o) {
     throw OutputError(fmt::format(
         "{} of {} frames failed to render ({}); the other pictures are in place{}. The first "
         "failure: {}",
-        failed.size(), n, quoted_list(names), o.movie ? ", and no movie was made" : "",
+        failed.size(), n, comma_list(names), o.movie ? ", and no movie was made" : "",
         errors[failed.front()]));
   }
 
@@ -382,23 +384,45 @@ int render_command(const RenderOptions& o) {
   if (!scene.fps)
     fmt::print(stderr, "warning: the run's fps is unknown (no summary.json): the movie is at {}\n",
                fps);
+  // each run's movie, and a comparison's two runs side by side (surface left, DEM right)
+  struct Movie {
+    std::vector<std::string> folders;
+    Span span;
+    std::string mp4;
+  };
+  std::vector<Movie> movies;
   for (std::size_t k = 0; k < runs.size(); ++k) {
-    const auto [first, last] = spans[k];
     const std::string folder = (fs::path(runs[k]) / "render").string();
-    const std::string mp4 = (fs::path(folder) / "movie.mp4").string();
-    if (!movie_tool)
-      throw InputError(fmt::format(
-          "ffmpeg is not installed, so no movie was made (the pictures are in {}). Install it "
-          "with: sudo apt-get install ffmpeg; then encode them with: ffmpeg -framerate {} "
-          "-start_number {} -i {}/%04d.png -frames:v {}{} -c:v libx264 -pix_fmt yuv420p {}",
-          folder, fps, first, folder, last - first + 1,
-          o.width % 2 || o.height % 2 ? " -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2'" : "", mp4));
-    encode_movie(folder, first, last - first + 1, fps, mp4);
+    movies.push_back({{folder}, spans[k], (fs::path(folder) / "movie.mp4").string()});
+  }
+  if (runs.size() > 1 && spans[0].first == spans[1].first && spans[0].last == spans[1].last) {
+    const fs::path folder = fs::path(o.dir) / "render";
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (ec) throw OutputError(fmt::format("{}: cannot create: {}", folder.string(), ec.message()));
+    movies.push_back({{movies[0].folders[0], movies[1].folders[0]},
+                      spans[0],
+                      (folder / "side_by_side.mp4").string()});
+  }
+  if (!movie_tool) {
+    const Movie& m = movies.front();
+    throw InputError(fmt::format(
+        "ffmpeg is not installed, so no movie was made (the pictures are in {}). Install it "
+        "with: sudo apt-get install ffmpeg; then encode them with: ffmpeg -framerate {} "
+        "-start_number {} -i {}/%04d.png -frames:v {}{} -c:v libx264 -pix_fmt yuv420p {}",
+        comma_list(runs.size() > 1
+                       ? std::vector<std::string>{movies[0].folders[0], movies[1].folders[0]}
+                       : m.folders),
+        fps, m.span.first, m.folders[0], m.span.last - m.span.first + 1,
+        o.width % 2 || o.height % 2 ? " -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2'" : "", m.mp4));
+  }
+  for (const Movie& m : movies) {
+    encode_movie(m.folders, m.span.first, m.span.last - m.span.first + 1, fps, m.mp4);
     if (!o.keep_pov) {
       std::error_code ec;
-      fs::remove(mp4 + ".log", ec);
+      fs::remove(m.mp4 + ".log", ec);
     }
-    fmt::print("{}\n", mp4);
+    fmt::print("{}\n", m.mp4);
   }
   return 0;
 }

@@ -149,7 +149,8 @@ int main(int argc, char** argv) {
   render->footer(
       "Every frame of a run gets the same camera and light: the scene file's [camera], or an\n"
       "automatic one framing the geometry and the grains of all the run's frames. A comparison\n"
-      "folder renders both runs with one camera, into surface/render and dem/render. Frames\n"
+      "folder renders both runs with one camera, into surface/render and dem/render (--movie\n"
+      "adds DIR/render/side_by_side.mp4: surface flow left, plain DEM right). Frames\n"
       "render in parallel (--jobs); each povray gets cores/jobs threads. A frame that fails is\n"
       "named with the end of POV-Ray's log, and the others are still rendered. The movie runs\n"
       "at the run's fps; without ffmpeg the frames are rendered and the exit status is 2.\n"

@@ -697,45 +697,50 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
   }
 }
 
-void encode_movie(const std::string& folder, int first, int count, double fps,
+void encode_movie(const std::vector<std::string>& folders, int first, int count, double fps,
                   const std::string& mp4_path) {
   const std::string exe = find_program("ffmpeg");
   if (exe.empty())
     throw OutputError(mp4_path +
                       ": cannot encode: ffmpeg is not on PATH (sudo apt-get install "
                       "ffmpeg)");
+  if (folders.empty() || count < 1)
+    throw std::invalid_argument("encode_movie: no folder or no frame to encode");
   std::error_code ec;
   const std::string log_path = fs::absolute(mp4_path + ".log", ec).string();
   const std::string partial = fs::absolute(mp4_path + ".partial", ec).string();
   fs::remove(partial, ec);
   char rate[32];
   std::snprintf(rate, sizeof rate, "%.9g", fps);
-  // Run in the images' folder so that a '%' in its path cannot disturb ffmpeg's %04d pattern.
-  // yuv420p (what players expect) needs even sizes: pad by a pixel when odd.
-  const std::vector<std::string> args = {exe,
-                                         "-nostdin",
-                                         "-y",
-                                         "-hide_banner",
-                                         "-framerate",
-                                         rate,
-                                         "-start_number",
-                                         std::to_string(first),
-                                         "-i",
-                                         "%04d.png",
-                                         "-frames:v",
-                                         std::to_string(count),
-                                         "-vf",
-                                         "pad=ceil(iw/2)*2:ceil(ih/2)*2",
-                                         "-c:v",
-                                         "libx264",
-                                         "-pix_fmt",
-                                         "yuv420p",
-                                         "-movflags",
-                                         "+faststart",
-                                         "-f",
-                                         "mp4",
-                                         partial};
-  std::string problem = run_logged(args, folder, log_path, "ffmpeg");
+  std::vector<std::string> args = {exe, "-nostdin", "-y", "-hide_banner"};
+  for (const std::string& folder : folders) {
+    // ffmpeg reads '%' in an image path as the start of its pattern: a literal one is "%%"
+    std::string pattern;
+    for (char ch : fs::absolute(folder, ec).string())
+      pattern += ch == '%' ? "%%" : std::string(1, ch);
+    pattern += "/%04d.png";
+    for (const std::string& a :
+         {std::string("-framerate"), std::string(rate), std::string("-start_number"),
+          std::to_string(first), std::string("-i"), pattern})
+      args.push_back(a);
+  }
+  // side by side when there are several; yuv420p (what players expect) needs even sizes: pad by
+  // a pixel when odd
+  std::string filter;
+  if (folders.size() > 1) {
+    for (std::size_t k = 0; k < folders.size(); ++k) filter += "[" + std::to_string(k) + ":v]";
+    filter += "hstack=inputs=" + std::to_string(folders.size()) + ",";
+  }
+  filter += "pad=ceil(iw/2)*2:ceil(ih/2)*2";
+  for (const std::string& a :
+       {std::string("-frames:v"), std::to_string(count),
+        std::string(folders.size() > 1 ? "-filter_complex" : "-vf"), filter, std::string("-c:v"),
+        std::string("libx264"), std::string("-pix_fmt"), std::string("yuv420p"),
+        std::string("-movflags"), std::string("+faststart"), std::string("-f"), std::string("mp4"),
+        partial})
+    args.push_back(a);
+  std::string problem =
+      run_logged(args, fs::absolute(folders.front(), ec).string(), log_path, "ffmpeg");
   if (problem.empty() && (!fs::exists(partial, ec) || fs::file_size(partial, ec) == 0))
     problem = "ffmpeg wrote no movie";
   if (!problem.empty()) {

@@ -97,12 +97,13 @@ std::string find_povray();
 void render_pov(const std::string& pov_path, const std::string& png_path, int width, int height,
                 int threads, bool antialias = true);
 
-/// Encodes the images `folder`/NNNN.png, frames first .. first + count - 1 (the names
-/// frame_path gives), into the H.264 MP4 `mp4_path` (yuv420p, odd sizes padded to even) at
-/// `fps` frames per second, with ffmpeg. ffmpeg's output goes to mp4_path + ".log"; the movie
-/// appears only when the encoding succeeded. Throws OutputError naming the path (with the end of
-/// the log) when ffmpeg is missing or fails.
-void encode_movie(const std::string& folder, int first, int count, double fps,
+/// Encodes the images FOLDER/NNNN.png, frames first .. first + count - 1 (the names frame_path
+/// gives), into the H.264 MP4 `mp4_path` (yuv420p, odd sizes padded to even) at `fps` frames per
+/// second, with ffmpeg. Several folders (pictures of the same size) are put side by side, left
+/// to right. ffmpeg's output goes to mp4_path + ".log"; the movie appears only when the encoding
+/// succeeded. Throws OutputError naming the path (with the end of the log) when ffmpeg is
+/// missing or fails.
+void encode_movie(const std::vector<std::string>& folders, int first, int count, double fps,
                   const std::string& mp4_path);
 
 }  // namespace sandflow

@@ -298,6 +298,36 @@ TEST_F(Render, MovieOfTheFrames) {
   }
 }
 
+TEST_F(Render, ComparisonMovieHasBothRunsSideBySide) {
+  if (sandflow::find_program("ffmpeg").empty() || sandflow::find_program("ffprobe").empty())
+    GTEST_SKIP() << "ffmpeg is not installed (sudo apt-get install ffmpeg)";
+  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto out = box.dir / "cmp";
+  std::string log;
+  ASSERT_EQ(sandflow("compare " + scene.string() + " --frames 2 --out " + out.string(), &log), 0)
+      << log;
+  ASSERT_EQ(sandflow("render " + out.string() +
+                         " --frames all --width 32 --height 24 --quality draft --movie",
+                     &log),
+            0)
+      << log;
+  EXPECT_TRUE(fs::is_regular_file(out / "surface" / "render" / "movie.mp4")) << log;
+  EXPECT_TRUE(fs::is_regular_file(out / "dem" / "render" / "movie.mp4")) << log;
+  const fs::path both = out / "render" / "side_by_side.mp4";
+  ASSERT_TRUE(fs::is_regular_file(both)) << log;
+  // two 32-pixel pictures side by side, both frames
+  const fs::path probe = box.dir / "probe.txt";
+  const std::string cmd =
+      "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+      "stream=width,height,nb_read_frames -of default=nw=1 " +
+      both.string() + " > " + probe.string() + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  const std::string info = read_text(probe);
+  EXPECT_NE(info.find("width=64"), std::string::npos) << info;
+  EXPECT_NE(info.find("height=24"), std::string::npos) << info;
+  EXPECT_NE(info.find("nb_read_frames=2"), std::string::npos) << info;
+}
+
 TEST_F(Render, WithoutFfmpegTheFramesAreRenderedAndTheMessageSaysHowToInstallIt) {
   const fs::path run = tiny_run(2);
   // a PATH with povray and the shell's tools but no ffmpeg
