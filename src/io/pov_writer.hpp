@@ -2,7 +2,7 @@
 //
 // The simulator's world is right-handed with z up; POV-Ray is left-handed with y up. Rather than
 // transforming every coordinate, the scene keeps world coordinates and sets the camera up as
-//     right -x*W/H  up y  sky z  look_at ...
+//     right -x*W/H  up y  sky z  look_at ...     (sky: the [camera] table's up, z by default)
 // POV-Ray derives the camera's handedness from the sign of (up x direction) . right before
 // look_at re-aims it; the negated right vector makes screen-right = forward x z, the right-handed
 // convention, so pictures are not mirrored (tests/io/test_pov_writer.cpp checks this with a
@@ -15,11 +15,12 @@
 // flicker between frames). Geometry: planes are drawn as infinite floors with a faint checker
 // (glass planes as a thin finite slab); boxes and cylinders as solids or, for containers, as
 // walls of wall_thickness around the inner size, centred on `center`, without a lid when
-// open_top; spheres as spheres. RenderStyle::Glass draws clear glass, Hidden draws nothing.
+// open_top; spheres as spheres; a bowl as its shell below the rim; heightmaps and meshes as
+// mesh2 triangles. RenderStyle::Glass draws clear glass, Hidden draws nothing. A scene without a
+// solid plane gets a floor under its lowest point, for looks only (unless the camera is below it).
 // Lighting: for the final look a soft key light (a 3x3 adaptive area light), a shadowless fill
 // light and a little ambient light, with a pale sky behind; the draft look replaces the area light
-// by a point light (faster, hard shadows). A scene without a plane gets a floor
-// under its lowest point, for looks only (unless the camera is below it).
+// by a point light (faster, hard shadows).
 //
 // An animation must not jitter: everything sized from the scene's extent (the automatic camera,
 // the lights, the floor's squares, a glass plane's slab) is sized from PovOptions::bounds when it
