@@ -10,14 +10,15 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <charconv>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <mutex>
 #include <optional>
-#include <regex>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -125,14 +126,36 @@ nlohmann::json read_summary(const std::string& run) {
   return j.is_discarded() || !j.is_object() ? nlohmann::json() : j;
 }
 
+/// camera.KEY, geometry.N.render or geometry[N].render.
+bool is_look_key(const std::string& key) {
+  const auto word = [](std::string_view w) {
+    return !w.empty() && std::all_of(w.begin(), w.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+    });
+  };
+  const auto digits = [](std::string_view w) {
+    return !w.empty() &&
+           std::all_of(w.begin(), w.end(), [](char c) { return c >= '0' && c <= '9'; });
+  };
+  const std::string_view k = key;
+  if (k.substr(0, 7) == "camera.") return word(k.substr(7));
+  constexpr std::string_view kGeometry = "geometry", kRender = ".render";
+  if (k.size() < kGeometry.size() + kRender.size() + 2 ||
+      k.substr(0, kGeometry.size()) != kGeometry || k.substr(k.size() - kRender.size()) != kRender)
+    return false;
+  const std::string_view index =
+      k.substr(kGeometry.size(), k.size() - kGeometry.size() - kRender.size());
+  if (index.front() == '.') return digits(index.substr(1));
+  return index.front() == '[' && index.back() == ']' && digits(index.substr(1, index.size() - 2));
+}
+
 /// The --set overrides of render: only what changes the picture, not what the grains met (the
 /// camera and how each geometry entry is drawn).
 std::vector<Override> look_overrides(const std::vector<std::string>& sets) {
-  static const std::regex kLookKey(R"(camera\.\w+|geometry(\.\d+|\[\d+\])\.render)");
   std::vector<Override> out;
   for (const std::string& s : sets) {
     Override o = parse_override(s);
-    if (!std::regex_match(o.key, kLookKey))
+    if (!is_look_key(o.key))
       throw InputError(fmt::format(
           "--set {}: render takes only camera.KEY and geometry.N.render (how the picture looks, "
           "not what the grains met)",
