@@ -42,9 +42,16 @@ struct Table1Options {
 };
 
 struct RenderOptions {
-  std::string dir;
+  std::string dir;  ///< a run folder, or a comparison's (surface/ and dem/)
   int width = 1280, height = 720;
-  int frame = 0;  ///< 0: the last
+  int frame = 0;                  ///< 0: the last (unless `frames` is given)
+  std::string frames;             ///< "N", "A:B", "A:", ":B", "all" or ":"; "": `frame`
+  std::string quality = "final";  ///< "final" (antialiased, soft light) or "draft"
+  int jobs = 0;                   ///< frames rendered at once; 0: one per core
+  bool movie = false;             ///< also encode DIR/render/movie.mp4 with ffmpeg
+  bool keep_pov = false;          ///< keep each picture's .pov scene and the logs
+  std::string scene;              ///< scene file; "": the one DIR/summary.json names
+  std::vector<std::string> sets;  ///< --set camera.KEY=... or geometry.N.render=...
 };
 
 /// `sandflow report` (report.cpp)

@@ -1,9 +1,25 @@
-// `sandflow render`: a run's frame drawn by POV-Ray.
+// `sandflow render`: a run's frames drawn by POV-Ray, several at once, and a movie of them.
+//
+// The camera and the lights belong to the run, not to the frame: they are placed around the
+// bounds of the geometry and of the grains of every frame of the run, computed once before the
+// first picture, so that an animation does not jitter and a frame rendered later matches the
+// others. A comparison folder (DIR/surface and DIR/dem) is framed over both runs, so their
+// pictures can be put side by side. A [camera] table in the scene file replaces the automatic
+// camera.
 #include <omp.h>
 
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <charconv>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <mutex>
+#include <optional>
 #include <string>
+#include <string_view>
+#include <thread>
 #include <vector>
 
 #include <fmt/format.h>
@@ -11,46 +27,426 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "geometry/shapes.hpp"
 #include "io/ply.hpp"
 #include "io/pov_writer.hpp"
 #include "io/run_output.hpp"
+#include "progress.hpp"
 #include "scene/scene_loader.hpp"
 
 namespace fs = std::filesystem;
 
 namespace sandflow {
+namespace {
 
-int render_command(const RenderOptions& o) {
-  const std::string& dir = o.dir;
-  const int width = o.width, height = o.height, frame = o.frame;
-  const std::string ply = frame > 0 ? frame_path(dir, frame) : last_frame(dir);
-  const FrameData f = read_ply(ply);
-  // the geometry comes from the scene file the run recorded
+// ---- Which frames -------------------------------------------------------------------------------
+
+/// --frames as written: either end may be open (A:, :B, all).
+struct FramesSpec {
+  std::optional<int> first, last;
+};
+
+constexpr const char* kFramesForms = "expected N, A:B, A:, :B, all or : (frames count from 1)";
+
+FramesSpec parse_frames(const std::string& text) {
+  const auto bad = [&](const std::string& why) {
+    throw InputError(fmt::format("--frames {}: {}", text, why));
+  };
+  const auto number = [&](const std::string& s) -> std::optional<int> {
+    if (s.empty()) return std::nullopt;
+    int v = 0;
+    const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (res.ec == std::errc::result_out_of_range) bad(fmt::format("{} is too large", s));
+    if (res.ec != std::errc() || res.ptr != s.data() + s.size())
+      bad(fmt::format("\"{}\" is not a frame number; {}", s, kFramesForms));
+    if (v < 1) bad(fmt::format("frame {} does not exist: frames count from 1", v));
+    return v;
+  };
+  if (text == "all" || text == ":") return {};
+  if (text.empty()) bad(kFramesForms);
+  const std::size_t colon = text.find(':');
+  if (colon == std::string::npos) {
+    const auto n = number(text);
+    return {n, n};
+  }
+  if (text.find(':', colon + 1) != std::string::npos) bad(kFramesForms);
+  FramesSpec spec{number(text.substr(0, colon)), number(text.substr(colon + 1))};
+  if (spec.first && spec.last && *spec.last < *spec.first)
+    bad(fmt::format("the last frame {} comes before the first {}: expected A:B with A <= B",
+                    *spec.last, *spec.first));
+  return spec;
+}
+
+/// The frame numbers NNNN of DIR/frames/NNNN.ply, ascending.
+std::vector<int> frame_numbers(const std::string& run) {
+  std::vector<int> out;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(fs::path(run) / "frames", ec)) {
+    if (e.path().extension() != ".ply") continue;
+    const std::string stem = e.path().stem().string();
+    int v = 0;
+    const auto res = std::from_chars(stem.data(), stem.data() + stem.size(), v);
+    if (res.ec == std::errc() && res.ptr == stem.data() + stem.size() && v > 0) out.push_back(v);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+/// A run folder, or the two runs of a comparison folder (surface/ and dem/).
+std::vector<std::string> run_folders(const std::string& dir) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw InputError(fmt::format("{}: no such folder", dir));
+  if (fs::is_directory(fs::path(dir) / "frames", ec)) return {dir};
+  std::vector<std::string> runs;
+  for (const char* mode : {"surface", "dem"})
+    if (fs::is_directory(fs::path(dir) / mode / "frames", ec))
+      runs.push_back((fs::path(dir) / mode).string());
+  if (runs.empty())
+    throw InputError(fmt::format(
+        "{}: no frames/NNNN.ply in this folder: expected the folder of a run (sandflow run) or of "
+        "a comparison (sandflow compare, with surface/ and dem/)",
+        dir));
+  return runs;
+}
+
+// ---- The scene: geometry, camera, fps -------------------------------------------------------
+
+struct RenderScene {
   std::vector<GeometryConfig> geometry;
-  Geometry placed;  // its meshes, placed
+  std::vector<MeshObstacle> placed;  ///< the meshes, placed
   std::vector<const TriangleMesh*> meshes;
-  std::ifstream in(fs::path(dir) / "summary.json");
-  if (in) {
-    const auto summary = nlohmann::json::parse(in, nullptr, false);
-    if (!summary.is_discarded() && summary.contains("scene_file")) {
-      const SceneConfig scene = load_scene(summary["scene_file"].get<std::string>());
-      geometry = scene.geometry;
-      placed = Geometry::from_config(geometry, scene.material, scene.path);
-      std::size_t next = 0;
-      for (const GeometryConfig& g : geometry)
-        meshes.push_back(g.type == GeometryType::Mesh ? &placed.meshes()[next++].mesh : nullptr);
+  CameraConfig camera;
+  std::optional<double> fps;  ///< [1/s]: the run's, else the scene file's
+};
+
+nlohmann::json read_summary(const std::string& run) {
+  std::ifstream in(fs::path(run) / "summary.json");
+  if (!in) return nlohmann::json();
+  auto j = nlohmann::json::parse(in, nullptr, false);
+  return j.is_discarded() || !j.is_object() ? nlohmann::json() : j;
+}
+
+/// camera.KEY, geometry.N.render or geometry[N].render.
+bool is_look_key(const std::string& key) {
+  const auto word = [](std::string_view w) {
+    return !w.empty() && std::all_of(w.begin(), w.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+    });
+  };
+  const auto digits = [](std::string_view w) {
+    return !w.empty() &&
+           std::all_of(w.begin(), w.end(), [](char c) { return c >= '0' && c <= '9'; });
+  };
+  const std::string_view k = key;
+  if (k.substr(0, 7) == "camera.") return word(k.substr(7));
+  constexpr std::string_view kGeometry = "geometry", kRender = ".render";
+  if (k.size() < kGeometry.size() + kRender.size() + 2 ||
+      k.substr(0, kGeometry.size()) != kGeometry || k.substr(k.size() - kRender.size()) != kRender)
+    return false;
+  const std::string_view index =
+      k.substr(kGeometry.size(), k.size() - kGeometry.size() - kRender.size());
+  if (index.front() == '.') return digits(index.substr(1));
+  return index.front() == '[' && index.back() == ']' && digits(index.substr(1, index.size() - 2));
+}
+
+/// The --set overrides of render: only what changes the picture, not what the grains met (the
+/// camera and how each geometry entry is drawn).
+std::vector<Override> look_overrides(const std::vector<std::string>& sets) {
+  std::vector<Override> out;
+  for (const std::string& s : sets) {
+    Override o = parse_override(s);
+    if (!is_look_key(o.key))
+      throw InputError(fmt::format(
+          "--set {}: render takes only camera.KEY and geometry.N.render (how the picture looks, "
+          "not what the grains met)",
+          s));
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
+/// The scene from --scene, else from the scene file the first run's summary.json names. Without
+/// either only the grains are drawn.
+RenderScene load_render_scene(const std::string& scene_option,
+                              const std::vector<Override>& overrides, const std::string& run) {
+  RenderScene rs;
+  const nlohmann::json summary = read_summary(run);
+  if (summary.contains("fps") && summary["fps"].is_number()) rs.fps = summary["fps"].get<double>();
+  std::string file = scene_option;
+  const std::string summary_path = (fs::path(run) / "summary.json").string();
+  if (file.empty()) {
+    if (summary.contains("scene_file") && summary["scene_file"].is_string()) {
+      file = summary["scene_file"].get<std::string>();
+      std::error_code ec;
+      if (!fs::is_regular_file(file, ec))
+        throw InputError(fmt::format(
+            "{}: the run's scene file {} cannot be opened (moved, or the run was started from "
+            "another folder): pass it with --scene FILE",
+            summary_path, file));
+    } else {
+      if (!overrides.empty())
+        throw InputError(
+            fmt::format("--set {}={}: {} is missing or names no scene file: pass "
+                        "--scene FILE",
+                        overrides.front().key, overrides.front().value, summary_path));
+      fmt::print(stderr,
+                 "warning: {} is missing or names no scene file (an unfinished run?): drawing "
+                 "the grains without the geometry; pass --scene FILE to draw it\n",
+                 summary_path);
+      return rs;
     }
   }
+  const SceneConfig scene = load_scene(file, overrides);
+  rs.geometry = scene.geometry;
+  rs.camera = scene.camera;
+  if (!rs.fps) rs.fps = scene.output.fps;
+  std::vector<std::string> warnings;
+  rs.placed.reserve(scene.geometry.size());  // the pointers below stay valid
+  for (const GeometryConfig& g : scene.geometry) {
+    if (g.type != GeometryType::Mesh || g.render == RenderStyle::Hidden) {
+      rs.meshes.push_back(nullptr);
+      continue;
+    }
+    rs.placed.push_back(place_mesh(g, scene.material, scene.path, warnings));
+    rs.meshes.push_back(&rs.placed.back().mesh);
+  }
+  for (const std::string& w : warnings) fmt::print(stderr, "warning: {}\n", w);
+  return rs;
+}
+
+// ---- Running tasks on several threads ----------------------------------------------------------
+
+/// Calls task(i) for i in [0, n) on `jobs` threads; `task` must not throw.
+void parallel_tasks(int n, int jobs, const std::function<void(int)>& task) {
+  std::atomic<int> next{0};
+  const auto worker = [&] {
+    for (int i = next++; i < n; i = next++) task(i);
+  };
+  std::vector<std::thread> pool;
+  for (int k = 1; k < std::min(jobs, n); ++k) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+}
+
+/// Bounds of the grains of every frame of `runs` (every frame, not only those rendered: the
+/// camera is the run's), read `jobs` at a time.
+ViewBounds run_bounds(const std::vector<std::string>& runs, int jobs) {
+  std::vector<std::string> files;
+  for (const std::string& run : runs)
+    for (int f : frame_numbers(run)) files.push_back(frame_path(run, f));
+  if (files.size() > 30)  // seconds for a large run: say what the wait is for
+    fmt::print(stderr, "framing the camera: reading the grains of {} frames\n", files.size());
+  std::vector<ViewBounds> part(files.size());
+  std::vector<std::string> errors(files.size());
+  parallel_tasks(static_cast<int>(files.size()), jobs, [&](int i) {
+    try {
+      part[i] = grain_bounds(read_ply(files[i]));
+    } catch (const std::exception& e) {
+      errors[i] = e.what();
+    }
+  });
+  ViewBounds b;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    if (!errors[i].empty()) throw InputError(errors[i]);
+    b.add(part[i]);
+  }
+  return b;
+}
+
+std::string comma_list(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+}  // namespace
+
+int render_command(const RenderOptions& o) {
+  // Options first: nothing is read or written when one is bad.
+  if (o.quality != "draft" && o.quality != "final")
+    throw InputError(fmt::format("--quality {}: expected draft or final", o.quality));
+  FramesSpec spec;
+  std::string frames_option;
+  if (!o.frames.empty()) {
+    spec = parse_frames(o.frames);
+    frames_option = "--frames " + o.frames;
+  } else if (o.frame > 0) {
+    spec = {o.frame, o.frame};
+    frames_option = fmt::format("--frame {}", o.frame);
+  }
+  const std::vector<Override> overrides = look_overrides(o.sets);
+  const bool movie_tool = !o.movie || !find_program("ffmpeg").empty();
+
+  // The frames of each run (a comparison's two runs have the same)
+  const std::vector<std::string> runs = run_folders(o.dir);
+  struct Task {
+    std::string run;
+    int frame;
+  };
+  std::vector<Task> tasks;
+  struct Span {
+    int first, last;
+  };
+  std::vector<Span> spans;
+  const bool last_only = o.frames.empty() && o.frame <= 0;
+  for (const std::string& run : runs) {
+    const std::vector<int> have = frame_numbers(run);
+    if (have.empty()) throw InputError(fmt::format("{}: no frames/NNNN.ply in this folder", run));
+    const int first = last_only ? have.back() : spec.first.value_or(have.front());
+    const int last = last_only ? have.back() : spec.last.value_or(have.back());
+    if (std::max(first, last) > have.back())
+      throw InputError(fmt::format(
+          "{}: frame {} is beyond the last frame of {}, {} ({}): expected frames up to {}",
+          frames_option, std::max(first, last), run, have.back(), frame_path(run, have.back()),
+          have.back()));
+    if (first > last)
+      throw InputError(fmt::format("{}: {} has no frames in that range (its first is {})",
+                                   frames_option, run, have.front()));
+    for (int f = first; f <= last; ++f) {
+      if (!std::binary_search(have.begin(), have.end(), f))
+        throw InputError(fmt::format("{}: {} is missing", frames_option, frame_path(run, f)));
+      tasks.push_back({run, f});
+    }
+    spans.push_back({first, last});
+  }
+
   if (find_povray().empty())
     throw InputError("povray is not installed: sudo apt-get install povray");
-  fs::create_directories(fs::path(dir) / "render");
-  const std::string stem = (fs::path(dir) / "render" / fs::path(ply).stem()).string();
+  if (!movie_tool)
+    fmt::print(stderr,
+               "warning: ffmpeg is not installed: the frames will be rendered, but no movie made "
+               "(sudo apt-get install ffmpeg)\n");
+
+  const RenderScene scene = load_render_scene(o.scene, overrides, runs.front());
+  const int cores = std::max(1, omp_get_num_procs());
+  const int jobs = std::min(o.jobs > 0 ? o.jobs : cores, static_cast<int>(tasks.size()));
+  // the cores shared out: each povray gets its share of them as render threads
+  const int threads_each = std::max(1, cores / std::max(jobs, 1));
+
   PovOptions opt;
-  opt.width = width;
-  opt.height = height;
-  write_pov_scene(stem + ".pov", f, geometry, opt, meshes);
-  render_pov(stem + ".pov", stem + ".png", width, height, omp_get_num_procs());
-  fmt::print("{}\n", stem + ".png");
+  opt.width = o.width;
+  opt.height = o.height;
+  opt.fov_deg = scene.camera.fov_deg;
+  opt.soft_light = o.quality == "final";
+  if (scene.camera.position) {
+    opt.auto_camera = false;
+    opt.camera_position = *scene.camera.position;
+    opt.camera_look_at = *scene.camera.look_at;
+    opt.camera_up = scene.camera.up.value_or(Vec3{0, 0, 1});
+  }
+  // lights and floor are placed around the same bounds for every frame, the camera too
+  opt.bounds = run_bounds(runs, cores);
+  opt.bounds.add(geometry_bounds(scene.geometry, scene.meshes));
+
+  for (const std::string& run : runs) {
+    std::error_code ec;
+    fs::create_directories(fs::path(run) / "render", ec);
+    if (ec)
+      throw OutputError(
+          fmt::format("{}: cannot create: {}", (fs::path(run) / "render").string(), ec.message()));
+  }
+
+  // Render: failures are collected, the other frames go on.
+  const int n = static_cast<int>(tasks.size());
+  std::vector<std::string> errors(tasks.size());
+  std::mutex progress_mutex;
+  int done = 0;
+  Progress progress(fmt::format("render {} ({}, {} at once)", o.dir, o.quality, jobs), n);
+  parallel_tasks(n, jobs, [&](int i) {
+    const Task& t = tasks[i];
+    const std::string stem = (fs::path(t.run) / "render" / fmt::format("{:04d}", t.frame)).string();
+    std::size_t grains = 0;
+    try {
+      const FrameData f = read_ply(frame_path(t.run, t.frame));
+      grains = f.size();
+      write_pov_scene(stem + ".pov", f, scene.geometry, opt, scene.meshes);
+      render_pov(stem + ".pov", stem + ".png", o.width, o.height, threads_each,
+                 o.quality == "final");
+      if (!o.keep_pov) {
+        std::error_code ec;
+        fs::remove(stem + ".pov", ec);
+        fs::remove(stem + ".png.log", ec);
+      }
+    } catch (const std::exception& e) {
+      errors[i] = e.what();
+    }
+    const std::lock_guard<std::mutex> lock(progress_mutex);
+    progress.update(++done, static_cast<std::int64_t>(grains));
+  });
+
+  // What was made, on stdout; what failed, in the error.
+  std::vector<int> failed;
+  for (int i = 0; i < n; ++i) {
+    const std::string stem =
+        (fs::path(tasks[i].run) / "render" / fmt::format("{:04d}", tasks[i].frame)).string();
+    if (errors[i].empty())
+      fmt::print("{}.png\n", stem);
+    else
+      failed.push_back(i);
+  }
+  std::fflush(stdout);
+  if (!failed.empty()) {
+    std::vector<std::string> names;
+    for (std::size_t k = 0; k < failed.size() && k < 10; ++k) {
+      const Task& t = tasks[failed[k]];
+      names.push_back(runs.size() > 1
+                          ? fmt::format("{} frame {}", fs::path(t.run).filename().string(), t.frame)
+                          : fmt::format("frame {}", t.frame));
+    }
+    if (failed.size() > names.size())
+      names.push_back(fmt::format("and {} more", failed.size() - names.size()));
+    throw OutputError(fmt::format(
+        "{} of {} frames failed to render ({}); the other pictures are in place{}. The first "
+        "failure: {}",
+        failed.size(), n, comma_list(names), o.movie ? ", and no movie was made" : "",
+        errors[failed.front()]));
+  }
+
+  if (!o.movie) return 0;
+  const double fps = scene.fps.value_or(30.0);
+  if (!scene.fps)
+    fmt::print(stderr, "warning: the run's fps is unknown (no summary.json): the movie is at {}\n",
+               fps);
+  // each run's movie, and a comparison's two runs side by side (surface left, DEM right)
+  struct Movie {
+    std::vector<std::string> folders;
+    Span span;
+    std::string mp4;
+  };
+  std::vector<Movie> movies;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const std::string folder = (fs::path(runs[k]) / "render").string();
+    movies.push_back({{folder}, spans[k], (fs::path(folder) / "movie.mp4").string()});
+  }
+  if (runs.size() > 1 && spans[0].first == spans[1].first && spans[0].last == spans[1].last) {
+    const fs::path folder = fs::path(o.dir) / "render";
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (ec) throw OutputError(fmt::format("{}: cannot create: {}", folder.string(), ec.message()));
+    movies.push_back({{movies[0].folders[0], movies[1].folders[0]},
+                      spans[0],
+                      (folder / "side_by_side.mp4").string()});
+  }
+  if (!movie_tool) {
+    const Movie& m = movies.front();
+    throw InputError(fmt::format(
+        "ffmpeg is not installed, so no movie was made (the pictures are in {}). Install it "
+        "with: sudo apt-get install ffmpeg; then encode them with: ffmpeg -framerate {} "
+        "-start_number {} -i {}/%04d.png -frames:v {}{} -c:v libx264 -pix_fmt yuv420p {}",
+        comma_list(runs.size() > 1
+                       ? std::vector<std::string>{movies[0].folders[0], movies[1].folders[0]}
+                       : m.folders),
+        fps, m.span.first, m.folders[0], m.span.last - m.span.first + 1,
+        o.width % 2 || o.height % 2 ? " -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2'" : "", m.mp4));
+  }
+  for (const Movie& m : movies) {
+    encode_movie(m.folders, m.span.first, m.span.last - m.span.first + 1, fps, m.mp4);
+    if (!o.keep_pov) {
+      std::error_code ec;
+      fs::remove(m.mp4 + ".log", ec);
+    }
+    fmt::print("{}\n", m.mp4);
+  }
   return 0;
 }
 

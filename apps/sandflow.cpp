@@ -117,12 +117,55 @@ int main(int argc, char** argv) {
       "is written).");
 
   RenderOptions rdo;
-  auto* render = app.add_subcommand("render", "render a run's frame with POV-Ray to PNG");
-  render->add_option("dir", rdo.dir, "run folder")->required();
-  render->add_option("--width", rdo.width, "image width")->check(CLI::Range(16, 16384));
-  render->add_option("--height", rdo.height, "image height")->check(CLI::Range(16, 16384));
-  render->add_option("--frame", rdo.frame, "frame number (default: the last)")
-      ->check(CLI::PositiveNumber);
+  auto* render = app.add_subcommand(
+      "render", "render a run's frames with POV-Ray to DIR/render/NNNN.png, and a movie of them");
+  render->add_option("dir", rdo.dir, "run folder, or a comparison's folder (surface/ and dem/)")
+      ->required();
+  render->add_option("--width", rdo.width, "image width [pixels] (default 1280)")
+      ->check(CLI::Range(16, 16384));
+  render->add_option("--height", rdo.height, "image height [pixels] (default 720)")
+      ->check(CLI::Range(16, 16384));
+  auto* frame_opt = render->add_option("--frame", rdo.frame, "one frame (default: the last)")
+                        ->check(CLI::PositiveNumber);
+  render
+      ->add_option("--frames", rdo.frames,
+                   "frames to render, from 1: N, A:B (inclusive), A:, :B, or all (default: the "
+                   "last)")
+      ->excludes(frame_opt)
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            return v.empty() ? std::string("expected N, A:B, A:, :B or all, got nothing")
+                             : std::string();
+          },
+          "FRAMES"));
+  render
+      ->add_option("--quality", rdo.quality,
+                   "final (antialiased, soft light; the default) or draft (fast previews)")
+      ->check(CLI::IsMember({"draft", "final"}));
+  render->add_option("--jobs", rdo.jobs, "frames rendered at once (default: one per core)")
+      ->check(CLI::Range(1, 1024));
+  render->add_flag("--movie", rdo.movie,
+                   "also encode the frames to DIR/render/movie.mp4 (H.264) with ffmpeg");
+  render->add_flag("--keep-pov", rdo.keep_pov,
+                   "keep each picture's POV-Ray scene (NNNN.pov) and the logs of POV-Ray "
+                   "(NNNN.png.log) and ffmpeg (movie.mp4.log)");
+  render->add_option("--scene", rdo.scene,
+                     "scene file for the geometry and [camera] (default: the one the run's "
+                     "summary.json names)");
+  render->add_option("--set", rdo.sets,
+                     "change the look: --set camera.fov=30, --set geometry.1.render=glass "
+                     "(camera.KEY and geometry.N.render only)");
+  render->footer(
+      "Every frame of a run gets the same camera and light: the scene file's [camera], or an\n"
+      "automatic one framing the geometry and the grains of all the run's frames. A comparison\n"
+      "folder renders both runs with one camera, into surface/render and dem/render (--movie\n"
+      "adds DIR/render/side_by_side.mp4: surface flow left, plain DEM right). Frames\n"
+      "render in parallel (--jobs); each povray gets cores/jobs threads. A frame that fails is\n"
+      "named with the end of POV-Ray's log, and the others are still rendered. The movie runs\n"
+      "at the run's fps; without ffmpeg the frames are rendered and the exit status is 2.\n"
+      "Prints the path of each picture (and movie) on stdout.\n"
+      "Exit status: 0 done, 2 bad option or folder, povray or ffmpeg missing, 4 a frame failed\n"
+      "or an output could not be written.\n");
 
   ReportOptions rpo;
   auto* report = app.add_subcommand(

@@ -1,6 +1,7 @@
 #include "io/pov_writer.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -125,131 +126,23 @@ int sand_texture(std::uint32_t id) {
 // ---------------------------------------------------------------------------------------------
 // Scene parts
 
-struct Bounds {
-  Vec3 lo{0, 0, 0}, hi{0, 0, 0};
-  bool empty = true;
-  void add(const Vec3& p, Real r) {
-    const Vec3 e{r, r, r};
-    if (empty) {
-      lo = p - e;
-      hi = p + e;
-      empty = false;
-    } else {
-      lo = min(lo, p - e);
-      hi = max(hi, p + e);
-    }
-  }
-  Vec3 centre() const { return (lo + hi) * 0.5; }
-  Real radius() const { return std::max(0.5 * norm(hi - lo), Real(1e-6)); }
-};
-
-// What the picture should show: the grains and the finite geometry (a bowl, a box, a mesh).
-Bounds scene_bounds(const FrameData& f, const std::vector<GeometryConfig>& geometry,
-                    const std::vector<const TriangleMesh*>& meshes) {
-  Bounds b;
-  for (std::size_t i = 0; i < f.size(); ++i) {
-    if (is_finite(f.position[i])) b.add(f.position[i], f.radius[i]);
-  }
-  for (std::size_t k = 0; k < geometry.size(); ++k) {
-    const GeometryConfig& g = geometry[k];
-    if (g.render == RenderStyle::Hidden) continue;
-    switch (g.type) {
-      case GeometryType::Mesh:
-        if (k < meshes.size() && meshes[k])
-          for (const Vec3& v : meshes[k]->vertices) b.add(v, 0);
-        break;
-      case GeometryType::Plane:
-        break;  // infinite: not framed
-      case GeometryType::Sphere:
-        b.add(g.center, g.radius);
-        break;
-      case GeometryType::Box:
-        b.add(g.center, 0.5 * norm(g.size) + g.wall_thickness);
-        break;
-      case GeometryType::Cylinder:
-        b.add(g.center, std::hypot(g.radius + g.wall_thickness, 0.5 * g.height + g.wall_thickness));
-        break;
-      case GeometryType::Bowl:
-        b.add(g.center, g.radius + g.wall_thickness);
-        break;
-      case GeometryType::Heightmap:
-        if (!g.heights.z.empty()) {
-          const auto [lo, hi] = std::minmax_element(g.heights.z.begin(), g.heights.z.end());
-          b.add({g.extent[0], g.extent[1], *lo - g.base_thickness}, 0);
-          b.add({g.extent[2], g.extent[3], *hi}, 0);
-        }
-        break;
-    }
+// The framed box, or the frame's own when none is given; never empty.
+ViewBounds scene_bounds(const FrameData& f, const std::vector<GeometryConfig>& geometry,
+                        const std::vector<const TriangleMesh*>& meshes, const PovOptions& opt) {
+  ViewBounds b = opt.bounds;
+  if (b.empty) {
+    b = grain_bounds(f);
+    b.add(geometry_bounds(geometry, meshes));
   }
   if (b.empty) b.add({0, 0, 0}, 0.5);
   return b;
 }
 
 struct Camera {
-  Vec3 location, look_at;
+  Vec3 location, look_at, sky{0, 0, 1};
 };
 
-// What the auto camera must keep in view: the grains, or the corners of the bounds without them.
-struct Framed {
-  std::vector<Vec3> p;
-  std::vector<Real> r;
-};
-
-Framed framing_points(const FrameData& f, const Bounds& b) {
-  Framed out;
-  for (std::size_t i = 0; i < f.size(); ++i) {
-    if (!is_finite(f.position[i])) continue;
-    out.p.push_back(f.position[i]);
-    out.r.push_back(f.radius[i]);
-  }
-  // the corners of the bounds too: the camera stays outside a container or an obstacle
-  for (int k = 0; k < 8; ++k) {
-    out.p.push_back({k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z});
-    out.r.push_back(0);
-  }
-  return out;
-}
-
-// Looks at the scene from a 3/4 elevated direction, just far enough for every framed point (with
-// its radius) to fit the field of view with a 10 % border, and re-aimed at the middle of what the
-// picture shows (the bounding box's centre leaves the empty corners above a heap on screen).
-Camera auto_camera(const Framed& pts, const Bounds& b, const PovOptions& opt) {
-  // from the target towards the camera: 35 degrees up, so that it sees into a bowl or a box
-  const Vec3 view = normalized({1.0, -1.4, 1.2});
-  const Vec3 fwd = -view;
-  const Vec3 right = normalized(cross(fwd, {0, 0, 1}));
-  const Vec3 up = cross(right, fwd);
-  const double aspect = static_cast<double>(opt.width) / std::max(opt.height, 1);
-  const double tan_h = 0.9 * std::tan(deg_to_rad(std::clamp(opt.fov_deg, 1.0, 170.0)) / 2);
-  const double tan_v = tan_h / aspect;
-  Vec3 target = b.centre();
-  double dist = 0;
-  for (int pass = 0; pass < 3; ++pass) {
-    // Distance: a point at depth dist + p.fwd must see |p.right| + r within tan_h (and up, tan_v).
-    dist = 1.05 * b.radius();  // at least outside the bounds
-    for (std::size_t i = 0; i < pts.p.size(); ++i) {
-      const Vec3 p = pts.p[i] - target;
-      dist = std::max(dist, (std::abs(dot(p, right)) + pts.r[i]) / tan_h - dot(p, fwd));
-      dist = std::max(dist, (std::abs(dot(p, up)) + pts.r[i]) / tan_v - dot(p, fwd));
-    }
-    if (pass == 2) break;
-    // Re-aim at the middle of the points' extent on screen.
-    double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300;
-    for (std::size_t i = 0; i < pts.p.size(); ++i) {
-      const Vec3 p = pts.p[i] - target;
-      const double depth = std::max(dist + dot(p, fwd), 1e-9 * dist);
-      const double u = dot(p, right) / depth, v = dot(p, up) / depth, e = pts.r[i] / depth;
-      u0 = std::min(u0, u - e);
-      u1 = std::max(u1, u + e);
-      v0 = std::min(v0, v - e);
-      v1 = std::max(v1, v + e);
-    }
-    target += right * (0.5 * (u0 + u1) * dist) + up * (0.5 * (v0 + v1) * dist);
-  }
-  return {target + view * dist, target};
-}
-
-void write_header(std::string& s, const Camera& cam, const Bounds& b, const PovOptions& opt,
+void write_header(std::string& s, const Camera& cam, const ViewBounds& b, const PovOptions& opt,
                   std::size_t grains) {
   const double aspect = static_cast<double>(opt.width) / std::max(opt.height, 1);
   const double r = b.radius();
@@ -264,7 +157,7 @@ void write_header(std::string& s, const Camera& cam, const Bounds& b, const PovO
   line(s, "  location ", cam.location);
   line(s, "  right -x*", aspect, "  // negated: right-handed world, picture not mirrored");
   line(s, "  up y");
-  line(s, "  sky z");
+  line(s, "  sky ", cam.sky);
   line(s, "  angle ", opt.fov_deg);
   line(s, "  look_at ", cam.look_at);
   line(s, "}");
@@ -274,11 +167,15 @@ void write_header(std::string& s, const Camera& cam, const Bounds& b, const PovO
   const Vec3 key = c + normalized({-0.25, -0.97, 1.2}) * key_dist;
   const Vec3 fill = c + normalized({1.3, -0.3, 0.7}) * key_dist;
   const double size = 0.2 * key_dist;
-  line(s, "light_source {");
-  line(s, "  ", key, " color rgb 1.0");
-  line(s, "  area_light <", size, ",0,0>, <0,", size,
-       ",0>, 3, 3 adaptive 1 jitter circular orient");
-  line(s, "}");
+  if (opt.soft_light) {
+    line(s, "light_source {");
+    line(s, "  ", key, " color rgb 1.0");
+    line(s, "  area_light <", size, ",0,0>, <0,", size,
+         ",0>, 3, 3 adaptive 1 jitter circular orient");
+    line(s, "}");
+  } else {
+    line(s, "light_source { ", key, " color rgb 1.0 }  // draft: a point light, hard shadows");
+  }
   line(s, "light_source { ", fill, " color rgb 0.3 shadowless }");
   line(s, "sky_sphere {");
   line(s,
@@ -315,6 +212,14 @@ void write_header(std::string& s, const Camera& cam, const Bounds& b, const PovO
        "#declare Floor = texture { pigment { checker srgb 0.60, srgb 0.64 translate 0.5*z scale ",
        square, " } finish { ambient 0.05 diffuse 0.8 } }");
   line(s, "");
+}
+
+// A drawn plane with an upward normal: a floor the picture already has.
+bool has_visible_plane(const std::vector<GeometryConfig>& geometry) {
+  return std::any_of(geometry.begin(), geometry.end(), [](const GeometryConfig& g) {
+    return g.type == GeometryType::Plane && g.render == RenderStyle::Solid &&
+           normalized(g.normal).z > 0.5;
+  });
 }
 
 std::string material(RenderStyle r) {
@@ -402,7 +307,7 @@ void write_mesh(std::string& s, const TriangleMesh& m, const std::string& mat) {
   line(s, "}");
 }
 
-void write_geometry(std::string& s, const GeometryConfig& g, const Bounds& b,
+void write_geometry(std::string& s, const GeometryConfig& g, const ViewBounds& b,
                     const TriangleMesh* mesh) {
   if (g.render == RenderStyle::Hidden) return;
   const bool glass = g.render == RenderStyle::Glass;
@@ -527,26 +432,168 @@ std::string tail_of(const std::string& path, std::size_t max_chars) {
 
 }  // namespace
 
+void ViewBounds::add(const Vec3& p, Real r) {
+  const Vec3 e{r, r, r};
+  if (empty) {
+    lo = p - e;
+    hi = p + e;
+    empty = false;
+  } else {
+    lo = min(lo, p - e);
+    hi = max(hi, p + e);
+  }
+}
+
+void ViewBounds::add(const ViewBounds& b) {
+  if (b.empty) return;
+  add(b.lo, 0);
+  add(b.hi, 0);
+}
+
+Real ViewBounds::radius() const {
+  return std::max(0.5 * norm(hi - lo), Real(1e-6));
+}
+
+ViewBounds grain_bounds(const FrameData& f) {
+  ViewBounds b;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (is_finite(f.position[i]) && i < f.radius.size()) b.add(f.position[i], f.radius[i]);
+  }
+  return b;
+}
+
+namespace {
+
+// The corners of the box [lo, hi] in a shape's own frame, rotated and moved as drawn.
+void add_local_box(ViewBounds& b, const GeometryConfig& g, const Vec3& lo, const Vec3& hi) {
+  const Mat3 m = rotation_xyz_deg(g.rotation_deg);
+  for (int k = 0; k < 8; ++k)
+    b.add(g.center + m * Vec3{k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z}, 0);
+}
+
+}  // namespace
+
+ViewBounds geometry_bounds(const std::vector<GeometryConfig>& geometry,
+                           const std::vector<const TriangleMesh*>& meshes) {
+  ViewBounds b;
+  for (std::size_t k = 0; k < geometry.size(); ++k) {
+    const GeometryConfig& g = geometry[k];
+    if (g.render == RenderStyle::Hidden) continue;
+    switch (g.type) {
+      case GeometryType::Mesh:
+        if (k < meshes.size() && meshes[k])
+          for (const Vec3& v : meshes[k]->vertices) b.add(v, 0);
+        break;
+      case GeometryType::Plane:
+        break;  // infinite: not framed
+      case GeometryType::Sphere:
+        b.add(g.center, g.radius);
+        break;
+      case GeometryType::Box: {
+        const double t = g.container ? g.wall_thickness : 0;
+        const Vec3 h = g.size * 0.5 + Vec3{t, t, t};
+        add_local_box(b, g, -h, h);
+        break;
+      }
+      case GeometryType::Cylinder: {
+        const double t = g.container ? g.wall_thickness : 0;
+        const double r = g.radius + t, hz = 0.5 * g.height + t;
+        add_local_box(b, g, {-r, -r, -hz}, {r, r, hz});
+        break;
+      }
+      case GeometryType::Bowl: {
+        // the shell below its rim plane
+        const double r = g.radius + g.wall_thickness;
+        add_local_box(b, g, {-r, -r, -r}, {r, r, g.depth.value_or(g.radius) - g.radius});
+        break;
+      }
+      case GeometryType::Heightmap:
+        if (!g.heights.z.empty()) {
+          const auto [lo, hi] = std::minmax_element(g.heights.z.begin(), g.heights.z.end());
+          b.add({g.extent[0], g.extent[1], *lo - g.base_thickness}, 0);
+          b.add({g.extent[2], g.extent[3], *hi}, 0);
+        }
+        break;
+    }
+  }
+  return b;
+}
+
+// Looks at the box from a 3/4 elevated direction, just far enough for its eight corners to fit
+// the field of view with a 10 % border, and re-aimed at the middle of what the picture shows
+// (the box's centre leaves the empty corners above a heap on screen). Every sphere inside the box
+// projects inside the corners' hull, so the corners alone decide the framing.
+std::pair<Vec3, Vec3> auto_camera(const ViewBounds& bounds, const PovOptions& opt) {
+  ViewBounds b = bounds;
+  if (b.empty) b.add({0, 0, 0}, 0.5);
+  std::array<Vec3, 8> corners;
+  for (int k = 0; k < 8; ++k)
+    corners[k] = {k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z};
+  // from the target towards the camera: 35 degrees up, so that it sees into a bowl or a box
+  const Vec3 view = normalized({1.0, -1.4, 1.2});
+  const Vec3 fwd = -view;
+  const Vec3 right = normalized(cross(fwd, {0, 0, 1}));
+  const Vec3 up = cross(right, fwd);
+  const double aspect = static_cast<double>(opt.width) / std::max(opt.height, 1);
+  const double tan_h = 0.9 * std::tan(deg_to_rad(std::clamp(opt.fov_deg, 1.0, 170.0)) / 2);
+  const double tan_v = tan_h / aspect;
+  Vec3 target = b.centre();
+  double dist = 0;
+  for (int pass = 0; pass < 3; ++pass) {
+    // Distance: a corner at depth dist + p.fwd must be within tan_h of the axis (and up, tan_v).
+    dist = 1.05 * b.radius();  // at least outside the bounds
+    for (const Vec3& c : corners) {
+      const Vec3 p = c - target;
+      dist = std::max(dist, std::abs(dot(p, right)) / tan_h - dot(p, fwd));
+      dist = std::max(dist, std::abs(dot(p, up)) / tan_v - dot(p, fwd));
+    }
+    if (pass == 2) break;
+    // Re-aim at the middle of the corners' extent on screen.
+    double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300;
+    for (const Vec3& c : corners) {
+      const Vec3 p = c - target;
+      const double depth = std::max(dist + dot(p, fwd), 1e-9 * dist);
+      const double u = dot(p, right) / depth, v = dot(p, up) / depth;
+      u0 = std::min(u0, u);
+      u1 = std::max(u1, u);
+      v0 = std::min(v0, v);
+      v1 = std::max(v1, v);
+    }
+    target += right * (0.5 * (u0 + u1) * dist) + up * (0.5 * (v0 + v1) * dist);
+  }
+  return {target + view * dist, target};
+}
+
 void write_pov_scene(const std::string& path, const FrameData& f,
                      const std::vector<GeometryConfig>& geometry, const PovOptions& opt,
                      const std::vector<const TriangleMesh*>& meshes) {
   if (f.radius.size() != f.size() || (!f.id.empty() && f.id.size() != f.size())) {
     throw std::invalid_argument("write_pov_scene: FrameData arrays have different lengths");
   }
-  const Bounds b = scene_bounds(f, geometry, meshes);
-  const Camera cam = opt.auto_camera ? auto_camera(framing_points(f, b), b, opt)
-                                     : Camera{opt.camera_position, opt.camera_look_at};
+  const ViewBounds b = scene_bounds(f, geometry, meshes, opt);
+  Camera cam{opt.camera_position, opt.camera_look_at, opt.camera_up};
+  if (opt.auto_camera) {
+    const auto [location, look_at] = auto_camera(b, opt);
+    cam = {location, look_at, {0, 0, 1}};
+  }
   std::string s;
   s.reserve(2048 + 48 * f.size());
   write_header(s, cam, b, opt, f.size());
   for (std::size_t k = 0; k < geometry.size(); ++k)
     write_geometry(s, geometry[k], b, k < meshes.size() ? meshes[k] : nullptr);
+  // below everything drawn, by a hair so that it does not touch a flat bottom; not when the
+  // camera is under it (it would hide everything)
+  const double floor_z = b.lo.z - 1e-3 * b.radius();
+  if (opt.floor && !has_visible_plane(geometry) && cam.location.z > floor_z) {
+    line(s, "// floor (the scene has no plane): for looks only");
+    line(s, "plane { z, ", floor_z, " texture { Floor } }");
+  }
   line(s, "");
   write_grains(s, f);
   write_text_atomically(path, s);
 }
 
-std::string find_povray() {
+std::string find_program(const std::string& name) {
   const char* path_env = std::getenv("PATH");
   std::string_view dirs = path_env ? path_env : "/usr/local/bin:/usr/bin:/bin";
   while (!dirs.empty()) {
@@ -554,44 +601,29 @@ std::string find_povray() {
     std::string dir(dirs.substr(0, colon));
     dirs = colon == std::string_view::npos ? std::string_view{} : dirs.substr(colon + 1);
     if (dir.empty()) dir = ".";
-    const std::string candidate = dir + "/povray";
+    const std::string candidate = dir + "/" + name;
     if (::access(candidate.c_str(), X_OK) == 0 && !fs::is_directory(candidate)) return candidate;
   }
   return "";
 }
 
-void render_pov(const std::string& pov_path, const std::string& png_path, int width, int height,
-                int threads) {
-  const std::string exe = find_povray();
-  if (exe.empty()) {
-    throw OutputError(png_path + ": cannot render: povray is not on PATH (install POV-Ray 3.7)");
-  }
-  std::error_code ec;
-  const fs::path pov_abs = fs::absolute(pov_path, ec);
-  const std::string log_path = fs::absolute(png_path + ".log", ec).string();
-  // POV-Ray writes to a temporary name; the PNG appears only when the render succeeded.
-  const std::string partial = fs::absolute(png_path + ".partial.png", ec).string();
-  fs::remove(partial, ec);
+std::string find_povray() {
+  return find_program("povray");
+}
 
+namespace {
+
+// Runs args[0] (a full path) with `args` in `work_dir`, stdin from /dev/null, stdout and stderr
+// to `log_path`, and waits for it. Returns "" on exit status 0, else what went wrong. Safe to
+// call from several threads at once: the log is opened close-on-exec, so a child started by
+// another thread does not hold it.
+std::string run_logged(std::vector<std::string> args, const std::string& work_dir,
+                       const std::string& log_path, const std::string& what) {
   // Everything the child needs is prepared before fork: it may only call async-signal-safe
-  // functions (the parent can have OpenMP threads).
-  std::vector<std::string> args = {exe,
-                                   "+I" + pov_abs.string(),
-                                   "+O" + partial,
-                                   "+W" + std::to_string(width),
-                                   "+H" + std::to_string(height),
-                                   "+A0.3",
-                                   "+FN",
-                                   "-D",
-                                   "-P",
-                                   "Output_Alpha=off"};
-  if (threads > 0) args.push_back("+WT" + std::to_string(threads));
+  // functions (the parent has other threads).
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
-  // POV-Ray's default I/O policy allows the working directory: run it in the scene's folder.
-  const std::string work_dir = pov_abs.parent_path().string();
-
   errno = 0;
   const int log_fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (log_fd < 0) throw OutputError(log_path + ": cannot create: " + system_reason(errno));
@@ -599,7 +631,7 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
   if (pid < 0) {
     const int err = errno;
     ::close(log_fd);
-    throw OutputError(png_path + ": cannot start povray: " + system_reason(err));
+    return "cannot start " + what + ": " + system_reason(err);
   }
   if (pid == 0) {
     const int null_fd = ::open("/dev/null", O_RDONLY);
@@ -614,23 +646,113 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
+  if (WIFSIGNALED(status))
+    return what + " was killed by signal " + std::to_string(WTERMSIG(status));
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    return what + " failed with exit status " + std::to_string(WEXITSTATUS(status));
+  return "";
+}
 
-  std::string problem;
-  if (WIFSIGNALED(status)) {
-    problem = "povray was killed by signal " + std::to_string(WTERMSIG(status));
-  } else if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    problem = "povray failed with exit status " + std::to_string(WEXITSTATUS(status));
-  } else if (!fs::exists(partial, ec) || fs::file_size(partial, ec) == 0) {
+}  // namespace
+
+void render_pov(const std::string& pov_path, const std::string& png_path, int width, int height,
+                int threads, bool antialias) {
+  const std::string exe = find_povray();
+  if (exe.empty()) {
+    throw OutputError(png_path +
+                      ": cannot render: povray is not on PATH (sudo apt-get install povray)");
+  }
+  std::error_code ec;
+  const fs::path pov_abs = fs::absolute(pov_path, ec);
+  const std::string log_path = fs::absolute(png_path + ".log", ec).string();
+  // POV-Ray writes to a temporary name; the PNG appears only when the render succeeded.
+  const std::string partial = fs::absolute(png_path + ".partial.png", ec).string();
+  fs::remove(partial, ec);
+
+  std::vector<std::string> args = {exe,
+                                   "+I" + pov_abs.string(),
+                                   "+O" + partial,
+                                   "+W" + std::to_string(width),
+                                   "+H" + std::to_string(height),
+                                   antialias ? "+A0.3" : "-A",
+                                   "+FN",
+                                   "-D",
+                                   "-P",
+                                   "Output_Alpha=off"};
+  if (threads > 0) args.push_back("+WT" + std::to_string(threads));
+  // POV-Ray's default I/O policy allows the working directory: run it in the scene's folder.
+  std::string problem = run_logged(args, pov_abs.parent_path().string(), log_path, "povray");
+  if (problem.empty() && (!fs::exists(partial, ec) || fs::file_size(partial, ec) == 0))
     problem = "povray wrote no image";
-  }
-  if (problem.empty()) {
-    fs::rename(partial, png_path, ec);
-    if (ec) problem = "cannot rename " + partial + ": " + ec.message();
-  }
   if (!problem.empty()) {
     fs::remove(partial, ec);
     throw OutputError(png_path + ": " + problem + "; end of " + log_path + ":\n" +
                       tail_of(log_path, 1500));
+  }
+  fs::rename(partial, png_path, ec);
+  if (ec) {
+    const std::string reason = ec.message();
+    fs::remove(partial, ec);
+    throw OutputError(png_path + ": cannot rename " + partial + " to it: " + reason);
+  }
+}
+
+void encode_movie(const std::vector<std::string>& folders, int first, int count, double fps,
+                  const std::string& mp4_path) {
+  const std::string exe = find_program("ffmpeg");
+  if (exe.empty())
+    throw OutputError(mp4_path +
+                      ": cannot encode: ffmpeg is not on PATH (sudo apt-get install "
+                      "ffmpeg)");
+  if (folders.empty() || count < 1)
+    throw std::invalid_argument("encode_movie: no folder or no frame to encode");
+  std::error_code ec;
+  const std::string log_path = fs::absolute(mp4_path + ".log", ec).string();
+  const std::string partial = fs::absolute(mp4_path + ".partial", ec).string();
+  fs::remove(partial, ec);
+  char rate[32];
+  std::snprintf(rate, sizeof rate, "%.9g", fps);
+  std::vector<std::string> args = {exe, "-nostdin", "-y", "-hide_banner"};
+  for (const std::string& folder : folders) {
+    // ffmpeg reads '%' in an image path as the start of its pattern: a literal one is "%%"
+    std::string pattern;
+    for (char ch : fs::absolute(folder, ec).string())
+      pattern += ch == '%' ? "%%" : std::string(1, ch);
+    pattern += "/%04d.png";
+    for (const std::string& a :
+         {std::string("-framerate"), std::string(rate), std::string("-start_number"),
+          std::to_string(first), std::string("-i"), pattern})
+      args.push_back(a);
+  }
+  // side by side when there are several; yuv420p (what players expect) needs even sizes: pad by
+  // a pixel when odd
+  std::string filter;
+  if (folders.size() > 1) {
+    for (std::size_t k = 0; k < folders.size(); ++k) filter += "[" + std::to_string(k) + ":v]";
+    filter += "hstack=inputs=" + std::to_string(folders.size()) + ",";
+  }
+  filter += "pad=ceil(iw/2)*2:ceil(ih/2)*2";
+  for (const std::string& a :
+       {std::string("-frames:v"), std::to_string(count),
+        std::string(folders.size() > 1 ? "-filter_complex" : "-vf"), filter, std::string("-c:v"),
+        std::string("libx264"), std::string("-pix_fmt"), std::string("yuv420p"),
+        std::string("-movflags"), std::string("+faststart"), std::string("-f"), std::string("mp4"),
+        partial})
+    args.push_back(a);
+  std::string problem =
+      run_logged(args, fs::absolute(folders.front(), ec).string(), log_path, "ffmpeg");
+  if (problem.empty() && (!fs::exists(partial, ec) || fs::file_size(partial, ec) == 0))
+    problem = "ffmpeg wrote no movie";
+  if (!problem.empty()) {
+    fs::remove(partial, ec);
+    throw OutputError(mp4_path + ": " + problem + "; end of " + log_path + ":\n" +
+                      tail_of(log_path, 1500));
+  }
+  fs::rename(partial, mp4_path, ec);
+  if (ec) {
+    const std::string reason = ec.message();
+    fs::remove(partial, ec);
+    throw OutputError(mp4_path + ": cannot rename " + partial + " to it: " + reason);
   }
 }
 

@@ -2,7 +2,7 @@
 //
 // The simulator's world is right-handed with z up; POV-Ray is left-handed with y up. Rather than
 // transforming every coordinate, the scene keeps world coordinates and sets the camera up as
-//     right -x*W/H  up y  sky z  look_at ...
+//     right -x*W/H  up y  sky z  look_at ...     (sky: the [camera] table's up, z by default)
 // POV-Ray derives the camera's handedness from the sign of (up x direction) . right before
 // look_at re-aims it; the negated right vector makes screen-right = forward x z, the right-handed
 // convention, so pictures are not mirrored (tests/io/test_pov_writer.cpp checks this with a
@@ -15,12 +15,21 @@
 // flicker between frames). Geometry: planes are drawn as infinite floors with a faint checker
 // (glass planes as a thin finite slab); boxes and cylinders as solids or, for containers, as
 // walls of wall_thickness around the inner size, centred on `center`, without a lid when
-// open_top; spheres as spheres. RenderStyle::Glass draws clear glass, Hidden draws nothing.
-// Lighting is a soft key light (a 3x3 adaptive area light), a shadowless fill light and a little
-// ambient light, with a pale sky behind.
+// open_top; spheres as spheres; a bowl as its shell below the rim; heightmaps and meshes as
+// mesh2 triangles. RenderStyle::Glass draws clear glass, Hidden draws nothing. A scene without a
+// solid plane gets a floor under its lowest point, for looks only (unless the camera is below it).
+// Lighting: for the final look a soft key light (a 3x3 adaptive area light), a shadowless fill
+// light and a little ambient light, with a pale sky behind; the draft look replaces the area light
+// by a point light (faster, hard shadows).
+//
+// An animation must not jitter: everything sized from the scene's extent (the automatic camera,
+// the lights, the floor's squares, a glass plane's slab) is sized from PovOptions::bounds when it
+// is given. `sandflow render` passes the bounds of the whole run, so every frame of a run has the
+// same camera and light.
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/vec3.hpp"
@@ -30,14 +39,43 @@
 
 namespace sandflow {
 
+/// An axis-aligned box around what a picture shows [m]; spheres widen it by their radius.
+struct ViewBounds {
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};
+  bool empty = true;
+  void add(const Vec3& p, Real r);
+  void add(const ViewBounds& b);
+  Vec3 centre() const { return (lo + hi) * 0.5; }
+  Real radius() const;  ///< half the diagonal, at least 1e-6 [m]
+};
+
+/// The grains of a frame (non-finite positions skipped).
+ViewBounds grain_bounds(const FrameData& f);
+/// The finite, visible geometry: meshes (as in write_pov_scene), spheres, boxes, cylinders,
+/// bowls, heightmaps; planes are infinite and hidden geometry is not drawn, so neither counts.
+ViewBounds geometry_bounds(const std::vector<GeometryConfig>& geometry,
+                           const std::vector<const TriangleMesh*>& meshes = {});
+
 struct PovOptions {
   int width = 1280;  ///< image size [pixels]
   int height = 720;
-  bool auto_camera = true;  ///< frame the grains from a 3/4 view; false: use the two below
+  bool auto_camera = true;  ///< frame the bounds from a 3/4 view; false: use the three below
   Vec3 camera_position;     ///< [m], when auto_camera is false
   Vec3 camera_look_at;      ///< [m], when auto_camera is false
+  Vec3 camera_up{0, 0, 1};  ///< the picture's up direction (POV-Ray's `sky`), when not auto
   double fov_deg = 40;      ///< horizontal field of view [deg] (POV-Ray's `angle`)
+  /// What the camera frames and the lights are placed around; unset: this frame's grains and
+  /// the geometry. An empty box is taken as unset.
+  ViewBounds bounds;
+  bool soft_light = true;  ///< an area light (soft shadows); false: a point light (draft)
+  bool floor = true;       ///< draw a floor under the scene when its geometry has no plane (and the
+                           ///< camera is above it)
 };
+
+/// The automatic camera's position and look-at point for `bounds` (what write_pov_scene uses
+/// when opt.auto_camera): from above at 35 degrees, a 3/4 view, just far enough for the whole
+/// box to fit opt.fov_deg at opt.width x opt.height with a 10 % border.
+std::pair<Vec3, Vec3> auto_camera(const ViewBounds& bounds, const PovOptions& opt);
 
 /// Writes a self-contained POV-Ray 3.7 scene of frame `f` with its `geometry` to `path`
 /// (atomically: a temporary file renamed over `path`). Throws OutputError naming the path;
@@ -48,15 +86,26 @@ void write_pov_scene(const std::string& path, const FrameData& f,
                      const std::vector<GeometryConfig>& geometry, const PovOptions& opt,
                      const std::vector<const TriangleMesh*>& meshes = {});
 
-/// Full path of the `povray` executable found on PATH, or "" when there is none.
+/// Full path of the executable `name` found on PATH, or "" when there is none.
+std::string find_program(const std::string& name);
+/// find_program("povray").
 std::string find_povray();
 
-/// Renders `pov_path` to `png_path` (width x height, antialiased, `threads` render threads; 0 or
-/// less lets POV-Ray decide). POV-Ray's output goes to png_path + ".log". The PNG appears only
-/// when the render succeeded. Throws OutputError with the end of the log when povray is missing,
-/// fails, or leaves no image.
+/// Renders `pov_path` to `png_path` (width x height, antialiased unless `antialias` is false,
+/// `threads` render threads; 0 or less lets POV-Ray decide). POV-Ray's output goes to
+/// png_path + ".log". The PNG appears only when the render succeeded. Throws OutputError with the
+/// end of the log when povray is missing, fails, or leaves no image.
 void render_pov(const std::string& pov_path, const std::string& png_path, int width, int height,
-                int threads);
+                int threads, bool antialias = true);
+
+/// Encodes the images FOLDER/NNNN.png, frames first .. first + count - 1 (the names frame_path
+/// gives), into the H.264 MP4 `mp4_path` (yuv420p, odd sizes padded to even) at `fps` frames per
+/// second, with ffmpeg. Several folders (pictures of the same size) are put side by side, left
+/// to right. ffmpeg's output goes to mp4_path + ".log"; the movie appears only when the encoding
+/// succeeded. Throws OutputError naming the path (with the end of the log) when ffmpeg is
+/// missing or fails.
+void encode_movie(const std::vector<std::string>& folders, int first, int count, double fps,
+                  const std::string& mp4_path);
 
 /// The grains of frame `f` exactly as write_pov_scene draws them, one `G(x,y,z,r,c)` line each:
 /// the body of a frame file that #includes the rest (camera, lights, the macro G, the geometry)

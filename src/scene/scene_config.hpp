@@ -85,6 +85,15 @@ struct OutputConfig {
   UpAxis up_axis = UpAxis::Z;       ///< of PLY, VTK, geo, CSV and OBJ files
 };
 
+/// The camera of `sandflow render`: a fixed one when position and look_at are set, else the
+/// automatic one that frames the whole run.
+struct CameraConfig {
+  std::optional<Vec3> position;     ///< [m]; set together with look_at
+  std::optional<Vec3> look_at;      ///< [m]
+  std::optional<Vec3> up;           ///< the picture's up direction; unset: +z (fixed camera only)
+  Real fov_deg = 40.0;              ///< horizontal field of view [deg], in (0, 180)
+};
+
 enum class GeometryType { Plane, Box, Cylinder, Sphere, Bowl, Heightmap, Mesh };
 enum class RenderStyle { Solid, Glass, Hidden };
 /// Where a heightmap's samples came from: written in the scene, a grey PNG, or made by noise.
@@ -165,6 +174,7 @@ struct SceneConfig {
   StiffnessConfig stiffness;
   SurfaceConfig surface;
   OutputConfig output;
+  CameraConfig camera;
   std::vector<GeometryConfig> geometry;
   std::vector<EmitterConfig> emitters;
 

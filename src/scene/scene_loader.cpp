@@ -582,6 +582,45 @@ void read_output(TableReader r, OutputConfig& o) {
   }
 }
 
+// The render camera: a fixed one (position and look_at together, up optional) or only a field of
+// view for the automatic one.
+void read_camera(TableReader r, CameraConfig& c) {
+  const auto vector = [&r](std::string_view key, std::optional<Vec3>& out) {
+    const bool present = r.has(key);
+    Vec3 v{0, 0, 0};
+    r.read(key, v);  // also makes `key` one the table accepts
+    if (present) out = v;
+  };
+  vector("position", c.position);
+  vector("look_at", c.look_at);
+  vector("up", c.up);
+  r.read("fov", c.fov_deg, open(0, 180));
+  r.finish("[camera]");
+
+  if (c.position && !c.look_at)
+    r.require("look_at", "[x, y, z], the point the camera at camera.position looks at");
+  if (c.look_at && !c.position)
+    r.require("position", "[x, y, z], where the camera looking at camera.look_at stands");
+  if (c.up && !c.position)
+    r.fail_at("up", r.name("up") +
+                        " is set without camera.position and camera.look_at: the automatic camera "
+                        "keeps z up; set all three or leave up out");
+  if (!c.position) return;
+  const Vec3 view = *c.look_at - *c.position;
+  if (norm(view) == 0)
+    r.fail_at("look_at", r.name("look_at") + " is camera.position: expected a point the camera "
+                                             "looks at, away from where it stands");
+  if (c.up) {
+    const Real n = norm(*c.up);
+    if (n == 0) r.fail_at("up", r.name("up") + " = [0, 0, 0]: expected a direction");
+    // the picture's up must not point along the view, or it cannot be set upright
+    if (norm(cross(*c.up / n, view / norm(view))) < 1e-3)
+      r.fail_at("up", r.name("up") +
+                          " is parallel to the view direction (look_at - position): expected a "
+                          "direction across it");
+  }
+}
+
 // A heightmap's samples: inline `heights`, a grey PNG `file` or procedural `noise`, exactly one.
 void read_heightmap(TableReader& r, GeometryConfig& g, const std::string& scene_path) {
   std::optional<std::array<Real, 4>> extent;
@@ -801,6 +840,7 @@ SceneConfig read_scene(const toml::table& root, const std::string& path) {
     read_stiffness({places, *t, "stiffness"}, c.stiffness);
   if (const auto* t = doc.table("surface")) read_surface({places, *t, "surface"}, c.surface);
   if (const auto* t = doc.table("output")) read_output({places, *t, "output"}, c.output);
+  if (const auto* t = doc.table("camera")) read_camera({places, *t, "camera"}, c.camera);
 
   if (const auto* a = doc.array_of_tables("geometry")) {
     for (std::size_t i = 0; i < a->size(); ++i) {
@@ -897,7 +937,8 @@ void apply_override(toml::table& root, const Override& o) {
       toml::node* child = t->get(seg);
       if (!child) {
         const bool plain = seg == "scene" || seg == "material" || seg == "simulation" ||
-                           seg == "stiffness" || seg == "surface" || seg == "output";
+                           seg == "stiffness" || seg == "surface" || seg == "output" ||
+                           seg == "camera";
         if (t != &root || !plain)
           fail(where, "the scene has no table " + (walked.empty() ? seg : walked + "." + seg));
         child = &t->insert_or_assign(seg, toml::table{}).first->second;

@@ -113,7 +113,7 @@ TEST_F(PovTest, SceneTextHasGrainsAndGeometry) {
   const std::string text = read_text(p);
   EXPECT_NE(text.find("#version 3.7;"), std::string::npos);
   EXPECT_NE(text.find("assumed_gamma 1.0"), std::string::npos);
-  EXPECT_NE(text.find("sky z"), std::string::npos);
+  EXPECT_NE(text.find("sky <0,0,1>"), std::string::npos);
   EXPECT_NE(text.find("right -x*"), std::string::npos);
   EXPECT_NE(text.find("#macro G(X,Y,Z,R,C)"), std::string::npos);
   // One line per grain.
@@ -248,6 +248,121 @@ TEST_F(PovTest, RenderFailureIsOutputErrorWithLog) {
     EXPECT_NE(msg.find("exit status"), std::string::npos) << msg;
   }
   EXPECT_FALSE(fs::exists(path("broken.png")));
+}
+
+// The part of a scene that must stay put across the frames of a run: camera and lights.
+std::string camera_and_lights(const std::string& pov) {
+  const std::size_t a = pov.find("camera {");
+  const std::size_t b = pov.find("sky_sphere");
+  return a == std::string::npos || b == std::string::npos ? "" : pov.substr(a, b - a);
+}
+
+TEST_F(PovTest, GivenBoundsFixTheCameraAndLightsAcrossFrames) {
+  FrameData a = small_mound();
+  FrameData b = a;
+  for (Vec3& p : b.position) p += Vec3{0.1, 0.05, 0.2};  // the grains of a later frame
+  PovOptions opt;
+  write_pov_scene(path("a.pov"), a, {floor_plane()}, opt);
+  write_pov_scene(path("b.pov"), b, {floor_plane()}, opt);
+  // each frame framed alone: the camera follows the grains
+  EXPECT_NE(camera_and_lights(read_text(path("a.pov"))),
+            camera_and_lights(read_text(path("b.pov"))));
+  // framed on the bounds of both: one camera, one light
+  opt.bounds = grain_bounds(a);
+  opt.bounds.add(grain_bounds(b));
+  write_pov_scene(path("a.pov"), a, {floor_plane()}, opt);
+  write_pov_scene(path("b.pov"), b, {floor_plane()}, opt);
+  const std::string ca = camera_and_lights(read_text(path("a.pov")));
+  ASSERT_FALSE(ca.empty());
+  EXPECT_EQ(ca, camera_and_lights(read_text(path("b.pov"))));
+}
+
+TEST(PovCamera, AutoCameraFitsTheBoundsTightly) {
+  struct Case {
+    Vec3 lo, hi;
+    int width, height;
+    double fov;
+  };
+  const Case cases[] = {{{-0.5, -0.5, 0}, {0.5, 0.5, 0.2}, 1280, 720, 40},  // a flat heap
+                        {{0, 0, 0}, {0.1, 0.1, 1.0}, 640, 480, 40},         // a tall column
+                        {{-2, -0.2, 0}, {2, 0.2, 0.3}, 64, 48, 25}};        // a long strip
+  for (const Case& c : cases) {
+    ViewBounds b;
+    b.add(c.lo, 0);
+    b.add(c.hi, 0);
+    PovOptions opt;
+    opt.width = c.width;
+    opt.height = c.height;
+    opt.fov_deg = c.fov;
+    const auto [location, look_at] = auto_camera(b, opt);
+    // POV-Ray's camera: `angle` is the horizontal field of view, up is z
+    const Vec3 fwd = (look_at - location) / norm(look_at - location);
+    const Vec3 right = cross(fwd, Vec3{0, 0, 1}) / norm(cross(fwd, Vec3{0, 0, 1}));
+    const Vec3 up = cross(right, fwd);
+    const double tan_h = std::tan(deg_to_rad(c.fov) / 2);
+    const double tan_v = tan_h * c.height / c.width;
+    double fill = 0;  // the largest share of the half-width or half-height a corner takes
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 p{k & 1 ? c.hi.x : c.lo.x, k & 2 ? c.hi.y : c.lo.y, k & 4 ? c.hi.z : c.lo.z};
+      const Vec3 d = p - location;
+      const double depth = dot(d, fwd);
+      ASSERT_GT(depth, 0);
+      fill = std::max(
+          {fill, std::abs(dot(d, right)) / depth / tan_h, std::abs(dot(d, up)) / depth / tan_v});
+    }
+    // every corner inside the 10 % border, and the box as large as that allows
+    EXPECT_LE(fill, 0.9 + 1e-9);
+    EXPECT_GT(fill, 0.88);
+  }
+}
+
+TEST_F(PovTest, DraftHasAPointLightFinalAnAreaLight) {
+  PovOptions opt;
+  write_pov_scene(path("final.pov"), small_mound(), {floor_plane()}, opt);
+  opt.soft_light = false;
+  write_pov_scene(path("draft.pov"), small_mound(), {floor_plane()}, opt);
+  EXPECT_NE(read_text(path("final.pov")).find("area_light"), std::string::npos);
+  EXPECT_EQ(read_text(path("draft.pov")).find("area_light"), std::string::npos);
+}
+
+TEST_F(PovTest, AFloorIsAddedOnlyWhenTheSceneHasNone) {
+  const auto planes = [](const std::string& text) {
+    int n = 0;
+    for (std::size_t at = text.find("plane { z"); at != std::string::npos;
+         at = text.find("plane { z", at + 1))
+      ++n;
+    return n;
+  };
+  const FrameData f = small_mound();
+  write_pov_scene(path("with.pov"), f, {floor_plane()}, PovOptions{});
+  EXPECT_EQ(planes(read_text(path("with.pov"))), 1);  // the scene's own
+  write_pov_scene(path("without.pov"), f, {}, PovOptions{});
+  const std::string text = read_text(path("without.pov"));
+  ASSERT_EQ(planes(text), 1);
+  // just under the lowest grain's bottom (z = 0 here), by a thousandth of the scene's size
+  const std::size_t at = text.find("plane { z, ");
+  const double z = std::stod(text.substr(at + 11));
+  EXPECT_LT(z, 0.0);
+  EXPECT_GT(z, -1e-3);
+  PovOptions no_floor;
+  no_floor.floor = false;
+  write_pov_scene(path("none.pov"), f, {}, no_floor);
+  EXPECT_EQ(planes(read_text(path("none.pov"))), 0);
+}
+
+TEST_F(PovTest, FixedCameraWritesItsUpDirection) {
+  PovOptions opt;
+  opt.auto_camera = false;
+  opt.camera_position = {1, -2, 0.5};
+  opt.camera_look_at = {0, 0, 0};
+  opt.camera_up = {0, 1, 1};
+  opt.fov_deg = 30;
+  write_pov_scene(path("fixed.pov"), small_mound(), {floor_plane()}, opt);
+  const std::string text = read_text(path("fixed.pov"));
+  EXPECT_NE(text.find("location <1,-2,0.5>"), std::string::npos);
+  EXPECT_NE(text.find("sky <0,1,1>"), std::string::npos);
+  EXPECT_NE(text.find("angle 30"), std::string::npos);
+  EXPECT_NE(text.find("look_at <0,0,0>"), std::string::npos);
 }
 
 }  // namespace

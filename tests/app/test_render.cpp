@@ -1,0 +1,352 @@
+// `sandflow render` end to end: the pictures of a tiny run, one camera for all its frames, the
+// options it refuses, a frame that fails, a comparison folder, and the movie.
+#include <gtest/gtest.h>
+#include <png.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "cli_runner.hpp"
+#include "io/ply.hpp"
+#include "io/pov_writer.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using sandflow_test::read_text;
+using sandflow_test::Sandbox;
+using sandflow_test::sandflow;
+
+// 300 grains in a block resting on a floor: three frames take a fraction of a second.
+const char* kTinyScene = R"(
+[scene]
+name = "tiny"
+[material]
+diameter = 0.01
+k_n = 1.0e4
+[output]
+fps = 24
+[[geometry]]
+type = "plane"
+[[emitter]]
+type = "block"
+count = 300
+center = [0.0, 0.0, 0.08]
+size = [0.1, 0.1, 0.08]
+)";
+
+struct Rgb {
+  int width = 0, height = 0;
+  std::vector<unsigned char> px;  // row-major RGB, top row first
+};
+
+Rgb read_rgb_png(const fs::path& path) {
+  png_image img{};
+  img.version = PNG_IMAGE_VERSION;
+  Rgb out;
+  if (!png_image_begin_read_from_file(&img, path.c_str())) return out;
+  img.format = PNG_FORMAT_RGB;
+  out.px.resize(PNG_IMAGE_SIZE(img));
+  if (!png_image_finish_read(&img, nullptr, out.px.data(), 0, nullptr)) {
+    png_image_free(&img);
+    out.px.clear();
+    return out;
+  }
+  out.width = static_cast<int>(img.width);
+  out.height = static_cast<int>(img.height);
+  return out;
+}
+
+// Standard deviation of the grey level (mean of R, G, B) over the picture [0, 255].
+double grey_spread(const Rgb& img) {
+  const std::size_t n = img.px.size() / 3;
+  double sum = 0, sum2 = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double g = (img.px[3 * i] + img.px[3 * i + 1] + img.px[3 * i + 2]) / 3.0;
+    sum += g;
+    sum2 += g * g;
+  }
+  const double mean = sum / static_cast<double>(n);
+  return std::sqrt(std::max(0.0, sum2 / static_cast<double>(n) - mean * mean));
+}
+
+// Sand is warm (red well above blue); the floor is grey and the sky blue-ish.
+int sand_pixels(const Rgb& img) {
+  int n = 0;
+  for (std::size_t i = 0; i + 2 < img.px.size(); i += 3) n += img.px[i] > img.px[i + 2] + 40;
+  return n;
+}
+
+// The lines of a .pov scene that must not change between frames: the camera block and the lights.
+std::string camera_and_lights(const std::string& pov) {
+  const std::size_t a = pov.find("camera {");
+  const std::size_t b = pov.find("sky_sphere");
+  if (a == std::string::npos || b == std::string::npos) return "";
+  return pov.substr(a, b - a);
+}
+
+class Render : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (sandflow::find_povray().empty()) GTEST_SKIP() << "povray is not installed";
+  }
+  // A tiny plain-DEM run of `frames` frames in box.dir/run.
+  fs::path tiny_run(int frames, const std::string& scene_text = kTinyScene) {
+    const auto scene = box.write("tiny.toml", scene_text);
+    const auto out = box.dir / "run";
+    std::string log;
+    EXPECT_EQ(sandflow("run " + scene.string() + " --mode dem --frames " + std::to_string(frames) +
+                           " --out " + out.string(),
+                       &log),
+              0)
+        << log;
+    return out;
+  }
+  Sandbox box;
+};
+
+TEST_F(Render, FramesAreNotBlankAndShareOneCamera) {
+  const fs::path run = tiny_run(4);
+  std::string log;
+  ASSERT_EQ(sandflow("render " + run.string() +
+                         " --frames 1:3 --width 64 --height 48 --quality draft --keep-pov",
+                     &log),
+            0)
+      << log;
+  for (const char* name : {"0001", "0002", "0003"}) {
+    const fs::path png = run / "render" / (std::string(name) + ".png");
+    const Rgb img = read_rgb_png(png);
+    ASSERT_EQ(img.width, 64) << png;
+    ASSERT_EQ(img.height, 48) << png;
+    // Not blank: the grey level spreads (a one-colour picture has 0; sand, floor and sky give
+    // tens of levels) and the grains are in it.
+    EXPECT_GT(grey_spread(img), 10.0) << png;
+    EXPECT_GT(sand_pixels(img), 50) << png;
+    EXPECT_NE(log.find(png.string()), std::string::npos) << log;  // its path printed
+  }
+  EXPECT_FALSE(fs::exists(run / "render" / "0004.png"));  // only the frames asked for
+  // The grains move between frames 1 and 3, the camera and the lights do not.
+  const std::string pov1 = read_text(run / "render" / "0001.pov");
+  const std::string pov3 = read_text(run / "render" / "0003.pov");
+  ASSERT_FALSE(camera_and_lights(pov1).empty()) << pov1.substr(0, 400);
+  EXPECT_EQ(camera_and_lights(pov1), camera_and_lights(pov3));
+  EXPECT_NE(pov1.substr(pov1.find("// grains")), pov3.substr(pov3.find("// grains")));
+  // draft: a point light, no area light
+  EXPECT_EQ(pov1.find("area_light"), std::string::npos);
+  // the progress line reached the end (stderr is not a terminal here: one plain line)
+  EXPECT_NE(log.find("frame 3/3"), std::string::npos) << log;
+}
+
+TEST_F(Render, LastFrameByDefaultAndNoLeftovers) {
+  const fs::path run = tiny_run(2);
+  std::string log;
+  ASSERT_EQ(sandflow("render " + run.string() + " --width 32 --height 24 --quality draft", &log), 0)
+      << log;
+  // exactly the last frame's picture: no .pov, no log, no partial image
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(run / "render"))
+    names.push_back(e.path().filename().string());
+  EXPECT_EQ(names, std::vector<std::string>{"0002.png"});
+}
+
+TEST_F(Render, BadFramesAreRefusedNamingTheOption) {
+  const fs::path run = tiny_run(3);
+  const std::string base = "render " + run.string() + " --width 32 --height 24 --quality draft ";
+  struct Case {
+    std::string frames, says;
+  };
+  const Case cases[] = {{"0", "frames count from 1"},     {"3:2", "comes before the first"},
+                        {"4", "beyond the last frame"},   {"2:9", "beyond the last frame"},
+                        {"abc", "is not a frame number"}, {"1:2:3", "expected N, A:B"},
+                        {"1.5", "is not a frame number"}};
+  for (const Case& c : cases) {
+    std::string log;
+    EXPECT_EQ(sandflow(base + "--frames " + c.frames, &log), 2) << c.frames << "\n" << log;
+    EXPECT_NE(log.find("--frames " + c.frames + ":"), std::string::npos) << log;
+    EXPECT_NE(log.find(c.says), std::string::npos) << log;
+  }
+  std::string log;
+  EXPECT_EQ(sandflow(base + "--frames 2 --frame 2", &log), 2) << log;
+  EXPECT_EQ(sandflow(base + "--quality best", &log), 2) << log;
+  EXPECT_NE(log.find("--quality"), std::string::npos) << log;
+  // nothing was rendered for a refused command
+  EXPECT_FALSE(fs::exists(run / "render"));
+}
+
+TEST_F(Render, AFailedFrameIsNamedAndTheOthersAreKept) {
+  const fs::path run = tiny_run(3);
+  // a folder where frame 2's picture should go: its render cannot be put in place
+  fs::create_directories(run / "render" / "0002.png" / "blocker");
+  std::string log;
+  EXPECT_EQ(sandflow("render " + run.string() +
+                         " --frames all --width 32 --height 24 "
+                         "--quality draft",
+                     &log),
+            4)
+      << log;
+  EXPECT_NE(log.find("1 of 3 frames failed to render (frame 2)"), std::string::npos) << log;
+  EXPECT_NE(log.find("0002.png"), std::string::npos) << log;
+  EXPECT_TRUE(fs::is_regular_file(run / "render" / "0001.png"));
+  EXPECT_TRUE(fs::is_regular_file(run / "render" / "0003.png"));
+}
+
+TEST_F(Render, SceneCameraIsUsed) {
+  std::string text = kTinyScene;
+  text += "[camera]\nposition = [0.4, -0.5, 0.3]\nlook_at = [0, 0, 0.05]\nfov = 30\n";
+  const fs::path run = tiny_run(1, text);
+  std::string log;
+  ASSERT_EQ(sandflow("render " + run.string() +
+                         " --width 32 --height 24 --quality draft "
+                         "--keep-pov",
+                     &log),
+            0)
+      << log;
+  const std::string pov = read_text(run / "render" / "0001.pov");
+  EXPECT_NE(pov.find("location <0.4,-0.5,0.3>"), std::string::npos) << pov.substr(0, 600);
+  EXPECT_NE(pov.find("look_at <0,0,0.05>"), std::string::npos);
+  EXPECT_NE(pov.find("angle 30"), std::string::npos);
+}
+
+TEST_F(Render, SetChangesTheLookOnly) {
+  const fs::path run = tiny_run(1);
+  std::string log;
+  ASSERT_EQ(sandflow("render " + run.string() +
+                         " --width 32 --height 24 --quality draft "
+                         "--keep-pov --set camera.fov=25 --set geometry.0.render=hidden",
+                     &log),
+            0)
+      << log;
+  const std::string pov = read_text(run / "render" / "0001.pov");
+  EXPECT_NE(pov.find("angle 25"), std::string::npos);
+  EXPECT_EQ(pov.find("// geometry 0"), std::string::npos);  // the floor plane, hidden
+  // what the grains met is not render's to change
+  EXPECT_EQ(sandflow("render " + run.string() + " --set material.friction=1", &log), 2) << log;
+  EXPECT_NE(log.find("--set material.friction=1: render takes only camera.KEY and "
+                     "geometry.N.render"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(sandflow("render " + run.string() + " --set geometry.0.point=[0,0,1]", &log), 2) << log;
+  // and a bad look value is a scene error, named
+  EXPECT_EQ(sandflow("render " + run.string() + " --set camera.fov=0", &log), 2) << log;
+  EXPECT_NE(log.find("--set camera.fov: camera.fov = 0 is outside (0, 180)"), std::string::npos)
+      << log;
+}
+
+TEST_F(Render, ComparisonFolderGetsOneCameraForBothRuns) {
+  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto out = box.dir / "cmp";
+  std::string log;
+  ASSERT_EQ(sandflow("compare " + scene.string() + " --frames 2 --out " + out.string(), &log), 0)
+      << log;
+  // The two runs of so short a comparison are alike: lift the DEM run's grains, so that each
+  // run alone would be framed differently.
+  const std::string dem_last = (out / "dem" / "frames" / "0002.ply").string();
+  sandflow::FrameData f = sandflow::read_ply(dem_last);
+  for (auto& p : f.position) p.z += 0.2;
+  sandflow::write_ply(dem_last, f);
+  ASSERT_EQ(
+      sandflow("render " + out.string() + " --width 32 --height 24 --quality draft --keep-pov",
+               &log),
+      0)
+      << log;
+  const fs::path s = out / "surface" / "render", d = out / "dem" / "render";
+  ASSERT_TRUE(fs::is_regular_file(s / "0002.png")) << log;
+  ASSERT_TRUE(fs::is_regular_file(d / "0002.png")) << log;
+  const std::string cs = camera_and_lights(read_text(s / "0002.pov"));
+  ASSERT_FALSE(cs.empty());
+  EXPECT_EQ(cs, camera_and_lights(read_text(d / "0002.pov")));
+}
+
+TEST_F(Render, MovieOfTheFrames) {
+  if (sandflow::find_program("ffmpeg").empty())
+    GTEST_SKIP() << "ffmpeg is not installed (sudo apt-get install ffmpeg)";
+  const fs::path run = tiny_run(4);
+  std::string log;
+  // odd sizes: yuv420p needs even ones, the movie is padded
+  ASSERT_EQ(sandflow("render " + run.string() +
+                         " --frames 2:4 --width 33 --height 25 "
+                         "--quality draft --movie",
+                     &log),
+            0)
+      << log;
+  const fs::path mp4 = run / "render" / "movie.mp4";
+  ASSERT_TRUE(fs::is_regular_file(mp4)) << log;
+  EXPECT_NE(log.find(mp4.string()), std::string::npos) << log;
+  // an MP4: its first box is 'ftyp'
+  const std::string head = read_text(mp4).substr(0, 8);
+  EXPECT_EQ(head.substr(4, 4), "ftyp");
+  // three frames at the run's 24 fps, H.264 in yuv420p
+  if (!sandflow::find_program("ffprobe").empty()) {
+    const fs::path probe = box.dir / "probe.txt";
+    const std::string cmd =
+        "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+        "stream=codec_name,pix_fmt,nb_read_frames,r_frame_rate -of "
+        "default=nw=1 " +
+        mp4.string() + " > " + probe.string() + " 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const std::string info = read_text(probe);
+    EXPECT_NE(info.find("codec_name=h264"), std::string::npos) << info;
+    EXPECT_NE(info.find("pix_fmt=yuv420p"), std::string::npos) << info;
+    EXPECT_NE(info.find("nb_read_frames=3"), std::string::npos) << info;
+    EXPECT_NE(info.find("r_frame_rate=24/1"), std::string::npos) << info;
+  }
+}
+
+TEST_F(Render, ComparisonMovieHasBothRunsSideBySide) {
+  if (sandflow::find_program("ffmpeg").empty() || sandflow::find_program("ffprobe").empty())
+    GTEST_SKIP() << "ffmpeg is not installed (sudo apt-get install ffmpeg)";
+  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto out = box.dir / "cmp";
+  std::string log;
+  ASSERT_EQ(sandflow("compare " + scene.string() + " --frames 1 --out " + out.string(), &log), 0)
+      << log;
+  ASSERT_EQ(sandflow("render " + out.string() +
+                         " --frames all --width 32 --height 24 --quality draft --movie",
+                     &log),
+            0)
+      << log;
+  EXPECT_TRUE(fs::is_regular_file(out / "surface" / "render" / "movie.mp4")) << log;
+  EXPECT_TRUE(fs::is_regular_file(out / "dem" / "render" / "movie.mp4")) << log;
+  const fs::path both = out / "render" / "side_by_side.mp4";
+  ASSERT_TRUE(fs::is_regular_file(both)) << log;
+  // two 32-pixel pictures side by side
+  const fs::path probe = box.dir / "probe.txt";
+  const std::string cmd =
+      "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+      "stream=width,height,nb_read_frames -of default=nw=1 " +
+      both.string() + " > " + probe.string() + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  const std::string info = read_text(probe);
+  EXPECT_NE(info.find("width=64"), std::string::npos) << info;
+  EXPECT_NE(info.find("height=24"), std::string::npos) << info;
+  EXPECT_NE(info.find("nb_read_frames=1"), std::string::npos) << info;
+}
+
+TEST_F(Render, WithoutFfmpegTheFramesAreRenderedAndTheMessageSaysHowToInstallIt) {
+  const fs::path run = tiny_run(2);
+  // a PATH with povray and the shell's tools but no ffmpeg
+  const fs::path bin = box.dir / "bin";
+  fs::create_directories(bin);
+  fs::create_symlink(sandflow::find_povray(), bin / "povray");
+  std::string log;
+  const std::string cmd =
+      "render " + run.string() + " --frames all --width 32 --height 24 --quality draft --movie";
+  const char* path_env = std::getenv("PATH");
+  const std::string saved = path_env ? path_env : "";
+  ::setenv("PATH", bin.c_str(), 1);
+  const int rc = sandflow(cmd, &log);
+  ::setenv("PATH", saved.c_str(), 1);
+  EXPECT_EQ(rc, 2) << log;
+  EXPECT_NE(log.find("sudo apt-get install ffmpeg"), std::string::npos) << log;
+  EXPECT_TRUE(fs::is_regular_file(run / "render" / "0001.png")) << log;
+  EXPECT_TRUE(fs::is_regular_file(run / "render" / "0002.png")) << log;
+  EXPECT_FALSE(fs::exists(run / "render" / "movie.mp4"));
+}
+
+}  // namespace

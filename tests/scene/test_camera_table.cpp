@@ -1,0 +1,84 @@
+// The [camera] table of a scene file: what it reads, and each error naming file, line and key.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "scene/scene_loader.hpp"
+
+namespace sandflow {
+namespace {
+
+constexpr const char* kEmitter = "[[emitter]]\ncount = 10\n";  // lines 1-2
+
+std::string error_of(const std::string& text, const std::vector<Override>& overrides = {}) {
+  try {
+    load_scene_from_string(text, "t.toml", overrides);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+void expect_error(const std::string& text, const std::vector<std::string>& pieces,
+                  const std::vector<Override>& overrides = {}) {
+  const std::string msg = error_of(text, overrides);
+  ASSERT_FALSE(msg.empty()) << "expected an InputError for:\n" << text;
+  for (const auto& piece : pieces)
+    EXPECT_NE(msg.find(piece), std::string::npos) << "message: " << msg << "\nmissing: " << piece;
+}
+
+TEST(CameraTable, DefaultsToTheAutomaticCamera) {
+  const SceneConfig s = load_scene_from_string(kEmitter, "t.toml");
+  EXPECT_FALSE(s.camera.position);
+  EXPECT_FALSE(s.camera.look_at);
+  EXPECT_FALSE(s.camera.up);
+  EXPECT_DOUBLE_EQ(s.camera.fov_deg, 40.0);
+}
+
+TEST(CameraTable, ReadsEveryKey) {
+  const SceneConfig s = load_scene_from_string(
+      std::string(kEmitter) +
+          "[camera]\nposition = [1, -2, 0.5]\nlook_at = [0, 0, 0.1]\nup = [0, 0.1, 1]\nfov = 35\n",
+      "t.toml");
+  ASSERT_TRUE(s.camera.position && s.camera.look_at && s.camera.up);
+  EXPECT_EQ(s.camera.position->y, -2.0);
+  EXPECT_EQ(s.camera.look_at->z, 0.1);
+  EXPECT_EQ(s.camera.up->y, 0.1);
+  EXPECT_EQ(s.camera.fov_deg, 35.0);  // degrees, as written: POV-Ray takes degrees
+  // a field of view alone widens the automatic camera
+  const SceneConfig fov_only =
+      load_scene_from_string(std::string(kEmitter) + "[camera]\nfov = 60\n", "t.toml");
+  EXPECT_FALSE(fov_only.camera.position);
+  EXPECT_EQ(fov_only.camera.fov_deg, 60.0);
+  // --set reaches the table even when the file has none
+  const SceneConfig set = load_scene_from_string(kEmitter, "t.toml", {{"camera.fov", "25"}});
+  EXPECT_EQ(set.camera.fov_deg, 25.0);
+}
+
+TEST(CameraTable, ErrorsNameThePlaceAndWhatWasExpected) {
+  const std::string head = std::string(kEmitter) + "[camera]\n";  // the table is line 3
+  expect_error(head + "fov = 180\n", {"t.toml:4:1: camera.fov = 180 is outside (0, 180)"});
+  expect_error(head + "fov = 0\n", {"t.toml:4:1: camera.fov = 0 is outside (0, 180)"});
+  expect_error(head + "position = [1, 2]\nlook_at = [0, 0, 0]\n",
+               {"t.toml:4:1: camera.position: expected an array of 3 numbers"});
+  expect_error(head + "position = [1, 2, 3]\n",
+               {"t.toml:3:1: camera.look_at is missing", "the point the camera"});
+  expect_error(head + "look_at = [1, 2, 3]\n", {"t.toml:3:1: camera.position is missing"});
+  expect_error(head + "position = [1, 2, 3]\nlook_at = [1, 2, 3]\n",
+               {"t.toml:5:1: camera.look_at is camera.position"});
+  expect_error(head + "up = [0, 0, 1]\n",
+               {"t.toml:4:1: camera.up is set without camera.position and camera.look_at"});
+  expect_error(head + "position = [0, 0, 3]\nlook_at = [0, 0, 0]\nup = [0, 0, 1]\n",
+               {"t.toml:6:1: camera.up is parallel to the view direction"});
+  expect_error(head + "position = [1, 0, 3]\nlook_at = [0, 0, 0]\nup = [0, 0, 0]\n",
+               {"t.toml:6:1: camera.up = [0, 0, 0]: expected a direction"});
+  expect_error(head + "angle = 30\n", {"t.toml:4:1: camera.angle is not a key of [camera]",
+                                       "(keys: position, look_at, up, fov)"});
+  expect_error(kEmitter, {"--set camera.fov: camera.fov = -3 is outside (0, 180)"},
+               {{"camera.fov", "-3"}});
+}
+
+}  // namespace
+}  // namespace sandflow
