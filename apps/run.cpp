@@ -118,10 +118,12 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out,
   const HeapFit& fit = res.heap;
   const auto inside = world.geometry().count_inside(res.x);
   const FrameStats& last = res.frames.back();
+  // the scene file as an absolute path: `render` and `report` find it from any folder
+  const std::string scene_file = fs::absolute(scene.path).lexically_normal().string();
   nlohmann::json summary = {
       {"sandflow_version", SANDFLOW_VERSION},
       {"scene", scene.name},
-      {"scene_file", scene.path},
+      {"scene_file", scene_file},
       {"mode", mode_name(scene.simulation.mode)},
       {"frames", frames},
       {"fps", scene.output.fps},
