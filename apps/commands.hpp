@@ -3,6 +3,7 @@
 // main() in sandflow.cpp parses the command line and maps the errors to exit codes.
 #pragma once
 
+#include <csignal>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 
 #include "analysis/heap.hpp"
 #include "analysis/surface_diff.hpp"
+#include "checkpoint/checkpoint.hpp"
 #include "scene/world.hpp"
 
 namespace sandflow {
@@ -26,7 +28,13 @@ struct RunOptions {
   bool check = false;
   bool force = false;
   bool profile = false;
+  std::string resume;         ///< --resume DIR: continue the run in DIR
+  int checkpoint_every = -1;  ///< frames between checkpoints; -1: the default (or the run's own)
 };
+
+/// Frames between checkpoints when --checkpoint-every is not given: one second of simulated time
+/// at the default 30 fps (docs/checkpoints.md says why).
+constexpr int kDefaultCheckpointEvery = 30;
 
 struct Table1Options {
   double scale = 1;
@@ -59,9 +67,26 @@ struct RunResult {
   HeapFit heap;
 };
 
-/// Runs a scene into `out` (prepared by the caller), writing stats.csv, frames and summary.json.
-/// `label` prefixes the progress line (table1's "scene k of n: ").
-RunResult run_scene(const SceneConfig& scene, const std::string& out, const std::string& label = "");
+/// What makes a run resumable (`sandflow run`; compare and table1 leave it empty).
+struct RunControl {
+  std::string start_record;   ///< how the run was started, hashed into its checkpoints ("": none)
+  int checkpoint_every = 0;   ///< frames between checkpoints (and one after the last); 0: none
+  Checkpoint* resume = nullptr;  ///< continue from this state (moved from)
+  /// Set by a signal handler: finish the frame, write a checkpoint, throw RunInterrupted.
+  const volatile std::sig_atomic_t* stop = nullptr;
+};
+
+/// Thrown by run_scene when `RunControl::stop` was set: a checkpoint of `frame` is written.
+struct RunInterrupted {
+  int frame;
+  int signal;
+};
+
+/// Runs a scene into `out` (prepared by the caller), writing stats.csv, frames and summary.json,
+/// and with `control`, DIR/checkpoint.bin. `label` prefixes the progress line (table1's "scene k
+/// of n: ").
+RunResult run_scene(const SceneConfig& scene, const std::string& out, const std::string& label = "",
+                    const RunControl& control = {});
 
 /// Both runs of a scene and the figures compared (what compare.json holds).
 struct Comparison {
