@@ -564,11 +564,19 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   auto inside = [&](const Vec3& x) {
     return x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y && x.z >= lo.z && x.z <= hi.z;
   };
-  for (std::size_t i = 0; i < n; ++i)
-    if (!(g.r[i] > 0 && g.m[i] > 0 && g.inv_m[i] > 0 && g.inv_I[i] > 0) || !inside(g.x[i]))
+  // radii as the emitters draw them, masses and inertias as Grains::add makes them
+  const MaterialConfig& mat = world.scene().material;
+  const Real r_lo = 0.5 * mat.diameter * (1 - mat.diameter_spread) * (1 - 1e-12);
+  const Real r_hi = 0.5 * mat.diameter * (1 + mat.diameter_spread) * (1 + 1e-12);
+  auto near = [](Real a, Real b) { return std::abs(a - b) <= 1e-9 * std::abs(b); };
+  for (std::size_t i = 0; i < n; ++i) {
+    const Real r = g.r[i], m = mat.density * (4.0 / 3.0) * kPi * r * r * r;
+    if (!(r >= r_lo && r <= r_hi) || !near(g.m[i], m) || !near(g.inv_m[i], 1 / m) ||
+        !near(g.inv_I[i], 1 / (0.4 * m * r * r)) || !inside(g.x[i]))
       fail(fmt::format("hot grain {} has a radius, mass or position out of range", g.id[i]));
+  }
   for (std::size_t k = 0; k < ns; ++k)
-    if (!(st.r[k] > 0) || !inside(st.x[k]))
+    if (!(st.r[k] >= r_lo && st.r[k] <= r_hi) || !inside(st.x[k]))
       fail(fmt::format("static grain {} has a radius or position out of range", st.id[k]));
   std::vector<GrainId> ids(g.id);
   ids.insert(ids.end(), st.id.begin(), st.id.end());
@@ -629,8 +637,11 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
     if (slot != kNoSlot && slot >= n) fail("a slot of the last rebuild is out of range");
   if (d.x_at_build.size() != n || d.allow.size() != n)
     fail("the reference positions or allowances do not match the grains");
+  // allowances as a rebuild clamps them
+  const DemParams& dp = world.dem().params();
+  const Real a_min = dp.skin / 2, a_max = std::max(a_min, dp.skin_max);
   for (std::size_t i = 0; i < n; ++i)
-    if (d.allow[i] < 0 || !inside(d.x_at_build[i]))
+    if (!(d.allow[i] >= a_min && d.allow[i] <= a_max) || !inside(d.x_at_build[i]))
       fail("a reference position or allowance is out of range");
 
   // the surface flow: one entry per column, and static grains only where it files them
