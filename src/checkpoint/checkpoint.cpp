@@ -557,10 +557,16 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   for (std::size_t len : {st.x.size(), st.r.size(), st.column.size()})
     if (len != ns) fail(fmt::format("the static grains' arrays have {} and {} entries", ns, len));
   if (n + ns > std::numeric_limits<GrainId>::max()) fail("too many grains");
-  // a grain may be at most a domain's width outside it (it left during the frame's last step)
-  const Vec3 ext = world.domain_hi() - world.domain_lo();
-  const Real pad = std::max({ext.x, ext.y, ext.z});
-  const Vec3 lo = world.domain_lo() - Vec3{pad, pad, pad}, hi = world.domain_hi() + Vec3{pad, pad, pad};
+  // a grain may be at most a domain's width outside it (it left during the frame's last step);
+  // along an unbounded axis, a million diameters: far beyond any grain of a run, and near enough
+  // that the height field's cell indices stay far from overflowing
+  Vec3 lo = world.domain_lo(), hi = world.domain_hi();
+  const Real far = 1e6 * world.scene().material.diameter;
+  for (int a = 0; a < 3; ++a) {
+    const Real pad = std::isfinite(hi[a] - lo[a]) ? hi[a] - lo[a] : far;
+    lo[a] = std::max(lo[a] - pad, -far);
+    hi[a] = std::min(hi[a] + pad, far);
+  }
   auto inside = [&](const Vec3& x) {
     return x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y && x.z >= lo.z && x.z <= hi.z;
   };

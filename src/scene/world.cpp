@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include <fmt/format.h>
@@ -105,9 +106,10 @@ SceneConfig with_stiffness(SceneConfig scene, const Stiffness& s) {
 
 // The box the grains must stay in: simulation.domain, or the box of the scene's finite parts
 // (solids, meshes, planes' points, emitters, the height field's extent) widened on every side by
-// its largest extent, at least 1 m. So wide that only a grain flung away by a blow-up, or falling
-// past the end of the geometry, reaches a side; a heap spreads over less than its own height
-// times 1 / tan(repose) ~ 1.6, well inside.
+// its largest extent, at least 1 m: only a grain flung away by a blow-up, or falling past the end
+// of the geometry, reaches a side. A floor (a plane facing up, within 45 degrees) has no end:
+// grains may roll on it as far as they go (a bouncing 2 cm grain of a small pour was seen 1.1 m
+// out), so x and y are then unbounded, and only falling through it or flying off is caught.
 void scene_domain(const SceneConfig& scene, const Geometry& geometry, Vec3& lo, Vec3& hi) {
   if (const auto& d = scene.simulation.domain) {
     lo = {(*d)[0], (*d)[1], (*d)[2]};
@@ -133,6 +135,12 @@ void scene_domain(const SceneConfig& scene, const Geometry& geometry, Vec3& lo, 
   const Real m = std::max({1.0, ext.x, ext.y, ext.z});
   lo -= Vec3{m, m, m};
   hi += Vec3{m, m, m};
+  for (const GeometryConfig& g : scene.geometry)
+    if (g.type == GeometryType::Plane && g.normal.z > std::sqrt(0.5) * norm(g.normal)) {
+      constexpr Real kInf = std::numeric_limits<Real>::infinity();
+      lo.x = lo.y = -kInf;
+      hi.x = hi.y = kInf;
+    }
 }
 }  // namespace
 

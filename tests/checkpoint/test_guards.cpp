@@ -4,6 +4,7 @@
 // set them are validated like every other key.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <regex>
 #include <string>
 
@@ -124,6 +125,16 @@ TEST(Guards, TheDefaultDomainIsTheScenesBoxWidenedByItsExtentAtLeastAMetre) {
   World wb(big);
   EXPECT_NEAR(wb.domain_lo().x, -1.5 - 3, 1e-12);
   EXPECT_NEAR(wb.domain_hi().y, 1 + 3, 1e-12);
+  // a floor has no end: grains may roll on it as far as they go, but not fall through
+  SceneConfig floored = thrown_out(OnLeave::Stop);
+  GeometryConfig floor;
+  floor.type = GeometryType::Plane;
+  floored.geometry = {floor};
+  World wf(floored);
+  EXPECT_EQ(wf.domain_lo().x, -std::numeric_limits<Real>::infinity());
+  EXPECT_EQ(wf.domain_hi().y, std::numeric_limits<Real>::infinity());
+  EXPECT_NEAR(wf.domain_lo().z, 0 - 1, 1e-12);
+  EXPECT_NEAR(wf.domain_hi().z, 0.506 + 1, 1e-12);
 }
 
 TEST(Guards, LeavingGrainsStopTheRunOrAreCountedAsTheSceneChooses) {
