@@ -269,7 +269,8 @@ void World::check_overlap() {
   const Real limit = scene_.simulation.max_overlap_stop;
   const Real reached = dem_.counters().max_overlap_rel;
   if (!(reached > limit)) return;
-  // the counter knows how deep, not where: look for the deepest contact now
+  // the counter knows how deep, not where (it saw the state before the step moved it): look for
+  // the deepest contact now
   const DeepestOverlap d = dem_.deepest_overlap(grains_, geometry_);
   std::string what;
   const GrainId a = d.kind == DeepestOverlap::kNone ? 0 : grains_.id[d.slot];
@@ -290,13 +291,15 @@ void World::check_overlap() {
                          a, 100 * d.rel);
       break;
     case DeepestOverlap::kNone:
-      what = "no listed contact overlaps any more";
       break;
   }
+  if (d.rel < reached)
+    what = fmt::format("an overlap reached {:.0f} % of a diameter during the step{}", 100 * reached,
+                       what.empty() ? "" : "; the deepest after it: " + what);
   throw SimulationError(fmt::format(
-      "{}: an overlap reached {:.0f} % of a diameter, above simulation.max_overlap_stop = {:.0f} "
-      "%: {}; the contacts are too soft for the impacts (raise k_n) or the time step too long",
-      where(step_ + 1), 100 * reached, 100 * limit, what));
+      "{}: {}, above simulation.max_overlap_stop = {:.0f} %; the contacts are too soft for the "
+      "impacts (raise k_n) or the time step is too long",
+      where(step_ + 1), what, 100 * limit));
 }
 
 FrameStats World::advance_frame() {

@@ -276,9 +276,9 @@ velocity = [0.0, 0.0, -5.0]
   std::smatch m;
   ASSERT_TRUE(std::regex_search(
       log, m,
-      std::regex("simulation stopped: step (\\d+) \\(frame 2, t = [0-9.]+ s\\): an overlap reached "
-                 "\\d+ % of a diameter, above simulation.max_overlap_stop = 50 %: grain 0 overlaps "
-                 "geometry\\[0\\] \\('floor'\\)[^\n]*\n  reproduce it from the last checkpoint "
+      std::regex("simulation stopped: step (\\d+) \\(frame 2, t = [0-9.]+ s\\): grain 0 overlaps "
+                 "geometry\\[0\\] \\('floor'\\) by \\d+ % of its diameter, above "
+                 "simulation.max_overlap_stop = 50 %;[^\n]*\n  reproduce it from the last checkpoint "
                  "\\(frame 1\\): sandflow run --resume (\\S+)\n")))
       << log;
   EXPECT_EQ(m[2], out.string());
