@@ -377,7 +377,8 @@ Started start_resumed(const RunOptions& o) {
   RunOptions r;
   std::string text;
   try {
-    record = nlohmann::json::parse(read_scene_text(record_path.string()));
+    std::ifstream in(record_path);
+    record = nlohmann::json::parse(in);
     text = record.at("start").at("scene_text").get<std::string>();
     r.scene = record.at("scene_file").get<std::string>();
     r.sets = record.at("start").at("sets").get<std::vector<std::string>>();
