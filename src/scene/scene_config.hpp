@@ -71,7 +71,7 @@ struct SimulationConfig {
   std::uint64_t seed = 1;           ///< random seed of the emitters
   int threads = 0;                  ///< 0: all cores
   // guards (docs/scenes.md): a run that leaves its valid range stops, naming the step and grain
-  Real max_overlap_stop = 0.5;      ///< stop when an overlap exceeds this fraction of a diameter
+  Real max_overlap_stop = 0.6;      ///< stop when an overlap exceeds this fraction of a diameter
   /// [x0, y0, z0, x1, y1, z1] the grains must stay in [m]; unset: derived from the scene
   std::optional<std::array<Real, 6>> domain;
   OnLeave on_leave = OnLeave::Stop; ///< a grain leaving the domain stops the run, or is removed

@@ -278,7 +278,7 @@ velocity = [0.0, 0.0, -5.0]
       log, m,
       std::regex("simulation stopped: step (\\d+) \\(frame 2, t = [0-9.]+ s\\): grain 0 overlaps "
                  "geometry\\[0\\] \\('floor'\\) by \\d+ % of its diameter, above "
-                 "simulation.max_overlap_stop = 50 %;[^\n]*\n  reproduce it from the last checkpoint "
+                 "simulation.max_overlap_stop = 60 %;[^\n]*\n  reproduce it from the last checkpoint "
                  "\\(frame 1\\): sandflow run --resume (\\S+)\n")))
       << log;
   EXPECT_EQ(m[2], out.string());

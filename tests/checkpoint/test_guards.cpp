@@ -64,12 +64,13 @@ TEST(Guards, ARunawayOverlapWithAWallNamesTheStepTheGrainAndTheWall) {
   World w(s);
   const std::string msg = run_until_stopped(w, 2);
   EXPECT_NE(msg.find("grain 0 overlaps geometry[0] ('floor')"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("above simulation.max_overlap_stop = 50 %"), std::string::npos) << msg;
-  // it reaches the floor (4.5 cm) after ~0.0023 s; half a diameter deeper ~0.25 ms later
+  EXPECT_NE(msg.find("above simulation.max_overlap_stop = 60 %"), std::string::npos) << msg;
+  // it reaches the floor (4.5 cm below its bottom) after 2.25 ms at 20 m/s, and 0.6 of a
+  // diameter deeper 0.3 ms later (gravity and the soft springs change that by well under a step)
   const long long step = step_of(msg);
   const Real dt = w.time_step().dt;
   EXPECT_GE(step * dt, 0.045 / 20) << msg;
-  EXPECT_LE(step * dt, (0.045 + 0.005) / 20 + 2 * dt) << msg;
+  EXPECT_LE(step * dt, (0.045 + 0.006) / 20 + 2 * dt) << msg;
 }
 
 TEST(Guards, ARunawayOverlapBetweenGrainsNamesBoth) {
