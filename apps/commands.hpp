@@ -72,6 +72,9 @@ struct RunControl {
   std::string start_record;   ///< how the run was started, hashed into its checkpoints ("": none)
   int checkpoint_every = 0;   ///< frames between checkpoints (and one after the last); 0: none
   Checkpoint* resume = nullptr;  ///< continue from this state (moved from)
+  /// `out` holds a stopped run: once the state is restored (or from the start, without one), its
+  /// temporary files and the frames after the checkpoint go, and stats.csv is rewritten.
+  bool resumed = false;
   /// Set by a signal handler: finish the frame, write a checkpoint, throw RunInterrupted.
   const volatile std::sig_atomic_t* stop = nullptr;
 };

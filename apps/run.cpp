@@ -110,6 +110,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
       throw InputError(fmt::format("{}: frame {} is past the run's last frame {}",
                                    checkpoint_path, world.frame(), frames));
   }
+  if (control.resumed) prepare_resumed_dir(out, world.frame());
   StatsWriter stats(fs::path(out) / "stats.csv", res.frames);
   Progress progress(fmt::format("{}{} [{}]", label, scene.name, mode_name(scene.simulation.mode)),
                     frames);
@@ -327,7 +328,8 @@ struct Started {
   std::string out;
   nlohmann::json record;
   std::optional<Checkpoint> checkpoint;
-  bool done = false;  ///< nothing to run (--check, or a finished run)
+  bool resumed = false;  ///< `out` holds a stopped run
+  bool done = false;     ///< nothing to run (--check, or a finished run)
 };
 
 /// Runs `run` with checkpoints and the stop signals into `res`; returns the exit status of an
@@ -337,6 +339,7 @@ int run_resumable(Started& run, RunResult& res) {
   control.start_record = run.record["start"].dump();
   control.checkpoint_every = run.record["checkpoint_every"].get<int>();
   control.resume = run.checkpoint ? &*run.checkpoint : nullptr;
+  control.resumed = run.resumed;
   control.stop = &g_stop_signal;
   try {
     const StopSignals signals;
@@ -407,10 +410,18 @@ Started start_resumed(const RunOptions& o) {
   run.scene = apply_run_options(load_scene_from_string(text, r.scene, run_overrides(r)), r);
   run.out = dir;
   run.record = record;
+  run.resumed = true;
   const std::string path = (fs::path(dir) / "checkpoint.bin").string();
-  if (fs::exists(path, ec)) run.checkpoint = read_checkpoint(path);
+  if (fs::exists(path, ec)) {
+    try {
+      run.checkpoint = read_checkpoint(path);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format(
+          "{}\n  the run cannot go on from it (without it, --resume runs it again from the start)",
+          e.what()));
+    }
+  }
   const int frame = run.checkpoint ? run.checkpoint->world.frame : 0;
-  prepare_resumed_dir(dir, frame);
   if (run.checkpoint)
     fmt::print(stderr, "resuming {} from its checkpoint at frame {}\n", dir, frame);
   else

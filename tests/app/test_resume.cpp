@@ -333,17 +333,23 @@ TEST(Resume, RefusesWhatItCannotContinueAndSaysWhy) {
   std::ofstream(ck, std::ios::binary | std::ios::trunc) << sandflow::encode_checkpoint(c);
   EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2);
   EXPECT_NE(log.find("written by sandflow 9.9.9"), std::string::npos) << log;
+  // (a refused checkpoint leaves the folder as it was)
+  EXPECT_TRUE(fs::exists(out / "frames" / "0004.ply"));
   // one of another run (another scene)
   const fs::path other = box.dir / "other";
   ASSERT_EQ(sandflow(fmt::format("run {} --frames 2 --checkpoint-every 2 --set material.friction=0.3 --out {}",
                                  scene, other.string())),
             0);
   fs::copy_file(other / "checkpoint.bin", ck, fs::copy_options::overwrite_existing);
+  // (a frame after the checkpoint, as a killed run leaves it: kept while the checkpoint is refused)
+  fs::copy_file(out / "frames" / "0004.ply", out / "frames" / "0005.ply");
   EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2);
   EXPECT_NE(log.find("written for another scene"), std::string::npos) << log;
-  // the good one again: it resumes
+  EXPECT_TRUE(fs::exists(out / "frames" / "0005.ply"));
+  // the good one again: it resumes, and the frame after it is made again
   std::ofstream(ck, std::ios::binary | std::ios::trunc) << good;
   EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  EXPECT_FALSE(fs::exists(out / "frames" / "0005.ply"));
 }
 
 }  // namespace
