@@ -113,7 +113,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
   if (control.resumed) prepare_resumed_dir(out, world.frame());
   StatsWriter stats(fs::path(out) / "stats.csv", res.frames);
   Progress progress(fmt::format("{}{} [{}]", label, scene.name, mode_name(scene.simulation.mode)),
-                    frames);
+                    frames, world.frame());
   std::vector<std::string> unsynced;  // frames written since the last checkpoint
   auto write_checkpoint = [&] {
     // the frames it vouches for reach the disk before it does
