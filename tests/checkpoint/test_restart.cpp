@@ -163,11 +163,12 @@ TEST(Restart, EveryFrameBoundaryOfASurfaceRunIsARestartPoint) {
   }
 }
 
-TEST(Restart, TwoThreadsBeforeAndOneAfterGiveTheSameState) {
-  // enough grains (> kParallelMinGrains) that the lists are built and swept by two threads
+/// A settling block of more grains than kParallelMinGrains: the lists are built and swept by two
+/// threads.
+SceneConfig parallel_scene(Mode mode) {
   SceneConfig s;
   s.path = "threads";
-  s.simulation.mode = Mode::Dem;
+  s.simulation.mode = mode;
   s.simulation.dt_fraction = 0.2;
   s.simulation.sort_every = 2;
   s.material.diameter = 0.01;
@@ -182,8 +183,20 @@ TEST(Restart, TwoThreadsBeforeAndOneAfterGiveTheSameState) {
   pile.size = {0.2, 0.2, 0.2};
   pile.count = static_cast<std::int64_t>(kParallelMinGrains) + 500;
   s.emitters = {pile};
-  check_restart(s, 4, 2, 2, 1);
-  check_restart(s, 4, 2, 1, 2);
+  return s;
+}
+
+TEST(Restart, TwoThreadsBeforeAndOneAfterGiveTheSameState) {
+  check_restart(parallel_scene(Mode::Dem), 4, 2, 2, 1);
+  check_restart(parallel_scene(Mode::Dem), 4, 2, 1, 2);
+}
+
+TEST(Restart, TwoThreadsBeforeAndOneAfterGiveTheSameStateInSurfaceMode) {
+  check_restart(parallel_scene(Mode::Surface), 4, 2, 2, 1);
+  // (still enough hot grains for two threads when the checkpoint is taken)
+  World w(parallel_scene(Mode::Surface));
+  for (int f = 0; f < 2; ++f) w.advance_frame();
+  EXPECT_GT(w.grains().size(), kParallelMinGrains);
 }
 
 }  // namespace
