@@ -116,6 +116,7 @@ void scene_domain(const SceneConfig& scene, const Geometry& geometry, Vec3& lo, 
     hi = {(*d)[3], (*d)[4], (*d)[5]};
     return;
   }
+  lo = hi = Vec3{};  // (a scene of nothing: a box around the origin)
   bool any = geometry.finite_bounds(lo, hi);
   auto add = [&](const Vec3& a, const Vec3& b) {
     lo = any ? min(lo, a) : a;

@@ -9,11 +9,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <random>
-#include <regex>
 #include <string>
 #include <thread>
 
@@ -84,6 +84,17 @@ int wait_for(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+/// The whole number that follows the first `prefix` in `text` (-1 when there is none). (No
+/// std::regex: GCC 12 warns about its internals under the sanitizers.)
+long long number_after(const std::string& text, const std::string& prefix) {
+  const std::size_t at = text.find(prefix);
+  if (at == std::string::npos) return -1;
+  std::size_t end = at + prefix.size();
+  while (end < text.size() && std::isdigit(static_cast<unsigned char>(text[end]))) ++end;
+  if (end == at + prefix.size()) return -1;
+  return std::stoll(text.substr(at + prefix.size(), end - at - prefix.size()));
+}
+
 std::vector<std::string> lines(const fs::path& p) {
   std::vector<std::string> out;
   std::ifstream in(p);
@@ -149,12 +160,12 @@ TEST(Resume, SigintFinishesTheFrameCheckpointsAndSaysHowToResume) {
   kill(pid, SIGINT);
   EXPECT_EQ(wait_for(pid), 130);
   const std::string log = read_text(box.dir / "run.log");
-  std::smatch m;
-  ASSERT_TRUE(std::regex_search(
-      log, m, std::regex("interrupted at frame (\\d+); resume with: sandflow run --resume (\\S+)\n")))
+  const long long frame = number_after(log, "interrupted at frame ");
+  ASSERT_GT(frame, 0) << log;
+  EXPECT_NE(log.find(fmt::format("interrupted at frame {}; resume with: sandflow run --resume {}\n",
+                                 frame, out.string())),
+            std::string::npos)
       << log;
-  const int frame = std::stoi(m[1]);
-  EXPECT_EQ(m[2], out.string());
   EXPECT_GE(frame, 5);
   EXPECT_LT(frame, kFrames);
   EXPECT_EQ(sandflow::read_checkpoint((out / "checkpoint.bin").string()).world.frame, frame);
@@ -232,15 +243,15 @@ TEST(Resume, AFullDiskStopsWithAClearErrorAndKeepsTheLastGoodCheckpoint) {
                           box.dir / "run.log", limit);
   EXPECT_EQ(wait_for(pid), 4);
   const std::string log = read_text(box.dir / "run.log");
-  std::smatch m;
-  ASSERT_TRUE(std::regex_search(
-      log, m,
-      std::regex("output error: (\\S+)/checkpoint.bin: cannot write: File too large\n"
-                 "  the run can go on from the last checkpoint \\(frame (\\d+)\\): make room .*"
-                 "then: sandflow run --resume (\\S+)\n")))
+  const long long frame = number_after(log, "the run can go on from the last checkpoint (frame ");
+  ASSERT_GT(frame, 0) << log;
+  EXPECT_NE(log.find(fmt::format("output error: {}/checkpoint.bin: cannot write: File too large\n"
+                                 "  the run can go on from the last checkpoint (frame {}): make "
+                                 "room (or make the folder writable), then: sandflow run --resume "
+                                 "{}\n",
+                                 out.string(), frame, out.string())),
+            std::string::npos)
       << log;
-  EXPECT_EQ(m[1], out.string());
-  const int frame = std::stoi(m[2]);
   EXPECT_GE(frame, 6);
   // the last good checkpoint is intact and the half-written one is gone
   EXPECT_EQ(sandflow::read_checkpoint((out / "checkpoint.bin").string()).world.frame, frame);
@@ -273,20 +284,22 @@ velocity = [0.0, 0.0, -5.0]
                      &log),
             3)
       << log;
-  std::smatch m;
-  ASSERT_TRUE(std::regex_search(
-      log, m,
-      std::regex("simulation stopped: step (\\d+) \\(frame 2, t = [0-9.]+ s\\): grain 0 overlaps "
-                 "geometry\\[0\\] \\('floor'\\) by \\d+ % of its diameter, above "
-                 "simulation.max_overlap_stop = 60 %;[^\n]*\n  reproduce it from the last checkpoint "
-                 "\\(frame 1\\): sandflow run --resume (\\S+)\n")))
-      << log;
-  EXPECT_EQ(m[2], out.string());
+  ASSERT_GT(number_after(log, "simulation stopped: step "), 0) << log;
   const std::string first_line = log.substr(log.find("simulation stopped"));
+  const std::string stop = first_line.substr(0, first_line.find('\n'));
+  EXPECT_NE(stop.find(" (frame 2, t = "), std::string::npos) << stop;
+  EXPECT_NE(stop.find("): grain 0 overlaps geometry[0] ('floor') by "), std::string::npos) << stop;
+  EXPECT_NE(stop.find(" % of its diameter, above simulation.max_overlap_stop = 60 %;"),
+            std::string::npos)
+      << stop;
+  EXPECT_NE(first_line.find("\n  reproduce it from the last checkpoint (frame 1): sandflow run "
+                            "--resume " + out.string() + "\n"),
+            std::string::npos)
+      << log;
   // the command given stops at the same step with the same words
   std::string again;
   EXPECT_EQ(sandflow("run --resume " + out.string(), &again), 3);
-  EXPECT_NE(again.find(first_line.substr(0, first_line.find('\n'))), std::string::npos) << again;
+  EXPECT_NE(again.find(stop), std::string::npos) << again;
 }
 
 TEST(Resume, RefusesWhatItCannotContinueAndSaysWhy) {
