@@ -3,6 +3,7 @@
 // main() in sandflow.cpp parses the command line and maps the errors to exit codes.
 #pragma once
 
+#include <csignal>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -12,6 +13,7 @@
 
 #include "analysis/heap.hpp"
 #include "analysis/surface_diff.hpp"
+#include "checkpoint/checkpoint.hpp"
 #include "scene/world.hpp"
 
 namespace sandflow {
@@ -29,7 +31,13 @@ struct RunOptions {
   bool profile = false;
   std::optional<std::string> exports;  ///< --export LIST (overrides output.export)
   std::string up_axis;                 ///< --up-axis z|y (overrides output.up_axis)
+  std::string resume;         ///< --resume DIR: continue the run in DIR
+  int checkpoint_every = -1;  ///< frames between checkpoints; -1: the default (or the run's own)
 };
+
+/// Frames between checkpoints when --checkpoint-every is not given: one second of simulated time
+/// at the default 30 fps (docs/checkpoints.md says why).
+constexpr int kDefaultCheckpointEvery = 30;
 
 struct Table1Options {
   double scale = 1;
@@ -77,9 +85,29 @@ struct RunResult {
   HeapFit heap;
 };
 
-/// Runs a scene into `out` (prepared by the caller), writing stats.csv, frames and summary.json.
-/// `label` prefixes the progress line (table1's "scene k of n: ").
-RunResult run_scene(const SceneConfig& scene, const std::string& out, const std::string& label = "");
+/// What makes a run resumable (`sandflow run`; compare and table1 leave it empty).
+struct RunControl {
+  std::string start_record;   ///< how the run was started, hashed into its checkpoints ("": none)
+  int checkpoint_every = 0;   ///< frames between checkpoints (and one after the last); 0: none
+  Checkpoint* resume = nullptr;  ///< continue from this state (moved from)
+  /// `out` holds a stopped run: once the state is restored (or from the start, without one), its
+  /// temporary files and the frames after the checkpoint go, and stats.csv is rewritten.
+  bool resumed = false;
+  /// Set by a signal handler: finish the frame, write a checkpoint, throw RunInterrupted.
+  const volatile std::sig_atomic_t* stop = nullptr;
+};
+
+/// Thrown by run_scene when `RunControl::stop` was set: a checkpoint of `frame` is written.
+struct RunInterrupted {
+  int frame;
+  int signal;
+};
+
+/// Runs a scene into `out` (prepared by the caller), writing stats.csv, frames and summary.json,
+/// and with `control`, DIR/checkpoint.bin. `label` prefixes the progress line (table1's "scene k
+/// of n: ").
+RunResult run_scene(const SceneConfig& scene, const std::string& out, const std::string& label = "",
+                    const RunControl& control = {});
 
 /// Both runs of a scene and the figures compared (what compare.json holds).
 struct Comparison {

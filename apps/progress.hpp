@@ -16,13 +16,17 @@ namespace sandflow {
 
 class Progress {
  public:
-  Progress(std::string label, int total_frames)
-      : label_(std::move(label)), total_(total_frames), tty_(isatty(STDERR_FILENO) != 0) {}
+  /// `first_frame`: frames already done before this process (a resumed run), left out of the speed.
+  Progress(std::string label, int total_frames, int first_frame = 0)
+      : label_(std::move(label)),
+        total_(total_frames),
+        first_(first_frame),
+        tty_(isatty(STDERR_FILENO) != 0) {}
 
   /// `simulated`: grains in the DEM (active + interface), shown when below `grains`.
   void update(int frame, std::int64_t grains, std::int64_t simulated = -1) {
     const double elapsed = clock_.seconds();
-    const double per_frame = elapsed / std::max(1, frame);
+    const double per_frame = elapsed / std::max(1, frame - first_);
     const double eta = per_frame * (total_ - frame);
     const std::string line =
         fmt::format("{} frame {}/{}  grains {}{}  {:.1f} frames/min  ETA {}", label_, frame, total_,
@@ -50,6 +54,7 @@ class Progress {
  private:
   std::string label_;
   int total_;
+  int first_;
   bool tty_;
   Stopwatch clock_;
   double last_plain_ = 0;

@@ -1,8 +1,15 @@
 // `sandflow run` and `sandflow measure`, and the run driver that `compare` and `table1` share.
 #include <omp.h>
 
+#include <signal.h>
+
 #include <algorithm>
+#include <csignal>
 #include <filesystem>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -27,17 +34,28 @@ std::string mode_name(Mode m) {
   return m == Mode::Dem ? "dem" : "surface";
 }
 
-SceneConfig load_for_run(const RunOptions& o) {
+namespace {
+
+std::vector<Override> run_overrides(const RunOptions& o) {
   std::vector<Override> overrides;
   for (const auto& s : o.sets) overrides.push_back(parse_override(s));
   if (!o.mode.empty()) overrides.push_back({"simulation.mode", fmt::format("\"{}\"", o.mode)});
-  SceneConfig scene = load_scene(o.scene, overrides);
+  return overrides;
+}
+
+SceneConfig apply_run_options(SceneConfig scene, const RunOptions& o) {
   if (o.grains > 0) scale_grain_count(scene, o.grains);
   if (o.frames > 0) scene.output.frames = o.frames;
   if (o.threads > 0) scene.simulation.threads = o.threads;
   if (o.exports) scene.output.exports = parse_export_list(*o.exports, "--export");
   if (!o.up_axis.empty()) scene.output.up_axis = o.up_axis == "y" ? UpAxis::Y : UpAxis::Z;
   return scene;
+}
+
+}  // namespace
+
+SceneConfig load_for_run(const RunOptions& o) {
+  return apply_run_options(load_scene(o.scene, run_overrides(o)), o);
 }
 
 namespace {
@@ -72,8 +90,8 @@ int thread_count(const SceneConfig& scene) {
 
 /// Runs a scene into `out` (prepared by the caller), writing stats.csv, frames and summary.json.
 /// `label` prefixes the progress line (table1's "scene k of n: ").
-RunResult run_scene(const SceneConfig& scene, const std::string& out,
-                    const std::string& label) {
+RunResult run_scene(const SceneConfig& scene, const std::string& out, const std::string& label,
+                    const RunControl& control) {
   World world(scene);
   for (const std::string& w : world.geometry().warnings()) fmt::print(stderr, "warning: {}\n", w);
   const int frames = world.planned_frames();
@@ -87,26 +105,63 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out,
              frames, world.scene().material.k_n, ts.dt, threads, out);
 
   RunResult res;
-  StatsWriter stats(fs::path(out) / "stats.csv");
+  // a resumable run: checkpoints carry the hash of its scene; a resumed one starts from one
+  const bool resumable = !control.start_record.empty();
+  const std::uint64_t hash = resumable ? scene_hash(world, control.start_record) : 0;
+  const std::string checkpoint_path = (fs::path(out) / "checkpoint.bin").string();
+  if (control.resume) {
+    res.frames = control.resume->frames;
+    restore_checkpoint(world, std::move(*control.resume), hash, checkpoint_path);
+    if (world.frame() > frames)
+      throw InputError(fmt::format("{}: frame {} is past the run's last frame {}",
+                                   checkpoint_path, world.frame(), frames));
+  }
+  if (control.resumed) prepare_resumed_dir(out, world.frame());
+  StatsWriter stats(fs::path(out) / "stats.csv", res.frames);
   FrameExporter exporter(world, out);  // the per-frame files of --export
   for (const std::string& w : exporter.warnings()) fmt::print(stderr, "warning: {}\n", w);
+  exporter.continue_after(res.frames);  // a resumed run's frames.pvd lists the frames before it
   Progress progress(fmt::format("{}{} [{}]", label, scene.name, mode_name(scene.simulation.mode)),
-                    frames);
-  double simulated_sum = 0;
-  Real max_overlap = 0;
-  TransitionCounts transitions;
-  for (int f = 0; f < frames; ++f) {
+                    frames, world.frame());
+  std::vector<std::string> unsynced;  // frames written since the last checkpoint
+  auto write_checkpoint = [&] {
+    // the frames it vouches for reach the disk before it does
+    std::set<std::string> folders;
+    for (const std::string& p : unsynced) {
+      sync_file(p);
+      folders.insert(fs::path(p).parent_path().string());
+    }
+    for (const std::string& d : folders) sync_dir(d);
+    unsynced.clear();
+    Checkpoint c;
+    c.scene_hash = hash;
+    c.world = world.save_state();
+    c.frames = res.frames;
+    write_file_atomic(checkpoint_path, encode_checkpoint(c));
+  };
+  for (int f = world.frame(); f < frames; ++f) {
     FrameStats st = world.advance_frame();
     Stopwatch io;
     exporter.write(world);
+    unsynced.insert(unsynced.end(), exporter.written().begin(), exporter.written().end());
     st.wall_seconds += io.seconds();
     stats.write(st);
+    res.frames.push_back(st);
+    progress.update(st.frame, st.n_total, st.n_active + st.n_interface);
+    const bool stop = control.stop && *control.stop != 0;
+    const int every = control.checkpoint_every;
+    if (resumable && (stop || (every > 0 && (st.frame % every == 0 || st.frame == frames))))
+      write_checkpoint();
+    if (stop && st.frame < frames) throw RunInterrupted{st.frame, *control.stop};
+  }
+  double simulated_sum = 0;
+  Real max_overlap = 0;
+  TransitionCounts transitions;
+  for (const FrameStats& st : res.frames) {
     simulated_sum += static_cast<double>(st.n_active + st.n_interface);
     res.wall_seconds += st.wall_seconds;
     max_overlap = std::max(max_overlap, st.max_overlap_rel);
     transitions += st.transitions;
-    res.frames.push_back(st);
-    progress.update(st.frame, st.n_total, st.n_active + st.n_interface);
   }
 
   // the heap of the final state, and what ended up where it must not be
@@ -145,6 +200,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out,
       {"repose_angle_deg", fit.ok ? nlohmann::json(fit.repose_angle_deg) : nlohmann::json()},
       {"heap", heap_json(fit)},
       {"grains_inside_geometry", inside},
+      {"grains_left_domain", world.left_domain()},
       {"state_hash", fmt::format("{:016x}", world.state_hash())},
       {"exports", exporter.summary()},
   };
@@ -195,9 +251,217 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out,
   return res;
 }
 
-int run_command(const RunOptions& o) {
-  const SceneConfig scene = load_for_run(o);
+namespace {
+
+// ---- Resumable runs (docs/checkpoints.md) -------------------------------------------------------
+
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+extern "C" void on_stop_signal(int sig) {
+  g_stop_signal = sig;
+}
+
+/// SIGINT and SIGTERM, for the life of a run, ask it to stop after the frame; a second one has
+/// the default effect (SA_RESETHAND): the process ends at once and the last checkpoint stays.
+class StopSignals {
+ public:
+  StopSignals() {
+    g_stop_signal = 0;
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART | SA_RESETHAND;
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~StopSignals() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+std::string shell_quote(const std::string& a) {
+  if (!a.empty() && a.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                        "0123456789_-+./=:,@%") == std::string::npos)
+    return a;
+  std::string q = "'";
+  for (char ch : a) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+  return q + "'";
+}
+
+std::string resume_command(const std::string& dir) {
+  return "sandflow run --resume " + shell_quote(dir);
+}
+
+/// "the last checkpoint (frame K)", or what there is instead, for the messages of a failed run.
+std::string last_checkpoint(const std::string& dir) {
+  const std::string path = (fs::path(dir) / "checkpoint.bin").string();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return "the start (there is no checkpoint yet)";
+  try {
+    return fmt::format("the last checkpoint (frame {})", read_checkpoint(path).world.frame);
+  } catch (const InputError& e) {
+    return fmt::format("the start: the checkpoint cannot be read ({})", e.what());
+  }
+}
+
+std::string read_scene_text(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec))
+    throw InputError(path + ": cannot open scene file (it is a directory)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open scene file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path + ": cannot read scene file");
+  return text.str();
+}
+
+/// What DIR/run.json records: everything that decides the run (hashed into its checkpoints),
+/// and the rest a resumed run needs.
+nlohmann::json run_record(const RunOptions& o, const std::string& scene_text, int every) {
+  std::error_code ec;
+  return {{"sandflow_version", SANDFLOW_VERSION},
+          {"working_directory", fs::current_path(ec).string()},
+          {"scene_file", o.scene},
+          {"start",
+           {{"scene_text", scene_text},
+            {"sets", o.sets},
+            {"mode", o.mode},
+            {"grains", o.grains},
+            {"exports", o.exports ? nlohmann::json(*o.exports) : nlohmann::json()},
+            {"up_axis", o.up_axis}}},
+          {"frames", o.frames},
+          {"threads", o.threads},
+          {"checkpoint_every", every},
+          {"resume_with", resume_command(o.out)}};
+}
+
+/// A run about to go: its scene, folder and record, and the checkpoint it resumes from.
+struct Started {
+  SceneConfig scene;
+  std::string out;
+  nlohmann::json record;
+  std::optional<Checkpoint> checkpoint;
+  bool resumed = false;  ///< `out` holds a stopped run
+  bool done = false;     ///< nothing to run (--check, or a finished run)
+};
+
+/// Runs `run` with checkpoints and the stop signals into `res`; returns the exit status of an
+/// interrupted run (128 + the signal), 0 otherwise.
+int run_resumable(Started& run, RunResult& res) {
+  RunControl control;
+  control.start_record = run.record["start"].dump();
+  control.checkpoint_every = run.record["checkpoint_every"].get<int>();
+  control.resume = run.checkpoint ? &*run.checkpoint : nullptr;
+  control.resumed = run.resumed;
+  control.stop = &g_stop_signal;
+  try {
+    const StopSignals signals;
+    res = run_scene(run.scene, run.out, "", control);
+  } catch (const RunInterrupted& e) {
+    fmt::print(stderr, "\ninterrupted at frame {}; resume with: {}\n", e.frame,
+               resume_command(run.out));
+    return 128 + e.signal;
+  } catch (const SimulationError& e) {
+    throw SimulationError(fmt::format("{}\n  reproduce it from {}: {}", e.what(),
+                                      last_checkpoint(run.out), resume_command(run.out)));
+  } catch (const OutputError& e) {
+    throw OutputError(fmt::format("{}\n  the run can go on from {}: make room (or make the folder "
+                                  "writable), then: {}",
+                                  e.what(), last_checkpoint(run.out), resume_command(run.out)));
+  }
+  return 0;
+}
+
+/// `sandflow run --resume DIR`.
+Started start_resumed(const RunOptions& o) {
+  if (!o.scene.empty() || !o.mode.empty() || o.grains > 0 || o.frames > 0 || !o.sets.empty() ||
+      !o.out.empty() || o.force || o.check || o.exports || !o.up_axis.empty())
+    throw InputError(
+        "--resume DIR continues a run exactly as it was started (DIR/run.json): it takes no "
+        "scene, --mode, --grains, --frames, --set, --export, --up-axis, --out, --force or "
+        "--check; only --threads, --checkpoint-every and --profile");
+  const std::string dir = o.resume;
+  const fs::path record_path = fs::path(dir) / "run.json";
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw InputError(dir + ": no such run folder");
+  if (!fs::exists(record_path, ec))
+    throw InputError(fmt::format(
+        "{}: no run.json: not a sandflow run folder, or its run stopped before it started; start "
+        "it again with: sandflow run SCENE --out {} --force",
+        dir, shell_quote(dir)));
+  nlohmann::json record;
+  RunOptions r;
+  std::string text;
+  try {
+    std::ifstream in(record_path);
+    record = nlohmann::json::parse(in);
+    text = record.at("start").at("scene_text").get<std::string>();
+    r.scene = record.at("scene_file").get<std::string>();
+    r.sets = record.at("start").at("sets").get<std::vector<std::string>>();
+    r.mode = record.at("start").at("mode").get<std::string>();
+    r.grains = record.at("start").at("grains").get<std::int64_t>();
+    if (const auto& e = record.at("start").at("exports"); !e.is_null())
+      r.exports = e.get<std::string>();
+    r.up_axis = record.at("start").at("up_axis").get<std::string>();
+    r.frames = record.at("frames").get<int>();
+    r.threads = record.at("threads").get<int>();
+    r.checkpoint_every = record.at("checkpoint_every").get<int>();
+    const std::string wd = record.at("working_directory").get<std::string>();
+    // a relative scene path names a file from the folder the run was started in
+    if (fs::path(r.scene).is_relative() && fs::current_path(ec) != fs::path(wd))
+      r.scene = (fs::path(wd) / r.scene).lexically_normal().string();
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("{}: not a run record sandflow can read: {}",
+                                 record_path.string(), e.what()));
+  }
+  Started run;
+  if (fs::exists(fs::path(dir) / "summary.json", ec)) {
+    fmt::print(stderr, "{}: this run is finished (its summary.json is written); nothing to resume\n",
+               dir);
+    run.done = true;
+    return run;
+  }
+  if (o.threads > 0) r.threads = o.threads;
+  if (o.checkpoint_every >= 0) record["checkpoint_every"] = o.checkpoint_every;
+  run.scene = apply_run_options(load_scene_from_string(text, r.scene, run_overrides(r)), r);
+  run.out = dir;
+  run.record = record;
+  run.resumed = true;
+  const std::string path = (fs::path(dir) / "checkpoint.bin").string();
+  if (fs::exists(path, ec)) {
+    try {
+      run.checkpoint = read_checkpoint(path);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format(
+          "{}\n  the run cannot go on from it (without it, --resume runs it again from the start)",
+          e.what()));
+    }
+  }
+  const int frame = run.checkpoint ? run.checkpoint->world.frame : 0;
+  if (run.checkpoint)
+    fmt::print(stderr, "resuming {} from its checkpoint at frame {}\n", dir, frame);
+  else
+    fmt::print(stderr, "{} has no checkpoint yet: running it again from the start\n", dir);
+  return run;
+}
+
+/// A new run: the scene, its plan (--check), or its prepared folder with its run.json.
+Started start_new(const RunOptions& o) {
+  if (o.scene.empty())
+    throw InputError("run: give a scene file (sandflow run SCENE), or --resume DIR to continue a run");
+  const std::string text = read_scene_text(o.scene);
+  Started run;
+  run.scene = apply_run_options(load_scene_from_string(text, o.scene, run_overrides(o)), o);
+  const SceneConfig& scene = run.scene;
   if (o.check) {
+    run.done = true;
     World world(scene);
     for (const std::string& w : world.geometry().warnings())
       fmt::print(stderr, "warning: {}\n", w);
@@ -219,13 +483,29 @@ int run_command(const RunOptions& o) {
     fmt::print("{}: exports {} each frame (up axis {})\n", scene.path,
                exports.empty() ? "nothing" : fmt::format("{}", fmt::join(exports, ", ")),
                up_axis_name(scene.output.up_axis));
-    return 0;
+    return run;
   }
-  const std::string out =
+  RunOptions started = o;
+  started.out =
       o.out.empty() ? fmt::format("out/{}-{}", scene.name, mode_name(scene.simulation.mode))
                     : o.out;
-  prepare_output_dir(out, o.force);
-  const RunResult res = run_scene(scene, out);
+  prepare_output_dir(started.out, o.force);
+  run.out = started.out;
+  run.record = run_record(started, text,
+                          o.checkpoint_every < 0 ? kDefaultCheckpointEvery : o.checkpoint_every);
+  write_file_atomic((fs::path(run.out) / "run.json").string(), run.record.dump(2) + "\n");
+  return run;
+}
+
+}  // namespace
+
+int run_command(const RunOptions& o) {
+  Started run = o.resume.empty() ? start_new(o) : start_resumed(o);
+  if (run.done) return 0;
+  const SceneConfig& scene = run.scene;
+  const std::string& out = run.out;
+  RunResult res;
+  if (const int interrupted = run_resumable(run, res)) return interrupted;
   const nlohmann::json& s = res.summary;
   const HeapFit& fit = res.heap;
   const int frames = s["frames"].get<int>();

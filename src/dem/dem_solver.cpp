@@ -140,18 +140,92 @@ void DemSolver::sort_by_cell(Grains& grains) {
   grains.permute(perm);
 }
 
+void DemSolver::set_wall_params(const Geometry& geometry) {
+  wall_params_.clear();
+  for (const Obstacle& o : geometry.obstacles()) {
+    ContactParams w = params_.contact;
+    w.mu = o.friction;
+    w.mu_r = o.rolling_friction;
+    wall_params_.push_back(w);
+  }
+}
+
+DemState DemSolver::save_state() const {
+  DemState s;
+  s.pairs.start = pairs_.start;
+  s.pairs.j = pairs_.j;
+  s.pairs.touch = pairs_.touch;
+  s.pairs.c_n = pairs_.c_n;
+  s.pairs.xi = pairs_.xi;
+  s.pairs.psi = pairs_.psi;
+  s.walls = walls_;
+  s.bounds = bounds_;
+  s.slot_of_id = slot_of_id_;
+  s.x_at_build = x_at_build_;
+  s.allow = allow_;
+  s.need_rebuild = need_rebuild_;
+  s.rebuild_count = rebuild_count_;
+  return s;
+}
+
+void DemSolver::restore_state(DemState s, const Geometry& geometry) {
+  const std::size_t slots = s.pairs.j.size(), n = s.allow.size();
+  pairs_ = std::move(s.pairs);
+  // per-step results and accumulators: written before they are read, sized as a rebuild does
+  pairs_.force.resize(slots);
+  pairs_.q.resize(slots);
+  pairs_.t_roll.resize(rolling_ ? slots : 0);
+  walls_ = std::move(s.walls);
+  bounds_ = std::move(s.bounds);
+  slot_of_id_ = std::move(s.slot_of_id);
+  x_at_build_ = std::move(s.x_at_build);
+  allow_ = std::move(s.allow);
+  allow2_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) allow2_[i] = allow_[i] * allow_[i];
+  acc_f_.assign(n, Vec3{});
+  acc_q_.assign(n, Vec3{});
+  acc_t_.assign(rolling_ ? n : 0, Vec3{});
+  need_rebuild_ = s.need_rebuild;
+  rebuild_count_ = s.rebuild_count;
+  set_wall_params(geometry);
+}
+
+DeepestOverlap DemSolver::deepest_overlap(const Grains& grains, const Geometry& geometry) const {
+  DeepestOverlap d;
+  const std::size_t n = std::min(grains.size(), pairs_.start.empty() ? 0 : pairs_.start.size() - 1);
+  auto consider = [&](DeepestOverlap::Kind kind, Real rel, std::size_t i, std::uint32_t other) {
+    if (rel > d.rel) d = {kind, rel, static_cast<std::uint32_t>(i), other};
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::uint32_t s = pairs_.start[i]; s < pairs_.start[i + 1]; ++s) {
+      const std::uint32_t j = pairs_.j[s];
+      if (j >= grains.size() || (grains.state[i] != GrainState::Active &&
+                                 grains.state[j] != GrainState::Active))
+        continue;  // (as in the sweep: two frozen grains do not interact)
+      const Real delta = grains.r[i] + grains.r[j] - norm(grains.x[i] - grains.x[j]);
+      consider(DeepestOverlap::kGrain, delta / (2 * std::min(grains.r[i], grains.r[j])), i, j);
+    }
+    if (grains.state[i] != GrainState::Active) continue;  // a frozen grain feels no wall
+    if (walls_.start.size() > i + 1)
+      for (std::uint32_t s = walls_.start[i]; s < walls_.start[i + 1]; ++s) {
+        const std::uint32_t k = walls_.obstacle[s];
+        const Real delta = grains.r[i] - geometry.obstacles()[k].solid->closest(grains.x[i]).distance;
+        consider(DeepestOverlap::kWall, delta / (2 * grains.r[i]), i, k);
+      }
+    if (bounds_.start.size() > i + 1)
+      for (std::uint32_t s = bounds_.start[i]; s < bounds_.start[i + 1]; ++s) {
+        const std::uint32_t b = bounds_.obstacle[s];
+        const Real delta = grains.r[i] + boundary_.radius - norm(grains.x[i] - boundary_.x[b]);
+        consider(DeepestOverlap::kBoundary, delta / (2 * grains.r[i]), i, b);
+      }
+  }
+  return d;
+}
+
 void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
   const std::size_t n = grains.size();
   const auto& cp = params_.contact;
-  if (wall_params_.size() != geometry.size()) {
-    wall_params_.clear();
-    for (const Obstacle& o : geometry.obstacles()) {
-      ContactParams w = cp;
-      w.mu = o.friction;
-      w.mu_r = o.rolling_friction;
-      wall_params_.push_back(w);
-    }
-  }
+  if (wall_params_.size() != geometry.size()) set_wall_params(geometry);
   if (params_.sort_every > 0 && rebuild_count_ % params_.sort_every == 0) sort_by_cell(grains);
   ++rebuild_count_;
   ++counters_.rebuilds;

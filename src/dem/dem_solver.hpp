@@ -42,6 +42,30 @@ struct DemCounters {
   std::int64_t rebuilds = 0;     ///< neighbour-list rebuilds, since the last reset
 };
 
+/// What a restart needs of a DemSolver between two steps (src/checkpoint/): the lists in their
+/// order with their contact history, where each grain stood at the last rebuild and how far it may
+/// move, and the counters that decide the next rebuild and sort. The rest is scratch, or follows
+/// from the scene.
+struct DemState {
+  PairList pairs;  ///< start, j, touch, c_n, xi, psi (force, q, t_roll are per-step scratch)
+  WallList walls;
+  WallList bounds;                          ///< boundary particles within reach
+  std::vector<std::uint32_t> slot_of_id;    ///< grain id -> slot at the last rebuild
+  std::vector<Vec3> x_at_build;             ///< [m]
+  std::vector<Real> allow;                  ///< [m]
+  bool need_rebuild = true;
+  std::int64_t rebuild_count = 0;
+};
+
+/// The deepest overlap among the listed contacts (DemSolver::deepest_overlap).
+struct DeepestOverlap {
+  enum Kind { kNone, kGrain, kWall, kBoundary };
+  Kind kind = kNone;
+  Real rel = 0;              ///< overlap / smaller diameter (a wall: / the grain's diameter)
+  std::uint32_t slot = 0;    ///< the grain's slot
+  std::uint32_t other = 0;   ///< the other grain's slot, the obstacle or the boundary particle
+};
+
 class DemSolver {
  public:
   explicit DemSolver(const DemParams& params);
@@ -70,12 +94,21 @@ class DemSolver {
   void contacts_of(const Grains& grains, const Geometry& geometry,
                    std::vector<std::uint8_t>& out) const;
 
+  /// The deepest overlap at the current positions over the listed pairs, walls and boundary
+  /// particles: what a guard names when the overlap limit is passed.
+  DeepestOverlap deepest_overlap(const Grains& grains, const Geometry& geometry) const;
+
+  /// For restarts: the state above, and its restoration (validated by the caller).
+  DemState save_state() const;
+  void restore_state(DemState s, const Geometry& geometry);
+
   const DemParams& params() const { return params_; }
   const PairList& pairs() const { return pairs_; }
   DemCounters& counters() { return counters_; }
 
  private:
   void rebuild(Grains& grains, const Geometry& geometry, Real dt);
+  void set_wall_params(const Geometry& geometry);
   /// Boundary particles within reach of each ACTIVE grain, history carried by grain id.
   void build_boundary_list(const Grains& grains);
   void sort_by_cell(Grains& grains);

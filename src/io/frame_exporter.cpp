@@ -134,12 +134,22 @@ FrameExporter::FrameExporter(const World& world, const std::string& dir)
   }
 }
 
+void FrameExporter::continue_after(const std::vector<FrameStats>& done) {
+  if (!has(ExportFormat::Vtk)) return;
+  series_.clear();
+  for (const FrameStats& st : done) series_.push_back({st.time, "frames/" + frame_name(st.frame, ".vtp")});
+}
+
 void FrameExporter::write(const World& world) {
+  written_.clear();
   if (formats_.empty()) return;
   const int n = world.frame();
   const double t = world.time();
   const fs::path frames = fs::path(dir_) / "frames";
-  const auto frame_file = [&](const char* ext) { return (frames / frame_name(n, ext)).string(); };
+  const auto frame_file = [&](const char* ext) {
+    written_.push_back((frames / frame_name(n, ext)).string());
+    return written_.back();
+  };
   const bool grains = has(ExportFormat::Ply) || has(ExportFormat::Vtk) || has(ExportFormat::Geo) ||
                       has(ExportFormat::Csv) || has(ExportFormat::Pov);
   const FrameData f = grains ? world.visible_frame() : FrameData{};
@@ -169,6 +179,8 @@ void FrameExporter::write(const World& world) {
          {std::pair<const char*, const std::vector<Real>*>{"H", &hf.surface()},
           {"h", &hf.static_top()}}) {
       const std::string stem = (hdir / fmt::format("{}_{:04d}", name, n)).string();
+      if (has(ExportFormat::Height)) written_.push_back(stem + ".png");
+      if (has(ExportFormat::HeightObj)) written_.push_back(stem + ".obj");
       if (has(ExportFormat::Height))
         clamped_ +=
             static_cast<std::int64_t>(write_height_png(stem + ".png", hf.params(), *z, range_));

@@ -43,6 +43,11 @@ class FrameExporter {
   /// Writes every chosen file of the frame just finished (world.frame(), at world.time()).
   void write(const World& world);
 
+  /// A resumed run: frames.pvd goes on listing the frames written before the checkpoint.
+  void continue_after(const std::vector<FrameStats>& done);
+  /// The files the last write() made (a checkpoint flushes them to the disk first).
+  const std::vector<std::string>& written() const { return written_; }
+
   /// What the user should know (height asked for in DEM mode).
   const std::vector<std::string>& warnings() const { return warnings_; }
   /// The formats written, after dropping those the mode cannot write.
@@ -58,6 +63,7 @@ class FrameExporter {
   UpAxis up_ = UpAxis::Z;
   std::vector<std::string> warnings_;
   std::vector<SeriesEntry> series_;  ///< frames.pvd
+  std::vector<std::string> written_;
   HeightRange range_;
   std::int64_t clamped_ = 0;  ///< height values outside range_, over the run
 };

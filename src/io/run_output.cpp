@@ -1,10 +1,12 @@
 #include "io/run_output.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 
 #include <fmt/format.h>
 
@@ -21,48 +23,119 @@ void prepare_output_dir(const std::string& dir, bool force) {
   if (fs::exists(dir, ec) && !fs::is_empty(dir, ec)) {
     if (!force)
       throw InputError(fmt::format(
-          "{}: the output folder is not empty; pass --force to replace its run", dir));
+          "{}: the output folder is not empty; pass --force to replace its run (or --resume {} "
+          "to continue it)",
+          dir, dir));
     for (const char* name : {"frames", "stats.csv", "summary.json", "final_grains.ply", "render",
-                             "report.html", "frames.pvd", "heightfield"})
+                             "report.html", "frames.pvd", "heightfield", "checkpoint.bin",
+                             "run.json"})
       fs::remove_all(fs::path(dir) / name, ec);
   }
   fs::create_directories(fs::path(dir) / "frames", ec);
   if (ec) throw OutputError(fmt::format("{}: cannot create the output folder: {}", dir, ec.message()));
 }
 
-void write_file_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.close();
-    if (!out) {
-      const std::string reason = std::strerror(errno);
-      std::remove(tmp.c_str());  // no half-written file left behind
-      throw OutputError(fmt::format("{}: cannot write: {}", tmp, reason));
+void prepare_resumed_dir(const std::string& dir, int frame) {
+  std::error_code ec;
+  fs::create_directories(fs::path(dir) / "frames", ec);
+  if (ec) throw OutputError(fmt::format("{}: cannot create {}/frames: {}", dir, dir, ec.message()));
+  for (const fs::path& folder : {fs::path(dir), fs::path(dir) / "frames"}) {
+    std::vector<fs::path> stale;
+    for (const auto& e : fs::directory_iterator(folder, ec)) {
+      const fs::path& p = e.path();
+      if (p.extension() == ".tmp") {
+        stale.push_back(p);
+      } else if (folder != fs::path(dir) && p.extension() == ".ply") {
+        // NNNN.ply after the checkpoint's frame
+        const std::string stem = p.stem().string();
+        if (!stem.empty() && stem.find_first_not_of("0123456789") == std::string::npos &&
+            stem.size() < 10 && std::stoi(stem) > frame)
+          stale.push_back(p);
+      }
+    }
+    for (const fs::path& p : stale) {
+      fs::remove(p, ec);
+      if (ec) throw OutputError(fmt::format("{}: cannot remove: {}", p.string(), ec.message()));
     }
   }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    const std::string reason = ec.message();
-    fs::remove(tmp, ec);
-    throw OutputError(fmt::format("{}: cannot write: {}", path, reason));
+}
+
+namespace {
+
+[[noreturn]] void fail_write(const std::string& path, const std::string& tmp, int fd, int err) {
+  if (fd >= 0) ::close(fd);
+  ::unlink(tmp.c_str());
+  throw OutputError(fmt::format("{}: cannot write: {}", path, std::strerror(err)));
+}
+
+}  // namespace
+
+void write_file_atomic(const std::string& path, std::string_view bytes) {
+  const std::string tmp = path + ".tmp";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0)
+    throw OutputError(fmt::format("{}: cannot create {}: {}", path, tmp, std::strerror(errno)));
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t k = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (k < 0 && errno == EINTR) continue;
+    if (k <= 0) fail_write(path, tmp, fd, k < 0 ? errno : EIO);
+    done += static_cast<std::size_t>(k);
   }
+  if (::fsync(fd) != 0) fail_write(path, tmp, fd, errno);
+  if (::close(fd) != 0) fail_write(path, tmp, -1, errno);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) fail_write(path, tmp, -1, errno);
+  const fs::path parent = fs::path(path).parent_path();
+  sync_dir(parent.empty() ? "." : parent.string());
+}
+
+void sync_file(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0 || ::fsync(fd) != 0) {
+    const int err = errno;
+    if (fd >= 0) ::close(fd);
+    throw OutputError(fmt::format("{}: cannot flush to the disk: {}", path, std::strerror(err)));
+  }
+  ::close(fd);
+}
+
+void sync_dir(const std::string& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  // (some file systems cannot flush a folder: EINVAL says so, and there is nothing to do)
+  if (fd < 0 || (::fsync(fd) != 0 && errno != EINVAL)) {
+    const int err = errno;
+    if (fd >= 0) ::close(fd);
+    throw OutputError(fmt::format("{}: cannot flush the folder to the disk: {}", dir,
+                                  std::strerror(err)));
+  }
+  ::close(fd);
 }
 
 std::string frame_path(const std::string& dir, int frame) {
   return (fs::path(dir) / "frames" / fmt::format("{:04d}.ply", frame)).string();
 }
 
-StatsWriter::StatsWriter(const std::string& path) : path_(path) {
-  f_ = std::fopen(path.c_str(), "w");
+std::string stats_header() {
+  return "frame,time,substeps,dt,n_total,n_active,n_interface,n_static,contacts,wall_contacts,"
+         "max_overlap_rel,kinetic_energy,rebuilds,trapped,dislodged,slept,woken,surface_updates,"
+         "left_domain,wall_seconds\n";
+}
+
+std::string stats_row(const FrameStats& s) {
+  return fmt::format(
+      "{},{:.6f},{},{:.6e},{},{},{},{},{},{},{:.6e},{:.6e},{},{},{},{},{},{},{},{:.4f}\n", s.frame,
+      s.time, s.substeps, s.dt, s.n_total, s.n_active, s.n_interface, s.n_static, s.contacts,
+      s.wall_contacts, s.max_overlap_rel, s.kinetic_energy, s.rebuilds, s.transitions.trapped,
+      s.transitions.dislodged, s.transitions.slept, s.transitions.woken, s.surface_updates,
+      s.left_domain, s.wall_seconds);
+}
+
+StatsWriter::StatsWriter(const std::string& path, const std::vector<FrameStats>& rows)
+    : path_(path) {
+  std::string text = stats_header();
+  for (const FrameStats& s : rows) text += stats_row(s);
+  write_file_atomic(path, text);
+  f_ = std::fopen(path.c_str(), "a");
   if (!f_) throw OutputError(fmt::format("{}: cannot write: {}", path, std::strerror(errno)));
-  std::fputs(
-      "frame,time,substeps,dt,n_total,n_active,n_interface,n_static,contacts,wall_contacts,"
-      "max_overlap_rel,kinetic_energy,rebuilds,trapped,dislodged,slept,woken,surface_updates,"
-      "wall_seconds\n",
-      f_);
 }
 
 StatsWriter::~StatsWriter() {
@@ -70,12 +143,7 @@ StatsWriter::~StatsWriter() {
 }
 
 void StatsWriter::write(const FrameStats& s) {
-  const std::string row = fmt::format(
-      "{},{:.6f},{},{:.6e},{},{},{},{},{},{},{:.6e},{:.6e},{},{},{},{},{},{},{:.4f}\n", s.frame, s.time,
-      s.substeps, s.dt, s.n_total, s.n_active, s.n_interface, s.n_static, s.contacts,
-      s.wall_contacts, s.max_overlap_rel, s.kinetic_energy, s.rebuilds, s.transitions.trapped,
-      s.transitions.dislodged, s.transitions.slept, s.transitions.woken, s.surface_updates,
-      s.wall_seconds);
+  const std::string row = stats_row(s);
   if (std::fputs(row.c_str(), f_) < 0 || std::fflush(f_) != 0)
     throw OutputError(fmt::format("{}: cannot write: {}", path_, std::strerror(errno)));
 }

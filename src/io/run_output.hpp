@@ -1,9 +1,16 @@
 // What a run writes in its output folder (DESIGN.md §8): stats.csv (a row per frame),
 // summary.json (the run's Table 1 row and heap figures) and frames/NNNN.ply.
+//
+// Whole files are written atomically and durably: to NAME.tmp, flushed to the disk (fsync), then
+// renamed over NAME and the folder flushed, so that a reader, a crash or a power cut leaves
+// either the old file or the new one, never half of one. A write that fails (a full disk, an
+// unwritable folder) removes its temporary file and throws OutputError naming the path.
 #pragma once
 
 #include <cstdio>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -15,16 +22,29 @@ namespace sandflow {
 /// unless `force`, in which case the old run's files are removed first.
 void prepare_output_dir(const std::string& dir, bool force);
 
-/// Writes `text` to `path` atomically (temporary file, then rename). Throws OutputError.
-void write_file_atomic(const std::string& path, const std::string& text);
+/// Prepares the folder of a run resumed at frame `frame`: removes the temporary files a killed
+/// run left, and the frames after `frame` (the resumed run writes them again).
+void prepare_resumed_dir(const std::string& dir, int frame);
+
+/// Writes `bytes` to `path` atomically and durably (see above). Throws OutputError.
+void write_file_atomic(const std::string& path, std::string_view bytes);
+
+/// Flushes a file already written, and a folder's entries, to the disk. Throws OutputError.
+void sync_file(const std::string& path);
+void sync_dir(const std::string& dir);
 
 /// Path of frame `frame` (1-based) in a run folder: DIR/frames/NNNN.ply.
 std::string frame_path(const std::string& dir, int frame);
 
+/// One row of stats.csv (with its newline), and the header.
+std::string stats_row(const FrameStats& s);
+std::string stats_header();
+
 /// stats.csv, one row per frame, flushed as it goes so a crash keeps the rows written so far.
 class StatsWriter {
  public:
-  explicit StatsWriter(const std::string& path);
+  /// Writes the header and `rows` (a resumed run's frames so far) atomically, then appends.
+  explicit StatsWriter(const std::string& path, const std::vector<FrameStats>& rows = {});
   ~StatsWriter();
   StatsWriter(const StatsWriter&) = delete;
   StatsWriter& operator=(const StatsWriter&) = delete;

@@ -42,6 +42,20 @@ class Emitter {
   const std::string& name() const { return config_.name; }
   EmitterType type() const { return config_.type; }
 
+  /// How far the emitter has got: what a restart needs (the rest follows from the scene).
+  struct Progress {
+    Real owed = 0;        ///< pour: fractional grains carried to the next batch
+    Real next_time = 0;   ///< time of the next batch [s]
+    std::int64_t emitted = 0, delayed = 0;
+  };
+  Progress progress() const { return {owed_, next_time_, emitted_, delayed_}; }
+  void restore(const Progress& p) {
+    owed_ = p.owed;
+    next_time_ = p.next_time;
+    emitted_ = p.emitted;
+    delayed_ = p.delayed;
+  }
+
   /// Time the last grain is emitted [s].
   Real end_time() const;
   std::int64_t emitted() const { return emitted_; }

@@ -56,6 +56,9 @@ struct SurfaceConfig {
   std::optional<std::array<Real, 4>> extent;  ///< [x0, y0, x1, y1] of the grid [m]; unset: auto
 };
 
+/// What a grain that leaves the domain does to the run (simulation.on_leave).
+enum class OnLeave { Stop, Count };
+
 struct SimulationConfig {
   Mode mode = Mode::Surface;        ///< surface: height field + DEM; dem: plain DEM
   Vec3 gravity{0, 0, -9.81};        ///< [m/s^2]
@@ -67,6 +70,11 @@ struct SimulationConfig {
   int sort_every = 20;              ///< re-sort grains by cell every N neighbour rebuilds
   std::uint64_t seed = 1;           ///< random seed of the emitters
   int threads = 0;                  ///< 0: all cores
+  // guards (docs/scenes.md): a run that leaves its valid range stops, naming the step and grain
+  Real max_overlap_stop = 0.6;      ///< stop when an overlap exceeds this fraction of a diameter
+  /// [x0, y0, z0, x1, y1, z1] the grains must stay in [m]; unset: derived from the scene
+  std::optional<std::array<Real, 6>> domain;
+  OnLeave on_leave = OnLeave::Stop; ///< a grain leaving the domain stops the run, or is removed
 };
 
 /// The files a run writes each frame (output.export, --export; docs/scenes.md "Exports").

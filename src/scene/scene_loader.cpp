@@ -146,6 +146,7 @@ template <class E>
 using Choices = std::pair<std::string_view, E>;
 
 constexpr Choices<Mode> kModes[] = {{"surface", Mode::Surface}, {"dem", Mode::Dem}};
+constexpr Choices<OnLeave> kOnLeave[] = {{"stop", OnLeave::Stop}, {"count", OnLeave::Count}};
 constexpr Choices<GeometryType> kGeometryTypes[] = {{"plane", GeometryType::Plane},
                                                     {"box", GeometryType::Box},
                                                     {"cylinder", GeometryType::Cylinder},
@@ -511,7 +512,19 @@ void read_simulation(TableReader r, SimulationConfig& s) {
   r.read("sort_every", s.sort_every, kNonNegative);  // 0: never re-sort
   r.read("seed", s.seed, kNonNegative);
   r.read("threads", s.threads, closed(0, 4096));
+  r.read("max_overlap_stop", s.max_overlap_stop, open_closed(0, 1));
+  r.read("domain", s.domain);
+  r.read("on_leave", s.on_leave, kOnLeave);
   r.finish("[simulation]");
+  if (s.domain) {
+    const auto& d = *s.domain;
+    if (!(d[3] > d[0]) || !(d[4] > d[1]) || !(d[5] > d[2]))
+      r.fail_at("domain", r.name("domain") + " = [" + format_real(d[0]) + ", " +
+                              format_real(d[1]) + ", " + format_real(d[2]) + ", " +
+                              format_real(d[3]) + ", " + format_real(d[4]) + ", " +
+                              format_real(d[5]) +
+                              "]: expected [x0, y0, z0, x1, y1, z1] with x1 > x0, y1 > y0, z1 > z0");
+  }
 }
 
 void read_stiffness(TableReader r, StiffnessConfig& k) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include <fmt/format.h>
@@ -102,6 +103,46 @@ SceneConfig with_stiffness(SceneConfig scene, const Stiffness& s) {
   scene.material.k_n = s.k_n;
   return scene;
 }
+
+// The box the grains must stay in: simulation.domain, or the box of the scene's finite parts
+// (solids, meshes, planes' points, emitters, the height field's extent) widened on every side by
+// its largest extent, at least 1 m: only a grain flung away by a blow-up, or falling past the end
+// of the geometry, reaches a side. A floor (a plane facing up, within 45 degrees) has no end:
+// grains may roll on it as far as they go (a bouncing 2 cm grain of a small pour was seen 1.1 m
+// out), so x and y are then unbounded, and only falling through it or flying off is caught.
+void scene_domain(const SceneConfig& scene, const Geometry& geometry, Vec3& lo, Vec3& hi) {
+  if (const auto& d = scene.simulation.domain) {
+    lo = {(*d)[0], (*d)[1], (*d)[2]};
+    hi = {(*d)[3], (*d)[4], (*d)[5]};
+    return;
+  }
+  lo = hi = Vec3{};  // (a scene of nothing: a box around the origin)
+  bool any = geometry.finite_bounds(lo, hi);
+  auto add = [&](const Vec3& a, const Vec3& b) {
+    lo = any ? min(lo, a) : a;
+    hi = any ? max(hi, b) : b;
+    any = true;
+  };
+  for (const GeometryConfig& g : scene.geometry)
+    if (g.type == GeometryType::Plane) add(g.point, g.point);
+  for (const EmitterConfig& e : scene.emitters) {
+    Vec3 half = e.size * 0.5;
+    if (e.type == EmitterType::Pour)
+      half = e.shape == PourShape::Disk ? Vec3{e.radius, e.radius, 0} : Vec3{half.x, half.y, 0};
+    add(e.center - half, e.center + half);
+  }
+  if (const auto& x = scene.surface.extent) add({(*x)[0], (*x)[1], lo.z}, {(*x)[2], (*x)[3], hi.z});
+  const Vec3 ext = hi - lo;
+  const Real m = std::max({1.0, ext.x, ext.y, ext.z});
+  lo -= Vec3{m, m, m};
+  hi += Vec3{m, m, m};
+  for (const GeometryConfig& g : scene.geometry)
+    if (g.type == GeometryType::Plane && g.normal.z > std::sqrt(0.5) * norm(g.normal)) {
+      constexpr Real kInf = std::numeric_limits<Real>::infinity();
+      lo.x = lo.y = -kInf;
+      hi.x = hi.y = kInf;
+    }
+}
 }  // namespace
 
 World::World(const SceneConfig& scene)
@@ -117,6 +158,7 @@ World::World(const SceneConfig& scene)
   for (std::size_t k = 0; k < scene.emitters.size(); ++k)
     emitters_.emplace_back(scene.emitters[k], scene.material, scene.simulation.gravity,
                            fmt::format("{}: emitter[{}]", scene.path, k));
+  scene_domain(scene_, geometry_, domain_lo_, domain_hi_);
 }
 
 int World::planned_frames() const {
@@ -158,6 +200,7 @@ void World::emit() {
 }
 
 void World::step() {
+  check_grains();
   {
     ScopedStage s(profile_, Stage::Emit);
     emit();
@@ -168,9 +211,96 @@ void World::step() {
         surface_->update(grains_, static_, dem_, geometry_, surface_->params().update_interval);
     ++surface_updates_;
   }
+  if (!leaving_.empty()) remove_leaving();
   dem_.step(grains_, geometry_, ts_.dt, profile_);
+  check_overlap();
   ++step_;
   time_ = static_cast<Real>(step_) * ts_.dt;
+}
+
+std::string World::where(std::int64_t step) const {
+  return fmt::format("step {} (frame {}, t = {:.6f} s)", step, frame_ + 1,
+                     static_cast<Real>(step) * ts_.dt);
+}
+
+void World::check_grains() {
+  const Vec3 lo = domain_lo_, hi = domain_hi_;
+  for (std::size_t i = 0; i < grains_.size(); ++i) {
+    if (grains_.state[i] != GrainState::Active) continue;  // frozen grains do not move
+    const Vec3& x = grains_.x[i];
+    // (a NaN fails the comparisons too: the usual case costs one test per axis)
+    if (x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y && x.z >= lo.z && x.z <= hi.z &&
+        is_finite(grains_.v[i]))
+      continue;
+    if (!is_finite(x) || !is_finite(grains_.v[i]))
+      throw SimulationError(fmt::format(
+          "{}: grain {} has a non-finite position or velocity; the time step {:.3g} s may be too "
+          "large for the contacts",
+          where(step_), grains_.id[i], ts_.dt));
+    if (scene_.simulation.on_leave == OnLeave::Count) {
+      leaving_.push_back(grains_.id[i]);
+      continue;
+    }
+    throw SimulationError(fmt::format(
+        "{}: grain {} left the domain [{:.4g}, {:.4g}] x [{:.4g}, {:.4g}] x [{:.4g}, {:.4g}] m at "
+        "({:.4g}, {:.4g}, {:.4g}) m, moving at ({:.4g}, {:.4g}, {:.4g}) m/s; to remove such grains "
+        "and count them, set simulation.on_leave = \"count\", or widen simulation.domain",
+        where(step_), grains_.id[i], lo.x, hi.x, lo.y, hi.y, lo.z, hi.z, x.x, x.y, x.z,
+        grains_.v[i].x, grains_.v[i].y, grains_.v[i].z));
+  }
+}
+
+void World::remove_leaving() {
+  std::sort(leaving_.begin(), leaving_.end());
+  std::vector<std::uint32_t> keep;
+  keep.reserve(grains_.size());
+  for (std::uint32_t i = 0; i < grains_.size(); ++i)
+    if (!std::binary_search(leaving_.begin(), leaving_.end(), grains_.id[i])) keep.push_back(i);
+  // (a grain the transfer has just put to sleep stays: it no longer moves)
+  const auto removed = static_cast<std::int64_t>(grains_.size() - keep.size());
+  grains_.permute(keep);
+  for (GrainId id : leaving_) dem_.forget_history(id);
+  dem_.invalidate();
+  left_ += removed;
+  left_frame_ += removed;
+  leaving_.clear();
+}
+
+void World::check_overlap() {
+  const Real limit = scene_.simulation.max_overlap_stop;
+  const Real reached = dem_.counters().max_overlap_rel;
+  if (!(reached > limit)) return;
+  // the counter knows how deep, not where (it saw the state before the step moved it): look for
+  // the deepest contact now
+  const DeepestOverlap d = dem_.deepest_overlap(grains_, geometry_);
+  std::string what;
+  const GrainId a = d.kind == DeepestOverlap::kNone ? 0 : grains_.id[d.slot];
+  switch (d.kind) {
+    case DeepestOverlap::kGrain:
+      what = fmt::format("grains {} and {} overlap by {:.0f} % of the smaller diameter", a,
+                         grains_.id[d.other], 100 * d.rel);
+      break;
+    case DeepestOverlap::kWall: {
+      const int src = geometry_.obstacles()[d.other].source;
+      what = fmt::format("grain {} overlaps geometry[{}] ('{}') by {:.0f} % of its diameter", a,
+                         src, scene_.geometry[static_cast<std::size_t>(src)].name, 100 * d.rel);
+      break;
+    }
+    case DeepestOverlap::kBoundary:
+      what = fmt::format("grain {} overlaps the boundary particles of a mesh by {:.0f} % of its "
+                         "diameter",
+                         a, 100 * d.rel);
+      break;
+    case DeepestOverlap::kNone:
+      break;
+  }
+  if (d.rel < reached)
+    what = fmt::format("an overlap reached {:.0f} % of a diameter during the step{}", 100 * reached,
+                       what.empty() ? "" : "; the deepest after it: " + what);
+  throw SimulationError(fmt::format(
+      "{}: {}, above simulation.max_overlap_stop = {:.0f} %; the contacts are too soft for the "
+      "impacts (raise k_n) or the time step is too long",
+      where(step_ + 1), what, 100 * limit));
 }
 
 FrameStats World::advance_frame() {
@@ -178,6 +308,7 @@ FrameStats World::advance_frame() {
   dem_.counters() = {};
   transitions_ = {};
   surface_updates_ = 0;
+  left_frame_ = 0;
   for (int s = 0; s < ts_.substeps; ++s) step();
   ++frame_;
 
@@ -196,22 +327,24 @@ FrameStats World::advance_frame() {
   st.n_total = st.n_active + st.n_interface + st.n_static;
   st.transitions = transitions_;
   st.surface_updates = surface_updates_;
-  if (st.n_total != static_cast<std::int64_t>(next_id_))
+  st.left_domain = left_frame_;
+  if (st.n_total + left_ != static_cast<std::int64_t>(next_id_))
     throw SimulationError(
-        fmt::format("{} grains were emitted but {} are held at step {}: a "
+        fmt::format("{} grains were emitted and {} left the domain but {} are held at step {}: a "
                     "transition lost or duplicated grains",
-                    next_id_, st.n_total, step_));
+                    next_id_, left_, st.n_total, step_));
   st.contacts = dem_.counters().contacts;
   st.wall_contacts = dem_.counters().wall_contacts;
   st.max_overlap_rel = dem_.counters().max_overlap_rel;
   st.rebuilds = dem_.counters().rebuilds;
   st.kinetic_energy = kinetic_energy();
+  // (the guards of each step see the positions before it: this one sees the frame's last step)
   for (std::size_t i = 0; i < grains_.size(); ++i)
-    if (!is_finite(grains_.x[i]) || !is_finite(grains_.v[i]))
+    if (!is_finite(grains_.x[i]) || !is_finite(grains_.v[i]) || !is_finite(grains_.w[i]))
       throw SimulationError(fmt::format(
-          "grain {} has a non-finite position or velocity at step {} (t = {:.6f} s); the time "
-          "step {:.3g} s may be too large for the contacts",
-          grains_.id[i], step_, time_, ts_.dt));
+          "step {} (frame {}, t = {:.6f} s): grain {} has a non-finite position, velocity or "
+          "spin; the time step {:.3g} s may be too large for the contacts",
+          step_, frame_, time_, grains_.id[i], ts_.dt));
   st.wall_seconds = wall.seconds();
   return st;
 }
@@ -278,6 +411,52 @@ std::uint64_t World::state_hash() const {
     }
   }
   return h.value();
+}
+
+}  // namespace sandflow
+
+namespace sandflow {
+
+WorldState World::save_state() const {
+  WorldState s;
+  s.grains = grains_;
+  s.statics.id = static_.id;
+  s.statics.x = static_.x;
+  s.statics.r = static_.r;
+  s.statics.column = static_.column;
+  s.dem = dem_.save_state();
+  if (surface_) s.surface = surface_->save_state();
+  for (const Emitter& e : emitters_) s.emitters.push_back(e.progress());
+  for (int k = 0; k < 4; ++k) s.rng[k] = rng_.state()[k];
+  s.next_id = next_id_;
+  s.step = step_;
+  s.frame = frame_;
+  s.left = left_;
+  s.profile = profile_;
+  return s;
+}
+
+void World::restore_state(WorldState s) {
+  grains_ = std::move(s.grains);
+  static_.id = std::move(s.statics.id);
+  static_.x = std::move(s.statics.x);
+  static_.r = std::move(s.statics.r);
+  static_.column = std::move(s.statics.column);
+  static_.column_start.clear();
+  static_.by_column.clear();
+  // the column index is a counting sort of `column`: filed again exactly as the run had it
+  if (surface_ && static_.size() > 0) static_.file_by_column(surface_->height_field().columns());
+  dem_.restore_state(std::move(s.dem), geometry_);
+  if (surface_ && s.surface) surface_->restore_state(std::move(*s.surface));
+  for (std::size_t k = 0; k < emitters_.size() && k < s.emitters.size(); ++k)
+    emitters_[k].restore(s.emitters[k]);
+  rng_.set_state(s.rng.data());
+  next_id_ = s.next_id;
+  step_ = s.step;
+  time_ = static_cast<Real>(step_) * ts_.dt;  // as step() computes it
+  frame_ = s.frame;
+  left_ = s.left;
+  profile_ = s.profile;
 }
 
 }  // namespace sandflow

@@ -2,8 +2,11 @@
 // order of DESIGN.md §1. The app drives it frame by frame and writes what it reports.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "core/rng.hpp"
@@ -50,7 +53,25 @@ struct FrameStats {
   std::int64_t rebuilds = 0;         ///< neighbour-list rebuilds during the frame
   TransitionCounts transitions;      ///< grains that changed state during the frame
   std::int64_t surface_updates = 0;  ///< height-field updates during the frame
+  std::int64_t left_domain = 0;      ///< grains removed on leaving the domain (on_leave = count)
   double wall_seconds = 0;           ///< wall-clock time of the frame [s]
+};
+
+/// Everything a restart needs to continue a World exactly as if it had not stopped
+/// (src/checkpoint/ writes and checks it): the grains in their storage order, the solver's lists
+/// and history, the height field, the emitters' progress, the random state and the counters.
+struct WorldState {
+  Grains grains;
+  StaticStore statics;  ///< id, x, r, column (the column index is filed again)
+  DemState dem;
+  std::optional<SurfaceState> surface;  ///< surface mode only
+  std::vector<Emitter::Progress> emitters;
+  std::array<std::uint64_t, 4> rng{};
+  GrainId next_id = 0;
+  std::int64_t step = 0;
+  int frame = 0;
+  std::int64_t left = 0;  ///< grains removed on leaving the domain
+  Profile profile;        ///< seconds per stage so far (timings only)
 };
 
 class World {
@@ -90,9 +111,31 @@ class World {
   std::uint64_t state_hash() const;
   Real kinetic_energy() const;
 
+  /// The box the ACTIVE grains must stay in [m] (simulation.domain, or derived from the scene).
+  const Vec3& domain_lo() const { return domain_lo_; }
+  const Vec3& domain_hi() const { return domain_hi_; }
+  /// Grains removed so far on leaving the domain (simulation.on_leave = "count").
+  std::int64_t left_domain() const { return left_; }
+  std::int64_t step_count() const { return step_; }
+
+  /// For restarts, at a frame boundary: the state, and its restoration (checked by the caller,
+  /// src/checkpoint/, against this scene).
+  WorldState save_state() const;
+  void restore_state(WorldState s);
+
  private:
   void step();
   void emit();
+  /// Guards (docs/scenes.md): a non-finite grain stops the run; a grain outside the domain stops
+  /// it or, with on_leave = "count", is marked for removal (leaving_).
+  void check_grains();
+  /// Removes the grains marked by check_grains (after the surface update: its contact flags
+  /// need the lists of the last rebuild, whose slots a removal would shift).
+  void remove_leaving();
+  /// Guard: an overlap above simulation.max_overlap_stop stops the run.
+  void check_overlap();
+  /// "step S (frame F, t = T s)" for the messages of the guards.
+  std::string where(std::int64_t step) const;
 
   Geometry geometry_;
   Stiffness stiffness_;
@@ -114,6 +157,9 @@ class World {
   std::int64_t step_ = 0;
   int frame_ = 0;
   Profile profile_;
+  Vec3 domain_lo_, domain_hi_;
+  std::vector<GrainId> leaving_;  ///< marked this step, removed before the DEM step
+  std::int64_t left_ = 0, left_frame_ = 0;
 };
 
 }  // namespace sandflow

@@ -138,6 +138,15 @@ void HeightField::set_static_top(std::vector<Real> h) {
   }
 }
 
+void HeightField::restore(State s) {
+  L_ = std::move(s.L);
+  H_ = std::move(s.H);
+  h_ = std::move(s.h);
+  R_ = std::move(s.R);
+  theta_ = std::move(s.theta);
+  Gamma_ = std::move(s.Gamma);
+}
+
 void HeightField::exchange(Real dt, const std::vector<std::uint8_t>& flowing) {
   const int nx = p_.nx, ny = p_.ny;
   const Real dx = p_.cell;

@@ -90,6 +90,14 @@ class HeightField {
   /// For tests and restarts: set h directly (clamped to [L, H]).
   void set_static_top(std::vector<Real> h);
 
+  /// For restarts (src/checkpoint/): every per-column array the next update reads or reports.
+  struct State {
+    std::vector<Real> L, H, h, R, theta, Gamma;
+  };
+  State state() const { return {L_, H_, h_, R_, theta_, Gamma_}; }
+  /// Sets the arrays as saved (sizes checked by the caller).
+  void restore(State s);
+
   /// Contributions of one sphere to the columns its thick ray touches: f(column, bottom, top).
   template <class F>
   void for_each_ray_hit(const Vec3& x, Real r, F&& f) const;

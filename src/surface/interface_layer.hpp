@@ -61,6 +61,13 @@ class InterfaceLayer {
                             const std::vector<std::uint8_t>& contacts);
 
   const InterfaceParams& params() const { return p_; }
+  /// For restarts: h and L as the last transfer saw them (empty before the first).
+  const std::vector<Real>& h_seen() const { return h_seen_; }
+  const std::vector<Real>& L_seen() const { return L_seen_; }
+  void restore_seen(std::vector<Real> h_seen, std::vector<Real> L_seen) {
+    h_seen_ = std::move(h_seen);
+    L_seen_ = std::move(L_seen);
+  }
 
  private:
   InterfaceParams p_;

@@ -13,6 +13,13 @@
 
 namespace sandflow {
 
+/// What a restart needs of the surface flow: the height field's columns and the interface's
+/// memory of the last transfer (src/checkpoint/). The rest is scratch of one update.
+struct SurfaceState {
+  HeightField::State columns;
+  std::vector<Real> h_seen, L_seen;
+};
+
 class SurfaceFlow {
  public:
   SurfaceFlow(const SurfaceParams& params, const Geometry& geometry);
@@ -24,6 +31,15 @@ class SurfaceFlow {
 
   const SurfaceParams& params() const { return p_; }
   const HeightField& height_field() const { return hf_; }
+
+  SurfaceState save_state() const {
+    return {hf_.state(), interface_.h_seen(), interface_.L_seen()};
+  }
+  /// Restores a saved state (sizes checked by the caller).
+  void restore_state(SurfaceState s) {
+    hf_.restore(std::move(s.columns));
+    interface_.restore_seen(std::move(s.h_seen), std::move(s.L_seen));
+  }
 
  private:
   /// Under its column's level (an overhang, a wall's foot): the height field does not reach it.

@@ -1,0 +1,368 @@
+// Long runs end to end (docs/checkpoints.md): a run stopped by SIGINT, killed at random moments,
+// stopped by a full disk or by a guard is resumed with `sandflow run --resume DIR` and ends
+// exactly as the same run uninterrupted: the same state hash, summary figures (timings aside),
+// statistics rows and frame files, none missing, duplicated or corrupt.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cctype>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <thread>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "checkpoint/checkpoint.hpp"
+#include "cli_runner.hpp"
+#include "io/ply.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using sandflow_test::read_text;
+using sandflow_test::Sandbox;
+using sandflow_test::sandflow;
+
+// A pour onto a floor in surface mode: ~1 s for 40 frames in Release.
+const char* kPourScene = R"(
+[scene]
+name = "pour"
+[material]
+diameter = 0.01
+diameter_spread = 0.1
+k_n = 1.0e4
+[simulation]
+dt_fraction = 0.2
+[output]
+fps = 30
+[[geometry]]
+type = "plane"
+[[emitter]]
+type = "pour"
+count = 300
+center = [0.0, 0.0, 0.1]
+radius = 0.04
+rate = 1500
+velocity = [0, 0, -1]
+)";
+
+constexpr int kFrames = 40;
+
+/// Starts the binary with `args` (output to `log`), with files limited to `max_file_bytes`.
+pid_t spawn(const std::string& args, const fs::path& log, rlim_t max_file_bytes = RLIM_INFINITY) {
+  const std::string command = std::string("exec ") + SANDFLOW_BINARY + " " + args;
+  const std::string log_path = log.string();
+  const pid_t pid = fork();
+  if (pid == 0) {  // (only async-signal-safe calls until exec)
+    const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(fd, 1);
+    dup2(fd, 2);
+    if (max_file_bytes != RLIM_INFINITY) {
+      const rlimit rl{max_file_bytes, max_file_bytes};
+      setrlimit(RLIMIT_FSIZE, &rl);
+    }
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+/// Waits for `pid`; its exit status, or 128 + the signal that ended it.
+int wait_for(pid_t pid) {
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+/// The whole number that follows the first `prefix` in `text` (-1 when there is none). (No
+/// std::regex: GCC 12 warns about its internals under the sanitizers.)
+long long number_after(const std::string& text, const std::string& prefix) {
+  const std::size_t at = text.find(prefix);
+  if (at == std::string::npos) return -1;
+  std::size_t end = at + prefix.size();
+  while (end < text.size() && std::isdigit(static_cast<unsigned char>(text[end]))) ++end;
+  if (end == at + prefix.size()) return -1;
+  return std::stoll(text.substr(at + prefix.size(), end - at - prefix.size()));
+}
+
+std::vector<std::string> lines(const fs::path& p) {
+  std::vector<std::string> out;
+  std::ifstream in(p);
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+/// The run in `got` is the run in `want`: same summary figures (timings aside), statistics (the
+/// wall-clock column aside) and frame files, every frame there and readable, no temporary file.
+void expect_same_run(const fs::path& want, const fs::path& got) {
+  auto summary = [](const fs::path& dir) {
+    auto j = nlohmann::json::parse(read_text(dir / "summary.json"));
+    for (const char* timing : {"wall_seconds", "seconds_per_frame", "stage_seconds", "threads"})
+      j.erase(timing);
+    return j;
+  };
+  ASSERT_TRUE(fs::exists(got / "summary.json")) << got;
+  EXPECT_EQ(summary(got)["state_hash"], summary(want)["state_hash"]);
+  EXPECT_EQ(summary(got), summary(want));
+  const auto a = lines(want / "stats.csv"), b = lines(got / "stats.csv");
+  ASSERT_EQ(a.size(), static_cast<std::size_t>(kFrames) + 1);
+  ASSERT_EQ(b.size(), a.size());
+  for (std::size_t k = 0; k < a.size(); ++k)
+    EXPECT_EQ(b[k].substr(0, b[k].rfind(',')), a[k].substr(0, a[k].rfind(','))) << "row " << k;
+  for (int f = 1; f <= kFrames; ++f) {
+    const std::string name = fmt::format("frames/{:04d}.ply", f);
+    ASSERT_TRUE(fs::exists(got / name)) << name << " is missing";
+    EXPECT_EQ(read_text(got / name), read_text(want / name)) << name << " differs";
+    EXPECT_NO_THROW(sandflow::read_ply((got / name).string())) << name;
+  }
+  EXPECT_FALSE(fs::exists(got / fmt::format("frames/{:04d}.ply", kFrames + 1)));
+  for (const fs::path& dir : {got, got / "frames"})
+    for (const auto& e : fs::directory_iterator(dir))
+      EXPECT_NE(e.path().extension(), ".tmp") << e.path() << " was left behind";
+}
+
+/// The straight run every test compares with.
+fs::path straight_run(const Sandbox& box, double* seconds = nullptr) {
+  const fs::path out = box.dir / "straight";
+  const auto t0 = std::chrono::steady_clock::now();
+  std::string log;
+  EXPECT_EQ(sandflow(fmt::format("run {} --frames {} --out {}", (box.dir / "pour.toml").string(),
+                                 kFrames, out.string()),
+                     &log),
+            0)
+      << log;
+  if (seconds)
+    *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+TEST(Resume, SigintFinishesTheFrameCheckpointsAndSaysHowToResume) {
+  Sandbox box;
+  box.write("pour.toml", kPourScene);
+  const fs::path want = straight_run(box);
+  const fs::path out = box.dir / "run";
+  // checkpoints only when asked: the one found afterwards is SIGINT's
+  const pid_t pid = spawn(fmt::format("run {} --frames {} --checkpoint-every 0 --out {}",
+                                      (box.dir / "pour.toml").string(), kFrames, out.string()),
+                          box.dir / "run.log");
+  while (!fs::exists(out / "frames" / "0005.ply") && waitpid(pid, nullptr, WNOHANG) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  kill(pid, SIGINT);
+  EXPECT_EQ(wait_for(pid), 130);
+  const std::string log = read_text(box.dir / "run.log");
+  const long long frame = number_after(log, "interrupted at frame ");
+  ASSERT_GT(frame, 0) << log;
+  EXPECT_NE(log.find(fmt::format("interrupted at frame {}; resume with: sandflow run --resume {}\n",
+                                 frame, out.string())),
+            std::string::npos)
+      << log;
+  EXPECT_GE(frame, 5);
+  EXPECT_LT(frame, kFrames);
+  EXPECT_EQ(sandflow::read_checkpoint((out / "checkpoint.bin").string()).world.frame, frame);
+  EXPECT_FALSE(fs::exists(out / "summary.json"));
+  // the command it printed
+  std::string resumed;
+  ASSERT_EQ(sandflow("run --resume " + out.string(), &resumed), 0) << resumed;
+  EXPECT_NE(resumed.find(fmt::format("resuming {} from its checkpoint at frame {}", out.string(),
+                                     frame)),
+            std::string::npos)
+      << resumed;
+  expect_same_run(want, out);
+  // and a finished run says so
+  EXPECT_EQ(sandflow("run --resume " + out.string(), &resumed), 0);
+  EXPECT_NE(resumed.find("this run is finished"), std::string::npos) << resumed;
+}
+
+TEST(Resume, KilledAtRandomMomentsItResumesToTheSameRun) {
+  Sandbox box;
+  box.write("pour.toml", kPourScene);
+  double seconds = 0;
+  const fs::path want = straight_run(box, &seconds);
+  const fs::path out = box.dir / "run";
+  const std::string start = fmt::format("run {} --frames {} --checkpoint-every 2 --out {}",
+                                        (box.dir / "pour.toml").string(), kFrames, out.string());
+  // SIGKILL at random moments of each attempt (seeded: the moments of a failure can be re-run),
+  // within 40 % of the whole run's time so that several land before the end: at start-up, in a
+  // frame, while a frame or a checkpoint is written
+  const unsigned seed = 20240611;
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> moment(0.0, 0.4 * seconds);
+  int kills = 0;
+  bool finished = false;
+  for (int attempt = 0; attempt < 8 && !finished; ++attempt) {
+    // (a kill before run.json was written leaves no run to resume: start it again)
+    const bool fresh = !fs::exists(out / "run.json");
+    const std::string args =
+        fresh ? start + " --force" : "run --resume " + out.string() + (attempt % 2 ? " --threads 2" : "");
+    const pid_t pid = spawn(args, box.dir / "attempt.log");
+    const double at = moment(rng);
+    std::this_thread::sleep_for(std::chrono::duration<double>(at));
+    kill(pid, SIGKILL);
+    const int status = wait_for(pid);
+    if (status == 128 + SIGKILL) {
+      ++kills;
+      continue;
+    }
+    ASSERT_EQ(status, 0) << read_text(box.dir / "attempt.log");
+    finished = true;
+  }
+  EXPECT_GE(kills, 3) << "the kills came too late to test anything";
+  if (!finished) {
+    std::string log;
+    ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  }
+  expect_same_run(want, out);
+}
+
+TEST(Resume, AFullDiskStopsWithAClearErrorAndKeepsTheLastGoodCheckpoint) {
+  Sandbox box;
+  box.write("pour.toml", kPourScene);
+  const fs::path want = straight_run(box);
+  // the checkpoint of frame 6: grains keep pouring in, so later checkpoints are larger
+  const fs::path probe = box.dir / "probe";
+  ASSERT_EQ(sandflow(fmt::format("run {} --frames 6 --checkpoint-every 6 --out {}",
+                                 (box.dir / "pour.toml").string(), probe.string())),
+            0);
+  const auto limit = static_cast<rlim_t>(fs::file_size(probe / "checkpoint.bin"));
+  // every file is limited to that size: a checkpoint past frame 6 cannot be written (EFBIG, as
+  // ENOSPC would be for a full disk)
+  const fs::path out = box.dir / "run";
+  const pid_t pid = spawn(fmt::format("run {} --frames {} --checkpoint-every 1 --out {}",
+                                      (box.dir / "pour.toml").string(), kFrames, out.string()),
+                          box.dir / "run.log", limit);
+  EXPECT_EQ(wait_for(pid), 4);
+  const std::string log = read_text(box.dir / "run.log");
+  const long long frame = number_after(log, "the run can go on from the last checkpoint (frame ");
+  ASSERT_GT(frame, 0) << log;
+  EXPECT_NE(log.find(fmt::format("output error: {}/checkpoint.bin: cannot write: File too large\n"
+                                 "  the run can go on from the last checkpoint (frame {}): make "
+                                 "room (or make the folder writable), then: sandflow run --resume "
+                                 "{}\n",
+                                 out.string(), frame, out.string())),
+            std::string::npos)
+      << log;
+  EXPECT_GE(frame, 6);
+  // the last good checkpoint is intact and the half-written one is gone
+  EXPECT_EQ(sandflow::read_checkpoint((out / "checkpoint.bin").string()).world.frame, frame);
+  EXPECT_FALSE(fs::exists(out / "checkpoint.bin.tmp"));
+  std::string resumed;
+  ASSERT_EQ(sandflow("run --resume " + out.string(), &resumed), 0) << resumed;
+  expect_same_run(want, out);
+}
+
+TEST(Resume, ABlowUpNamesTheStepTheGrainAndTheCommandThatReproducesIt) {
+  Sandbox box;
+  // a grain thrown onto a floor of soft springs sinks through it in frame 2
+  box.write("blow.toml", R"(
+[material]
+k_n = 10.0
+[[geometry]]
+type = "plane"
+name = "floor"
+[[emitter]]
+type = "block"
+count = 1
+center = [0.0, 0.0, 0.3]
+size = [0.011, 0.011, 0.011]
+velocity = [0.0, 0.0, -5.0]
+)");
+  const fs::path out = box.dir / "run";
+  std::string log;
+  ASSERT_EQ(sandflow(fmt::format("run {} --mode dem --checkpoint-every 1 --out {}",
+                                 (box.dir / "blow.toml").string(), out.string()),
+                     &log),
+            3)
+      << log;
+  ASSERT_GT(number_after(log, "simulation stopped: step "), 0) << log;
+  const std::string first_line = log.substr(log.find("simulation stopped"));
+  const std::string stop = first_line.substr(0, first_line.find('\n'));
+  EXPECT_NE(stop.find(" (frame 2, t = "), std::string::npos) << stop;
+  EXPECT_NE(stop.find("): grain 0 overlaps geometry[0] ('floor') by "), std::string::npos) << stop;
+  EXPECT_NE(stop.find(" % of its diameter, above simulation.max_overlap_stop = 60 %;"),
+            std::string::npos)
+      << stop;
+  EXPECT_NE(first_line.find("\n  reproduce it from the last checkpoint (frame 1): sandflow run "
+                            "--resume " + out.string() + "\n"),
+            std::string::npos)
+      << log;
+  // the command given stops at the same step with the same words
+  std::string again;
+  EXPECT_EQ(sandflow("run --resume " + out.string(), &again), 3);
+  EXPECT_NE(again.find(stop), std::string::npos) << again;
+}
+
+TEST(Resume, RefusesWhatItCannotContinueAndSaysWhy) {
+  Sandbox box;
+  box.write("pour.toml", kPourScene);
+  const fs::path out = box.dir / "run";
+  const std::string scene = (box.dir / "pour.toml").string();
+  std::string log;
+  // no scene and no --resume
+  EXPECT_EQ(sandflow("run", &log), 2);
+  EXPECT_NE(log.find("give a scene file"), std::string::npos) << log;
+  // a folder that holds no run
+  fs::create_directories(box.dir / "empty");
+  EXPECT_EQ(sandflow("run --resume " + (box.dir / "empty").string(), &log), 2);
+  EXPECT_NE(log.find("no run.json"), std::string::npos) << log;
+  // a run to play with, stopped at frame 4 (its checkpoint)
+  ASSERT_EQ(sandflow(fmt::format("run {} --frames 4 --checkpoint-every 2 --out {}", scene,
+                                 out.string())),
+            0);
+  fs::remove(out / "summary.json");
+  // options that would change the run
+  EXPECT_EQ(sandflow("run --resume " + out.string() + " --set material.friction=0.1", &log), 2);
+  EXPECT_NE(log.find("continues a run exactly as it was started"), std::string::npos) << log;
+  EXPECT_EQ(sandflow("run " + scene + " --resume " + out.string(), &log), 2);
+  // a non-empty folder without --force or --resume
+  EXPECT_EQ(sandflow(fmt::format("run {} --out {}", scene, out.string()), &log), 2);
+  EXPECT_NE(log.find("--force"), std::string::npos) << log;
+  EXPECT_NE(log.find("--resume"), std::string::npos) << log;
+  // a corrupt checkpoint
+  const fs::path ck = out / "checkpoint.bin";
+  const std::string good = read_text(ck);
+  std::string bad = good;
+  bad[bad.size() / 2] = static_cast<char>(bad[bad.size() / 2] ^ 0x40);
+  std::ofstream(ck, std::ios::binary | std::ios::trunc) << bad;
+  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2);
+  EXPECT_NE(log.find(ck.string() + ": the data is corrupt"), std::string::npos) << log;
+  // a truncated one
+  std::ofstream(ck, std::ios::binary | std::ios::trunc) << good.substr(0, good.size() - 100);
+  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2);
+  EXPECT_NE(log.find(ck.string() + ": truncated"), std::string::npos) << log;
+  // one written by another version of sandflow
+  sandflow::Checkpoint c = sandflow::parse_checkpoint(good, "good");
+  c.sandflow_version = "9.9.9";
+  std::ofstream(ck, std::ios::binary | std::ios::trunc) << sandflow::encode_checkpoint(c);
+  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2);
+  EXPECT_NE(log.find("written by sandflow 9.9.9"), std::string::npos) << log;
+  // (a refused checkpoint leaves the folder as it was)
+  EXPECT_TRUE(fs::exists(out / "frames" / "0004.ply"));
+  // one of another run (another scene)
+  const fs::path other = box.dir / "other";
+  ASSERT_EQ(sandflow(fmt::format("run {} --frames 2 --checkpoint-every 2 --set material.friction=0.3 --out {}",
+                                 scene, other.string())),
+            0);
+  fs::copy_file(other / "checkpoint.bin", ck, fs::copy_options::overwrite_existing);
+  // (a frame after the checkpoint, as a killed run leaves it: kept while the checkpoint is refused)
+  fs::copy_file(out / "frames" / "0004.ply", out / "frames" / "0005.ply");
+  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2);
+  EXPECT_NE(log.find("written for another scene"), std::string::npos) << log;
+  EXPECT_TRUE(fs::exists(out / "frames" / "0005.ply"));
+  // the good one again: it resumes, and the frame after it is made again
+  std::ofstream(ck, std::ios::binary | std::ios::trunc) << good;
+  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  EXPECT_FALSE(fs::exists(out / "frames" / "0005.ply"));
+}
+
+}  // namespace
