@@ -183,6 +183,34 @@ TEST(Resume, SigintFinishesTheFrameCheckpointsAndSaysHowToResume) {
   EXPECT_NE(resumed.find("this run is finished"), std::string::npos) << resumed;
 }
 
+// The exports go on where the checkpoint left them: a resumed run's ParaView series lists every
+// frame, the ones before the interruption too, as the same run uninterrupted does.
+TEST(Resume, TheExportsOfAResumedRunAreThoseOfTheRunUninterrupted) {
+  Sandbox box;
+  box.write("pour.toml", kPourScene);
+  const std::string scene = (box.dir / "pour.toml").string();
+  const fs::path want = box.dir / "straight";
+  ASSERT_EQ(sandflow(fmt::format("run {} --frames {} --export ply,vtk --out {}", scene, kFrames,
+                                 want.string())),
+            0);
+  const fs::path out = box.dir / "run";
+  const pid_t pid = spawn(fmt::format("run {} --frames {} --export ply,vtk --out {}", scene,
+                                      kFrames, out.string()),
+                          box.dir / "run.log");
+  while (!fs::exists(out / "frames" / "0005.vtp") && waitpid(pid, nullptr, WNOHANG) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  kill(pid, SIGINT);
+  ASSERT_EQ(wait_for(pid), 130) << read_text(box.dir / "run.log");
+  std::string log;
+  ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  expect_same_run(want, out);
+  EXPECT_EQ(read_text(out / "frames.pvd"), read_text(want / "frames.pvd"));
+  for (int f = 1; f <= kFrames; ++f) {
+    const std::string name = fmt::format("frames/{:04d}.vtk", f);
+    EXPECT_EQ(read_text(out / name), read_text(want / name)) << name << " differs";
+  }
+}
+
 TEST(Resume, KilledAtRandomMomentsItResumesToTheSameRun) {
   Sandbox box;
   box.write("pour.toml", kPourScene);
