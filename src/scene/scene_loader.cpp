@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <concepts>
@@ -32,6 +33,7 @@
 #include "core/error.hpp"
 #include "geometry/heightmap.hpp"
 #include "io/png_gray.hpp"
+#include "surface/surface_params.hpp"
 
 namespace sandflow {
 namespace {
@@ -46,6 +48,11 @@ std::string format_real(Real v) {
   char buf[32];
   const auto res = std::to_chars(buf, buf + sizeof buf, v);  // shortest round-trip form
   return std::string(buf, res.ptr);
+}
+
+// A whole number as digits (1e5 -> "100000"), a huge or non-finite one as format_real() has it.
+std::string format_count(Real v) {
+  return std::abs(v) < 9e18 ? std::to_string(static_cast<long long>(v)) : format_real(v);
 }
 
 std::string type_name(const toml::node& n) {
@@ -138,8 +145,9 @@ constexpr Range open(Real lo, Real hi) {
   return {lo, hi, true, true};
 }
 
-// The most grains one emitter may make: far above any scene we run, far below overflow.
-constexpr std::int64_t kMaxEmitterCount = 2'000'000'000;
+// The most grains a scene may make, in one emitter or in all: far above any scene we run, below
+// 2^31 (grain ids are 32-bit) and what `--grains` accepts.
+constexpr std::int64_t kMaxGrains = 2'000'000'000;
 
 template <class E>
 using Choices = std::pair<std::string_view, E>;
@@ -502,8 +510,8 @@ void read_stiffness(TableReader r, StiffnessConfig& k) {
   r.finish("[stiffness]");
 }
 
-// Angles are written in degrees and stored in radians.
-void read_surface(TableReader r, SurfaceConfig& s) {
+// Angles are written in degrees and stored in radians. `diameter` is the default cell size.
+void read_surface(TableReader r, SurfaceConfig& s, Real diameter) {
   r.read("cell_size", s.cell_size, kPositive);
   r.read("exchange_rate", s.exchange_rate, kPositive);
   std::optional<Real> repose_deg;
@@ -537,6 +545,19 @@ void read_surface(TableReader r, SurfaceConfig& s) {
       r.fail_at("extent", r.name("extent") + " = [" + format_real(x0) + ", " + format_real(y0) +
                               ", " + format_real(x1) + ", " + format_real(y1) +
                               "]: expected [x0, y0, x1, y1] with x1 > x0 and y1 > y0");
+    // the grid the extent makes, refused here with its place when too large (without an extent,
+    // surface_params() refuses it once the geometry gives the domain)
+    const Real cell = s.cell_size.value_or(diameter);
+    const Real nx = std::ceil((x1 - x0) / cell), ny = std::ceil((y1 - y0) / cell);
+    if (!(nx * ny <= static_cast<Real>(kMaxHeightFieldColumns)))
+      r.fail_at(s.cell_size ? "cell_size" : "extent",
+                r.name("extent") + " at " +
+                    (s.cell_size ? r.name("cell_size") + " = " + format_real(cell) + " m"
+                                 : "a cell size of " + format_real(cell) +
+                                       " m (the grain diameter: cell_size unset)") +
+                    " makes a height field of " + format_count(nx) + " x " + format_count(ny) +
+                    " columns, more than the limit of " + std::to_string(kMaxHeightFieldColumns) +
+                    ": set a larger cell_size or a smaller extent");
   }
 }
 
@@ -548,7 +569,8 @@ void read_output(TableReader r, OutputConfig& o) {
 }
 
 // A heightmap's samples: inline `heights`, a grey PNG `file` or procedural `noise`, exactly one.
-void read_heightmap(TableReader& r, GeometryConfig& g, const std::string& scene_path) {
+void read_heightmap(TableReader& r, GeometryConfig& g, const std::string& scene_path,
+                    const ImageReader& read_image) {
   std::optional<std::array<Real, 4>> extent;
   r.require("extent", "[x0, y0, x1, y1], the rectangle the terrain covers");
   r.read("extent", extent);
@@ -603,7 +625,7 @@ void read_heightmap(TableReader& r, GeometryConfig& g, const std::string& scene_
     const std::string what = r.name("file") + " = " + in_quotes(file) + ": ";
     GrayImage img;
     try {
-      img = read_gray_png(g.file, kMaxHeightmapSide);
+      img = read_image(g.file, kMaxHeightmapSide);
     } catch (const InputError& e) {
       r.fail_at("file", what + e.what());
     }
@@ -622,7 +644,8 @@ void read_heightmap(TableReader& r, GeometryConfig& g, const std::string& scene_
   }
 }
 
-GeometryConfig read_geometry(TableReader r, std::size_t index, const std::string& scene_path) {
+GeometryConfig read_geometry(TableReader r, std::size_t index, const std::string& scene_path,
+                             const ImageReader& read_image) {
   GeometryConfig g;
   g.name = "geometry " + std::to_string(index);
   r.read("type", g.type, kGeometryTypes);
@@ -682,7 +705,7 @@ GeometryConfig read_geometry(TableReader r, std::size_t index, const std::string
                                ": expected depth in (0, 2 radius), 2 radius being a closed sphere");
       break;
     case GeometryType::Heightmap:
-      read_heightmap(r, g, scene_path);
+      read_heightmap(r, g, scene_path, read_image);
       break;
     case GeometryType::Mesh: {
       r.read("file", g.mesh_file);
@@ -714,7 +737,7 @@ EmitterConfig read_emitter(TableReader r, std::size_t index) {
   r.read("type", e.type, kEmitterTypes);
   r.read("name", e.name);
   r.require("count", "the number of grains to emit, an integer >= 1");
-  r.read("count", e.count, closed(1, static_cast<Real>(kMaxEmitterCount)));
+  r.read("count", e.count, closed(1, static_cast<Real>(kMaxGrains)));
   r.read("start", e.start, kNonNegative);
   r.read("velocity", e.velocity);
   r.read("jitter", e.jitter, closed(0, 1));
@@ -746,7 +769,8 @@ EmitterConfig read_emitter(TableReader r, std::size_t index) {
   return e;
 }
 
-SceneConfig read_scene(const toml::table& root, const std::string& path) {
+SceneConfig read_scene(const toml::table& root, const std::string& path,
+                       const ImageReader& read_image) {
   const Places places(path);
   SceneConfig c;
   c.path = path;
@@ -764,25 +788,174 @@ SceneConfig read_scene(const toml::table& root, const std::string& path) {
     read_simulation({places, *t, "simulation"}, c.simulation);
   if (const auto* t = doc.table("stiffness"))
     read_stiffness({places, *t, "stiffness"}, c.stiffness);
-  if (const auto* t = doc.table("surface")) read_surface({places, *t, "surface"}, c.surface);
+  if (const auto* t = doc.table("surface"))
+    read_surface({places, *t, "surface"}, c.surface, c.material.diameter);
   if (const auto* t = doc.table("output")) read_output({places, *t, "output"}, c.output);
 
   if (const auto* a = doc.array_of_tables("geometry")) {
     for (std::size_t i = 0; i < a->size(); ++i) {
       const std::string prefix = "geometry[" + std::to_string(i) + "]";
-      c.geometry.push_back(read_geometry({places, *a->get(i)->as_table(), prefix}, i, path));
+      c.geometry.push_back(
+          read_geometry({places, *a->get(i)->as_table(), prefix}, i, path, read_image));
     }
   }
   const auto* emitters = doc.array_of_tables("emitter");
   if (!emitters || emitters->empty())
     doc.fail_at("emitter", "emitter: a scene needs at least one [[emitter]] table, found none");
+  std::int64_t total = 0;
   for (std::size_t i = 0; i < emitters->size(); ++i) {
     const std::string prefix = "emitter[" + std::to_string(i) + "]";
-    c.emitters.push_back(read_emitter({places, *emitters->get(i)->as_table(), prefix}, i));
+    const TableReader r(places, *emitters->get(i)->as_table(), prefix);
+    c.emitters.push_back(read_emitter(r, i));
+    total += c.emitters.back().count;  // each at most kMaxGrains: the sum cannot overflow here
+    if (total > kMaxGrains)
+      r.fail_at("count", r.name("count") + " = " + std::to_string(c.emitters.back().count) +
+                             " brings the scene to " + std::to_string(total) +
+                             " grains, more than the limit of " + std::to_string(kMaxGrains) +
+                             " in all");
   }
 
   doc.finish("a scene file");
   return c;
+}
+
+// ---- Parsing ------------------------------------------------------------------------------------
+
+// What Debian's toml++ 3.3 cannot be given safely, found before it sees the text:
+// - It recurses once per level of table nesting when it finishes a document, so a dotted key of
+//   100,000 parts (a.a.a...) overflows the stack. It caps the nesting of inline tables and arrays
+//   itself (256 levels); the parts of a dotted key or table header are capped here, so no document
+//   nests deeper than about 256 x 16 levels.
+// - Its test for Unicode whitespace reaches __builtin_unreachable() for most non-ASCII characters
+//   (upstream issues 190 and 295, undefined behaviour), and it makes that test outside strings and
+//   comments and after a backslash in a """multi-line string""". TOML allows non-ASCII characters
+//   only in strings and comments, so the first is an error anyway; the second is refused too.
+constexpr int kMaxKeyParts = 16;
+
+struct TomlHazard {
+  std::size_t line = 1, column = 1;
+  std::string what;
+};
+
+std::optional<TomlHazard> toml_hazard(std::string_view text) {
+  const auto bare = [](char ch) {
+    return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-';
+  };
+  const auto ascii = [](char ch) { return static_cast<unsigned char>(ch) < 0x80; };
+  std::size_t i = 0, line = 1, line_start = 0;
+  const auto hazard = [&](std::size_t at, std::string what) {
+    return TomlHazard{line, at - line_start + 1, std::move(what)};
+  };
+  int dots = 0;
+  bool after_part = false, after_dot = false;
+  const auto reset = [&] {
+    dots = 0;
+    after_part = after_dot = false;
+  };
+  const auto part = [&] {  // a bare or quoted part: continues a chain only after a dot
+    if (!after_dot) dots = 0;
+    after_part = true;
+    after_dot = false;
+  };
+  // Skips a string opened at i by `quote`, by TOML's rules (escapes only in "basic" strings; a
+  // multi-line string's closing triple may be followed by one or two quotes of its content).
+  const auto skip_string = [&](char quote) -> std::optional<TomlHazard> {
+    const bool multi = text.substr(i, 3) == std::string(3, quote);
+    i += multi ? 3 : 1;
+    while (i < text.size()) {
+      const char ch = text[i];
+      if (ch == '\\' && quote == '"' && multi) {
+        // an escape, or a line-ending backslash that trims the whitespace after it
+        std::size_t j = i + 1;
+        while (j < text.size() && (text[j] == ' ' || text[j] == '\t' || text[j] == '\r' ||
+                                   text[j] == '\n')) {
+          if (text[j] == '\n') {
+            ++line;
+            line_start = j + 1;
+          }
+          ++j;
+        }
+        if (j < text.size() && !ascii(text[j]))
+          return hazard(j, "a non-ASCII character after a backslash in a multi-line string, "
+                           "which the TOML library cannot read safely: write it as \\uXXXX");
+        i = j == i + 1 ? i + 2 : j;
+      } else if (ch == '\\' && quote == '"') {
+        i += text.substr(i + 1, 1) == "\n" ? 1 : 2;
+      } else if (ch == '\n') {
+        if (!multi) return std::nullopt;  // an unterminated string: toml++ reports it
+        ++line;
+        line_start = ++i;
+      } else if (ch != quote) {
+        ++i;
+      } else if (!multi) {
+        ++i;
+        return std::nullopt;
+      } else if (text.substr(i, 3) == std::string(3, quote)) {
+        i += 3;
+        for (int extra = 0; extra < 2 && i < text.size() && text[i] == quote; ++extra) ++i;
+        return std::nullopt;
+      } else {
+        ++i;
+      }
+    }
+    return std::nullopt;
+  };
+  while (i < text.size()) {
+    const char ch = text[i];
+    if (ch == '\n') {
+      ++line;
+      line_start = ++i;
+      reset();
+    } else if (ch == ' ' || ch == '\t' || ch == '\r') {
+      ++i;
+    } else if (ch == '#') {
+      while (i < text.size() && text[i] != '\n') ++i;
+      reset();
+    } else if (ch == '.') {
+      if (!after_part) {
+        reset();
+      } else if (++dots >= kMaxKeyParts) {
+        return hazard(i, "a dotted key or table name of more than " +
+                             std::to_string(kMaxKeyParts) + " parts: expected at most " +
+                             std::to_string(kMaxKeyParts));
+      } else {
+        after_part = false;
+        after_dot = true;
+      }
+      ++i;
+    } else if (bare(ch)) {
+      while (i < text.size() && bare(text[i])) ++i;
+      part();
+    } else if (ch == '"' || ch == '\'') {
+      const bool multi = text.substr(i, 3) == std::string(3, ch);
+      if (auto h = skip_string(ch)) return h;
+      if (multi)
+        reset();  // a multi-line string is never a key
+      else
+        part();
+    } else if (!ascii(ch)) {
+      return hazard(i, "a non-ASCII character outside a string or comment: TOML allows them "
+                       "only in \"strings\" and # comments");
+    } else {
+      reset();
+      ++i;
+    }
+  }
+  return std::nullopt;
+}
+
+// toml::parse of a text checked by toml_hazard(); `name` is the source path of its nodes.
+toml::table parse_toml(std::string_view text, const std::string& name) {
+  if (const auto h = toml_hazard(text))
+    throw InputError(name + ":" + std::to_string(h->line) + ":" + std::to_string(h->column) + ": " +
+                     h->what);
+  try {
+    return toml::parse(text, std::string_view(name));
+  } catch (const toml::parse_error& err) {
+    const auto& at = err.source().begin;
+    throw InputError(name + ":" + std::to_string(at.line) + ":" + std::to_string(at.column) + ": " +
+                     std::string(err.description()));
+  }
 }
 
 // ---- Overrides ----------------------------------------------------------------------------------
@@ -833,15 +1006,21 @@ std::optional<std::size_t> parse_index(const std::string& s) {
 // path. Text that is not a TOML value is taken as a bare string, so --set simulation.mode=dem
 // works.
 toml::table parse_override_value(const Override& o, const std::string& where) {
+  const std::string doc = "v = " + o.value;
   try {
-    toml::table t = toml::parse("v = " + o.value, std::string_view(where));
-    if (t.size() == 1 && t.contains("v")) return t;  // not "1\nw = 2" smuggling in more keys
+    if (!toml_hazard(doc)) {  // else a string (toml++ could not parse it safely)
+      toml::table t = toml::parse(doc, std::string_view(where));
+      if (t.size() == 1 && t.contains("v")) return t;  // not "1\nw = 2" smuggling in more keys
+    }
   } catch (const toml::parse_error&) {
   }
   std::ostringstream quoted;
   quoted << toml::value<std::string>(o.value);
+  const std::string as_string = "v = " + quoted.str();
+  if (const auto h = toml_hazard(as_string))
+    fail(where, "cannot read the value " + in_quotes(o.value) + ": " + h->what);
   try {
-    return toml::parse("v = " + quoted.str(), std::string_view(where));
+    return toml::parse(as_string, std::string_view(where));
   } catch (const toml::parse_error& err) {
     fail(where,
          "cannot read the value " + in_quotes(o.value) + ": " + std::string(err.description()));
@@ -915,17 +1094,14 @@ Override parse_override(const std::string& arg) {
 }
 
 SceneConfig load_scene_from_string(const std::string& text, const std::string& name,
-                                   const std::vector<Override>& overrides) {
-  toml::table root;
-  try {
-    root = toml::parse(text, std::string_view(name));
-  } catch (const toml::parse_error& err) {
-    const auto& at = err.source().begin;
-    throw InputError(name + ":" + std::to_string(at.line) + ":" + std::to_string(at.column) + ": " +
-                     std::string(err.description()));
-  }
+                                   const std::vector<Override>& overrides,
+                                   const ImageReader& read_image) {
+  if (text.size() > kMaxSceneBytes)
+    throw InputError(name + ": the scene is " + std::to_string(text.size()) +
+                     " bytes, more than the limit of " + std::to_string(kMaxSceneBytes));
+  toml::table root = parse_toml(text, name);
   for (const auto& o : overrides) apply_override(root, o);
-  return read_scene(root, name);
+  return read_scene(root, name, read_image);
 }
 
 SceneConfig load_scene(const std::string& path, const std::vector<Override>& overrides) {
@@ -934,10 +1110,17 @@ SceneConfig load_scene(const std::string& path, const std::vector<Override>& ove
     throw InputError(path + ": cannot open scene file (it is a directory)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open scene file");
-  std::ostringstream text;
-  text << in.rdbuf();
+  // read in pieces up to the limit: a pipe or a device has no size to check first
+  std::string text;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    if (text.size() + static_cast<std::size_t>(in.gcount()) > kMaxSceneBytes)
+      throw InputError(path + ": the scene file is larger than the limit of " +
+                       std::to_string(kMaxSceneBytes) + " bytes");
+    text.append(buf, static_cast<std::size_t>(in.gcount()));
+  }
   if (in.bad()) throw InputError(path + ": cannot read scene file");
-  return load_scene_from_string(text.str(), path, overrides);
+  return load_scene_from_string(text, path, overrides);
 }
 
 }  // namespace sandflow
