@@ -95,6 +95,8 @@ def main():
                                 chunk(b"IDAT", zlib.compress(rows_bytes(g8, filter_byte=9))) + end),
         "missing_ihdr.png": SIG + idat + end,
         "chunk_length_huge.png": SIG + ihdr(5, 4) + struct.pack(">I", 0x7FFFFFFF) + b"IDAT" + b"\0" * 16,
+        # found by fuzzing: libpng allocated and zeroed the 1.4 GB this text chunk announces
+        "itxt_announces_1_4_gb.png": SIG + ihdr(5, 4) + struct.pack(">I", 0x5268FD16) + b"iTXt" + b"abc",
         "garbage_after_signature.png": SIG + bytes((i * 97 + 13) % 256 for i in range(200)),
     }
     for name, data in cases.items():
