@@ -824,12 +824,17 @@ SceneConfig read_scene(const toml::table& root, const std::string& path,
 // What Debian's toml++ 3.3 cannot be given safely, found before it sees the text:
 // - It recurses once per level of table nesting when it finishes a document, so a dotted key of
 //   100,000 parts (a.a.a...) overflows the stack. It caps the nesting of inline tables and arrays
-//   itself (256 levels); the parts of a dotted key or table header are capped here, so no document
+//   itself (256 levels); the parts of a dotted key or table name are capped here, so no document
 //   nests deeper than about 256 x 16 levels.
 // - Its test for Unicode whitespace reaches __builtin_unreachable() for most non-ASCII characters
-//   (upstream issues 190 and 295, undefined behaviour), and it makes that test outside strings and
-//   comments and after a backslash in a """multi-line string""". TOML allows non-ASCII characters
-//   only in strings and comments, so the first is an error anyway; the second is refused too.
+//   (upstream issues 190 and 295, undefined behaviour), and it makes that test on characters
+//   outside strings and comments (even inside a malformed value: 1'Z'), and after a backslash in
+//   a """multi-line string""". TOML allows non-ASCII characters only in strings and comments, so
+//   the first is an error anyway; the second is refused too.
+// toml_hazard() follows TOML's grammar far enough to know where a string may start: at the start
+// of a key, a table name or a value, never inside another token. A text it misreads is one
+// toml++ refuses at or before that point, so a character it takes for part of a string is one
+// toml++ reads as such or never reads.
 constexpr int kMaxKeyParts = 16;
 
 struct TomlHazard {
@@ -838,25 +843,25 @@ struct TomlHazard {
 };
 
 std::optional<TomlHazard> toml_hazard(std::string_view text) {
-  const auto bare = [](char ch) {
+  // What the grammar expects next: a key (at a line's start, after '{' or ',' in an inline table,
+  // after a key's '.'), a table name (after '[' at a line's start, after its '.'), a value (after
+  // '=', '[' or ',' in an array), or nothing a string may start (Other).
+  enum class Expect { Key, KeyPart, Table, TablePart, Value, Other };
+  enum class Open { Array, InlineTable };
+  const auto key_char = [](char ch) {
     return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-';
+  };
+  const auto value_char = [&](char ch) {  // bare values: numbers, dates, true, inf, nan
+    return key_char(ch) || ch == '+' || ch == '.' || ch == ':';
   };
   const auto ascii = [](char ch) { return static_cast<unsigned char>(ch) < 0x80; };
   std::size_t i = 0, line = 1, line_start = 0;
   const auto hazard = [&](std::size_t at, std::string what) {
     return TomlHazard{line, at - line_start + 1, std::move(what)};
   };
-  int dots = 0;
-  bool after_part = false, after_dot = false;
-  const auto reset = [&] {
-    dots = 0;
-    after_part = after_dot = false;
-  };
-  const auto part = [&] {  // a bare or quoted part: continues a chain only after a dot
-    if (!after_dot) dots = 0;
-    after_part = true;
-    after_dot = false;
-  };
+  Expect expect = Expect::Key;
+  std::vector<Open> open;  // the arrays and inline tables around i
+  int parts = 0;           // parts of the key or table name being read
   // Skips a string opened at i by `quote`, by TOML's rules (escapes only in "basic" strings; a
   // multi-line string's closing triple may be followed by one or two quotes of its content).
   const auto skip_string = [&](char quote) -> std::optional<TomlHazard> {
@@ -900,45 +905,86 @@ std::optional<TomlHazard> toml_hazard(std::string_view text) {
     }
     return std::nullopt;
   };
+  // One more part of a key or table name.
+  const auto part = [&](std::size_t at) -> std::optional<TomlHazard> {
+    if (++parts > kMaxKeyParts)
+      return hazard(at, "a dotted key or table name of more than " +
+                            std::to_string(kMaxKeyParts) + " parts: expected at most " +
+                            std::to_string(kMaxKeyParts));
+    return std::nullopt;
+  };
   while (i < text.size()) {
+    const std::size_t at = i;
     const char ch = text[i];
+    const bool key_like = expect == Expect::Key || expect == Expect::Table;
     if (ch == '\n') {
       ++line;
       line_start = ++i;
-      reset();
+      if (open.empty()) {
+        expect = Expect::Key;
+        parts = 0;
+      }
     } else if (ch == ' ' || ch == '\t' || ch == '\r') {
       ++i;
     } else if (ch == '#') {
       while (i < text.size() && text[i] != '\n') ++i;
-      reset();
-    } else if (ch == '.') {
-      if (!after_part) {
-        reset();
-      } else if (++dots >= kMaxKeyParts) {
-        return hazard(i, "a dotted key or table name of more than " +
-                             std::to_string(kMaxKeyParts) + " parts: expected at most " +
-                             std::to_string(kMaxKeyParts));
-      } else {
-        after_part = false;
-        after_dot = true;
-      }
-      ++i;
-    } else if (bare(ch)) {
-      while (i < text.size() && bare(text[i])) ++i;
-      part();
-    } else if (ch == '"' || ch == '\'') {
-      const bool multi = text.substr(i, 3) == std::string(3, ch);
-      if (auto h = skip_string(ch)) return h;
-      if (multi)
-        reset();  // a multi-line string is never a key
-      else
-        part();
     } else if (!ascii(ch)) {
-      return hazard(i, "a non-ASCII character outside a string or comment: TOML allows them "
-                       "only in \"strings\" and # comments");
+      return hazard(at, "a non-ASCII character outside a string or comment: TOML allows them "
+                        "only in \"strings\" and # comments");
+    } else if (ch == '"' || ch == '\'') {
+      if (key_like || expect == Expect::Value) {
+        if (auto h = skip_string(ch)) return h;
+        if (key_like)
+          if (auto h = part(at)) return h;
+        expect = expect == Expect::Key     ? Expect::KeyPart
+                 : expect == Expect::Table ? Expect::TablePart
+                                           : Expect::Other;
+      } else {
+        expect = Expect::Other;  // not where a string may start: toml++ refuses it
+        ++i;
+      }
+    } else if (key_like && key_char(ch)) {
+      while (i < text.size() && key_char(text[i])) ++i;
+      if (auto h = part(at)) return h;
+      expect = expect == Expect::Key ? Expect::KeyPart : Expect::TablePart;
+    } else if (value_char(ch) && !(ch == '.' && (expect == Expect::KeyPart ||
+                                                 expect == Expect::TablePart))) {
+      while (i < text.size() && value_char(text[i])) ++i;
+      expect = Expect::Other;
     } else {
-      reset();
       ++i;
+      const bool in_array = !open.empty() && open.back() == Open::Array;
+      const bool in_table = !open.empty() && open.back() == Open::InlineTable;
+      if (ch == '.' && expect == Expect::KeyPart) {
+        expect = Expect::Key;
+      } else if (ch == '.' && expect == Expect::TablePart) {
+        expect = Expect::Table;
+      } else if (ch == '=' && expect == Expect::KeyPart) {
+        expect = Expect::Value;
+      } else if (ch == '[' && expect == Expect::Key && open.empty() && parts == 0) {
+        expect = Expect::Table;  // [table] or [[array of tables]]
+      } else if (ch == '[' && expect == Expect::Table && parts == 0) {
+        // the second '[' of [[
+      } else if (ch == '[' && expect == Expect::Value) {
+        open.push_back(Open::Array);
+      } else if (ch == '{' && expect == Expect::Value) {
+        open.push_back(Open::InlineTable);
+        expect = Expect::Key;
+        parts = 0;
+      } else if (ch == ']' && in_array && expect != Expect::TablePart) {
+        open.pop_back();
+        expect = Expect::Other;
+      } else if (ch == '}' && in_table) {
+        open.pop_back();
+        expect = Expect::Other;
+      } else if (ch == ',' && in_array) {
+        expect = Expect::Value;
+      } else if (ch == ',' && in_table) {
+        expect = Expect::Key;
+        parts = 0;
+      } else {
+        expect = Expect::Other;
+      }
     }
   }
   return std::nullopt;

@@ -128,6 +128,40 @@ TEST(SceneLimits, KeysUpToSixteenPartsAndStringsWithAnythingAreRead) {
   EXPECT_EQ(c.material.friction, 0.5);
 }
 
+TEST(SceneLimits, NonAsciiInStringsAndCommentsIsReadWhereverAStringMayStand) {
+  // Each text is valid TOML with non-ASCII characters only in strings and comments: the guard in
+  // front of toml++ must let it through (the loader then refuses the unknown keys).
+  const char* texts[] = {
+      R"(x = "é")",
+      R"(x = ['é', "ü", '''ö''', """ä
+ß"""])",
+      R"(x = [
+  # é
+  "é",
+  ["ü"],
+])",
+      R"(x = {"clé" = "é", b = ['ü'], c = {d = "ö"}})",
+      R"(x = [{a = "é"}, {b = "ü"}])",
+      R"(["té"]
+a."é".'ü' = 1)",
+      R"([["lé"]]
+x = 1 # é)",
+      R"(x = 1979-05-27 07:32:00 # é
+y = +inf # é
+z = 1.5e-3 # é)",
+  };
+  for (const char* t : texts) {
+    std::string msg;
+    try {
+      load_scene_from_string(t, "u.toml");
+    } catch (const InputError& e) {
+      msg = e.what();
+    }
+    EXPECT_EQ(msg.find("non-ASCII"), std::string::npos) << t << "\n" << msg;
+    EXPECT_EQ(msg.find("Error while parsing"), std::string::npos) << t << "\n" << msg;
+  }
+}
+
 TEST(SceneLimits, OverrideValuesGoThroughTheSameGuard) {
   // a value toml++ cannot read safely is taken as a string, as any text that is not TOML is
   const std::string deep = "{" + std::string("a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a") + " = 1}";

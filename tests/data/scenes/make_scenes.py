@@ -104,6 +104,9 @@ CASES = {
                                     "[simulation]\ngravity = " + "[" * 300 + "]" * 300 + "\n\n" + EMITTER),
     "non_ascii_key.toml": ("a non-ASCII character outside a string or comment",
                            "[material]\ndensit\u00e9 = 2600\n\n" + EMITTER),
+    # found by fuzzing: toml++ reads on past a quote inside a malformed value, outside any string
+    "non_ascii_after_value.toml": ("a non-ASCII character outside a string or comment",
+                                   "[simulation]\nmode = 1'\u0396'\n\n" + EMITTER),
     "non_ascii_after_line_backslash.toml": ("a non-ASCII character after a backslash in a multi-line "
                                             "string",
                                             '[scene]\ndescription = """\\\n\u00a7 sand"""\n\n' + EMITTER),
