@@ -111,7 +111,7 @@ ReadStatus read_raw(Memory* in, int max_side, RawImage* out, ErrorText* err) {
   const int channels = png_get_channels(png, info);
   const int bytes = depth == 16 ? 2 : 1;
   const double scale = depth == 16 ? 65535.0 : 255.0;
-  pixels = static_cast<unsigned char*>(std::malloc(rowbytes * h));
+  pixels = static_cast<unsigned char*>(std::calloc(h, rowbytes));  // passes fill it in parts
   value = static_cast<double*>(std::malloc(sizeof(double) * w * h));
   if (!pixels || !value) png_error(png, "out of memory");
   for (int pass = 0; pass < passes; ++pass)
