@@ -36,9 +36,10 @@ fi
 # 2. Build (clang, -fsanitize=fuzzer,address,undefined)
 build=build-fuzz
 echo "==> building the fuzz targets in $build"
+mkdir -p "$build"
 CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSANDFLOW_FUZZ=ON \
-  -DSANDFLOW_TESTS=OFF -DSANDFLOW_BENCH=OFF > "$build.cmake.log" 2>&1 ||
-  { cat "$build.cmake.log"; exit 1; }
+  -DSANDFLOW_TESTS=OFF -DSANDFLOW_BENCH=OFF > "$build/cmake.log" 2>&1 ||
+  { cat "$build/cmake.log"; exit 1; }
 cmake --build "$build" -j "$(nproc)" --target "${targets[@]/#/fuzz_}"
 
 # 3. Seeds: the repository's files, copied fresh each run (a seed of the mesh target starts with
