@@ -181,7 +181,9 @@ GrayImage parse_gray_png(std::string_view bytes, const std::string& name, int ma
   const ReadStatus st = read_raw(&in, max_side, &raw, &err);
   // The fields of the IHDR chunk, which a PNG must start with, are at fixed offsets.
   constexpr int kWidthAt = 16, kColourTypeAt = 25;
-  const auto at = [&name](std::size_t byte) { return name + ": byte " + std::to_string(byte) + ": "; };
+  const auto at = [&name](std::size_t byte) {
+    return name + ": byte " + std::to_string(byte) + ": ";
+  };
   switch (st) {
     case ReadStatus::Ok:
       break;

@@ -183,7 +183,8 @@ TEST(MeshIo, ParseMeshRefusesHugeUnusedElements) {
 TEST(MeshIo, ElementsWithoutPropertiesCostNothing) {
   std::string ply =
       "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
-      "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n";
+      "property float y\nproperty float z\nelement face 1\n"
+      "property list uchar int vertex_indices\n";
   for (int k = 0; k < 1000; ++k) ply += "element empty" + std::to_string(k) + " 20000000\n";
   ply += "end_header\n";
   const std::string one("\x00\x00\x80\x3f", 4), zero(4, '\0');  // 1.0f, 0.0f little-endian

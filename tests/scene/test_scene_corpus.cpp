@@ -121,7 +121,8 @@ TEST(SceneLimits, KeysUpToSixteenPartsAndStringsWithAnythingAreRead) {
   const SceneConfig c = load_scene_from_string(
       "# sable fin, 0.1 mm \u00e9tal\u00e9\n"
       "[scene]\nname = \"d\u00fcne a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r\"\n"
-      "description = \"\"\"a \\\"\"\" quote, \u00e0 la ligne\nx.y.z.a.b.c.d.e.f.g.h.i.j.k.l.m.n.o\"\"\"\n"
+      "description = \"\"\"a \\\"\"\" quote, \u00e0 la "
+      "ligne\nx.y.z.a.b.c.d.e.f.g.h.i.j.k.l.m.n.o\"\"\"\n"
       "[material]\nfriction = 0.5  # \u00b1 0.1\n[[emitter]]\ncount = 1\n",
       "ok.toml");
   EXPECT_EQ(c.name, "d\u00fcne a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r");
