@@ -6,9 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <string>
 #include <vector>
 
@@ -40,6 +40,18 @@ std::string expected_text(const fs::path& path) {
   return first.rfind(tag, 0) == 0 ? first.substr(tag.size()) : std::string();
 }
 
+// "LINE:COLUMN: ..." (std::regex would do, but GCC 12 warns falsely inside it under ASan).
+bool starts_with_line_column(const std::string& s) {
+  std::size_t i = 0;
+  for (int field = 0; field < 2; ++field) {
+    const std::size_t digits = i;
+    while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i;
+    if (i == digits || i >= s.size() || s[i] != ':') return false;
+    ++i;
+  }
+  return i < s.size() && s[i] == ' ';
+}
+
 class SceneCorpus : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(SceneCorpus, RefusedWithFileLineColumnAndWhat) {
@@ -53,8 +65,7 @@ TEST_P(SceneCorpus, RefusedWithFileLineColumnAndWhat) {
     const std::string msg = e.what();
     const std::string prefix = path.string() + ":";
     ASSERT_EQ(msg.rfind(prefix, 0), 0u) << msg;
-    EXPECT_TRUE(std::regex_search(msg.substr(prefix.size()), std::regex("^[0-9]+:[0-9]+: ")))
-        << "no line:column in " << msg;
+    EXPECT_TRUE(starts_with_line_column(msg.substr(prefix.size()))) << "no line:column in " << msg;
     EXPECT_NE(msg.find(expect), std::string::npos) << "expected '" << expect << "' in " << msg;
   }
 }
