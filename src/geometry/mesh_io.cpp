@@ -133,14 +133,18 @@ TriangleMesh parse_mesh(std::string_view data, MeshFormat format, const std::str
   return mesh;
 }
 
-TriangleMesh load_mesh(const std::string& path) {
-  const MeshFormat format = mesh_format_from_name(path);
-  std::string bytes = read_file_bytes(path);
+TriangleMesh decode_mesh(std::string bytes, const std::string& name) {
+  const MeshFormat format = mesh_format_from_name(name);
   if (is_gzip(bytes))
-    bytes = gunzip(bytes, path);
-  else if (ends_with(lower(path), ".gz"))
-    fail_file(path, "expected gzip data (the name ends in .gz)");
-  return parse_mesh(bytes, format, path);
+    bytes = gunzip(bytes, name);
+  else if (ends_with(lower(name), ".gz"))
+    fail_file(name, "expected gzip data (the name ends in .gz)");
+  return parse_mesh(bytes, format, name);
+}
+
+TriangleMesh load_mesh(const std::string& path) {
+  mesh_format_from_name(path);  // an unknown format is refused before the file is read
+  return decode_mesh(read_file_bytes(path), path);
 }
 
 }  // namespace sandflow

@@ -33,7 +33,11 @@ TriangleMesh load_mesh(const std::string& path);
 MeshFormat mesh_format_from_name(const std::string& path);
 
 /// Parses mesh data already in memory (plain, not gzipped); `name` is used in error messages.
-/// The entry point for fuzzing.
 TriangleMesh parse_mesh(std::string_view data, MeshFormat format, const std::string& name);
+
+/// A mesh file's bytes already in memory: gzip data (known by its magic bytes) is inflated and
+/// the format is the one `name` asks for; the same checks and messages as load_mesh. The entry
+/// point for fuzzing.
+TriangleMesh decode_mesh(std::string bytes, const std::string& name);
 
 }  // namespace sandflow

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -146,6 +147,7 @@ struct Element {
   std::string name;
   std::uint64_t count = 0;
   std::vector<Property> props;
+  int line = 0;  ///< header line, for messages
 };
 
 enum class Format { Ascii, BinaryLE };
@@ -162,9 +164,11 @@ enum Field { kX, kY, kZ, kRadius, kVx, kVy, kVz, kId, kState, kFieldCount };
 constexpr std::string_view kFieldNames[kFieldCount] = {"x",  "y",  "z",  "radius", "vx",
                                                        "vy", "vz", "id", "state"};
 
+// Messages name the place: "header line N" in the header, then "line N" (ascii) or "byte N"
+// (binary) in the data, and the element record.
 class Reader {
  public:
-  Reader(std::string path, std::string data) : path_(std::move(path)), data_(std::move(data)) {}
+  Reader(std::string_view data, const std::string& name) : data_(data), name_(name) {}
 
   FrameData read() {
     const Header h = parse_header();
@@ -180,14 +184,21 @@ class Reader {
       }
       skip_element(h.format, e, p, end);
     }
-    fail("no 'vertex' element");
+    fail("header line " + std::to_string(end_header_line_) + ": no 'vertex' element");
   }
 
  private:
-  [[noreturn]] void fail(const std::string& what) const { throw InputError(path_ + ": " + what); }
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(name_ + ": " + what); }
 
   const unsigned char* bytes() const {
     return reinterpret_cast<const unsigned char*>(data_.data());
+  }
+
+  // The place of a byte of the data: its line in an ascii file, its offset in a binary one.
+  std::string place(Format format, const unsigned char* p) const {
+    const auto offset = static_cast<std::size_t>(p - bytes());
+    if (format != Format::Ascii) return "byte " + std::to_string(offset);
+    return "line " + std::to_string(1 + std::count(data_.begin(), data_.begin() + offset, '\n'));
   }
 
   static std::vector<std::string_view> split(std::string_view line) {
@@ -205,16 +216,18 @@ class Reader {
 
   Header parse_header() {
     Header h;
-    std::string_view text(data_);
+    const std::string_view text = data_;
     if (text.substr(0, 3) != "ply" || text.size() < 4 || (text[3] != '\n' && text[3] != '\r')) {
-      fail("not a PLY file (it does not start with 'ply')");
+      fail("header line 1: not a PLY file (expected the first line 'ply')");
     }
     std::size_t pos = 0;
     int line_no = 0;
     bool have_format = false;
     while (true) {
       const std::size_t nl = text.find('\n', pos);
-      if (nl == std::string_view::npos) fail("header has no 'end_header' line");
+      if (nl == std::string_view::npos)
+        fail("header line " + std::to_string(line_no + 1) +
+             ": end of file, but the header has no 'end_header' line (file truncated?)");
       std::string_view line = text.substr(pos, nl - pos);
       if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
       pos = nl + 1;
@@ -228,6 +241,7 @@ class Reader {
       if (w[0] == "end_header") {
         if (!have_format) fail(where + "no 'format' line before 'end_header'");
         h.body_offset = pos;
+        end_header_line_ = line_no;
         return h;
       }
       if (w[0] == "format") {
@@ -239,16 +253,18 @@ class Reader {
         } else if (w[1] == "binary_big_endian") {
           fail(where + "binary_big_endian PLY is not supported (use binary_little_endian)");
         } else {
-          fail(where + "unknown format '" + std::string(w[1]) + "'");
+          fail(where + "unknown format '" + std::string(w[1].substr(0, 40)) + "'");
         }
         have_format = true;
       } else if (w[0] == "element") {
         Element e;
         if (w.size() != 3) fail(where + "expected 'element <name> <count>'");
-        e.name = std::string(w[1]);
+        e.name = std::string(w[1].substr(0, 40));
+        e.line = line_no;
         const auto r = std::from_chars(w[2].data(), w[2].data() + w[2].size(), e.count);
         if (r.ec != std::errc() || r.ptr != w[2].data() + w[2].size()) {
-          fail(where + "element count '" + std::string(w[2]) + "' is not a non-negative integer");
+          fail(where + "element count '" + std::string(w[2].substr(0, 40)) +
+               "' is not a non-negative integer");
         }
         h.elements.push_back(std::move(e));
       } else if (w[0] == "property") {
@@ -257,17 +273,18 @@ class Reader {
         if (w.size() == 5 && w[1] == "list") {
           prop.is_list = true;
           if (!parse_type(w[2], &prop.count_type) || !is_integer(prop.count_type)) {
-            fail(where + "list count type '" + std::string(w[2]) + "' is not an integer type");
+            fail(where + "list count type '" + std::string(w[2].substr(0, 40)) +
+                 "' is not an integer type");
           }
           if (!parse_type(w[3], &prop.type)) {
-            fail(where + "unknown property type '" + std::string(w[3]) + "'");
+            fail(where + "unknown property type '" + std::string(w[3].substr(0, 40)) + "'");
           }
-          prop.name = std::string(w[4]);
+          prop.name = std::string(w[4].substr(0, 40));
         } else if (w.size() == 3) {
           if (!parse_type(w[1], &prop.type)) {
-            fail(where + "unknown property type '" + std::string(w[1]) + "'");
+            fail(where + "unknown property type '" + std::string(w[1].substr(0, 40)) + "'");
           }
-          prop.name = std::string(w[2]);
+          prop.name = std::string(w[2].substr(0, 40));
         } else {
           fail(where + "expected 'property <type> <name>' or 'property list <type> <type> <name>'");
         }
@@ -276,7 +293,7 @@ class Reader {
         }
         h.elements.back().props.push_back(std::move(prop));
       } else {
-        fail(where + "unexpected '" + std::string(w[0]) + "'");
+        fail(where + "unexpected '" + std::string(w[0].substr(0, 40)) + "'");
       }
     }
   }
@@ -296,15 +313,24 @@ class Reader {
 
   void check_count(Format format, const Element& e, const unsigned char* p,
                    const unsigned char* end) const {
+    const std::string where = "header line " + std::to_string(e.line) + ": element '" + e.name +
+                              "' declares " + std::to_string(e.count) + " records";
+    if (e.name == "vertex" && e.count > kMaxFrameGrains)
+      fail(where + ", more than the limit of " + std::to_string(kMaxFrameGrains) + " grains");
     const std::size_t min_bytes = min_record_bytes(format, e);
     if (min_bytes == 0) return;
     // The last ascii token needs no trailing separator.
     const std::size_t avail = static_cast<std::size_t>(end - p) + (format == Format::Ascii);
     if (e.count > avail / min_bytes) {
-      fail("element '" + e.name + "' declares " + std::to_string(e.count) + " records but only " +
-           std::to_string(end - p) +
+      fail(where + " but only " + std::to_string(end - p) +
            " bytes of data follow the header (truncated file or corrupt count)");
     }
+  }
+
+  // "line 12: element 'vertex' record 3: " (ascii) or "byte 480: element 'vertex' record 3: "
+  std::string record_place(Format format, const unsigned char* p, const Element& e,
+                           std::uint64_t record) const {
+    return place(format, p) + ": element '" + e.name + "' record " + std::to_string(record) + ": ";
   }
 
   // Reads the next ascii number; fails naming the record when the data ends or is not a number.
@@ -313,14 +339,15 @@ class Reader {
     while (p < end && std::isspace(*p)) ++p;
     const unsigned char* start = p;
     while (p < end && !std::isspace(*p)) ++p;
-    auto where = [&] { return "element '" + e.name + "' record " + std::to_string(record) + ": "; };
-    if (start == p) fail(where() + "unexpected end of data (truncated file)");
+    if (start == p)
+      fail(record_place(Format::Ascii, p, e, record) + "unexpected end of data (truncated file)");
     const char* b = reinterpret_cast<const char*>(start);
     const char* t = reinterpret_cast<const char*>(p);
     double v = 0;
     const auto r = std::from_chars(b, t, v);
     if (r.ec != std::errc() || r.ptr != t) {
-      fail(where() + "'" + std::string(b, t) + "' is not a number");
+      fail(record_place(Format::Ascii, start, e, record) + "'" +
+           std::string(b, std::min<std::size_t>(t - b, 40)) + "' is not a number");
     }
     return v;
   }
@@ -329,17 +356,18 @@ class Reader {
                      std::uint64_t record) const {
     const std::size_t n = type_size(t);
     if (static_cast<std::size_t>(end - p) < n) {
-      fail("element '" + e.name + "' record " + std::to_string(record) +
-           ": unexpected end of data (truncated file)");
+      fail(record_place(Format::BinaryLE, p, e, record) +
+           "unexpected end of data (truncated file)");
     }
     const double v = decode_le(p, t);
     p += n;
     return v;
   }
 
-  std::uint64_t list_count(double v, const Element& e, std::uint64_t record) const {
+  std::uint64_t list_count(double v, Format format, const unsigned char* at, const Element& e,
+                           std::uint64_t record) const {
     if (!(v >= 0) || v != std::floor(v) || v > 4.0e9) {
-      fail("element '" + e.name + "' record " + std::to_string(record) + ": bad list length");
+      fail(record_place(format, at, e, record) + "bad list length");
     }
     return static_cast<std::uint64_t>(v);
   }
@@ -350,21 +378,22 @@ class Reader {
                    const unsigned char* end, double* out) const {
     for (std::size_t k = 0; k < e.props.size(); ++k) {
       const Property& prop = e.props[k];
+      const unsigned char* at = p;
       if (format == Format::Ascii) {
         if (prop.is_list) {
-          const std::uint64_t n = list_count(next_ascii(p, end, e, record), e, record);
+          const std::uint64_t n = list_count(next_ascii(p, end, e, record), format, at, e, record);
           for (std::uint64_t i = 0; i < n; ++i) next_ascii(p, end, e, record);
         } else {
           out[k] = next_ascii(p, end, e, record);
         }
       } else {
         if (prop.is_list) {
-          const std::uint64_t n =
-              list_count(next_binary(p, end, prop.count_type, e, record), e, record);
+          const std::uint64_t n = list_count(next_binary(p, end, prop.count_type, e, record),
+                                             format, at, e, record);
           const std::size_t item = type_size(prop.type);
           if (n > static_cast<std::size_t>(end - p) / item) {
-            fail("element '" + e.name + "' record " + std::to_string(record) +
-                 ": list runs past the end of the file (truncated file)");
+            fail(record_place(format, at, e, record) +
+                 "list runs past the end of the file (truncated file)");
           }
           p += n * item;
         } else {
@@ -385,13 +414,14 @@ class Reader {
   FrameData read_vertices(Format format, const Element& e, const unsigned char*& p,
                           const unsigned char* end) const {
     // Map the grain fields to property indices.
+    const std::string where = "header line " + std::to_string(e.line) + ": ";
     int field[kFieldCount];
     for (int f = 0; f < kFieldCount; ++f) {
       field[f] = -1;
       for (std::size_t k = 0; k < e.props.size(); ++k) {
         if (e.props[k].name == kFieldNames[f]) {
           if (e.props[k].is_list) {
-            fail("vertex property '" + e.props[k].name + "' is a list, expected a number");
+            fail(where + "vertex property '" + e.props[k].name + "' is a list, expected a number");
           }
           field[f] = static_cast<int>(k);
         }
@@ -399,10 +429,10 @@ class Reader {
     }
     for (int f : {kX, kY, kZ}) {
       if (field[f] < 0)
-        fail("vertex element has no '" + std::string(kFieldNames[f]) + "' property");
+        fail(where + "vertex element has no '" + std::string(kFieldNames[f]) + "' property");
     }
     if (field[kRadius] < 0)
-      fail("vertex element has no 'radius' property (grain radii are needed)");
+      fail(where + "vertex element has no 'radius' property (grain radii are needed)");
     check_count(format, e, p, end);
 
     FrameData f;
@@ -415,9 +445,10 @@ class Reader {
     std::vector<double> v(e.props.size(), 0.0);
     auto get = [&](int fi, double fallback) { return field[fi] >= 0 ? v[field[fi]] : fallback; };
     for (std::size_t i = 0; i < n; ++i) {
+      const unsigned char* record = p;
       read_record(format, e, i, p, end, v.data());
-      auto bad = [this, i](const std::string& what) {
-        fail("vertex " + std::to_string(i) + ": " + what);
+      auto bad = [&](const std::string& what) {
+        fail(place(format, record) + ": vertex " + std::to_string(i) + ": " + what);
       };
       f.position[i] = {get(kX, 0), get(kY, 0), get(kZ, 0)};
       f.radius[i] = get(kRadius, 0);
@@ -426,7 +457,9 @@ class Reader {
         bad("position or velocity is not finite");
       }
       if (!(f.radius[i] > 0) || !std::isfinite(f.radius[i])) {
-        bad("radius " + std::to_string(f.radius[i]) + " is not a positive number");
+        char text[32];  // the value as written, shortest form
+        const auto end_text = std::to_chars(text, text + sizeof text, f.radius[i]).ptr;
+        bad("radius " + std::string(text, end_text) + " is not a positive number");
       }
       const double id = get(kId, static_cast<double>(i));
       if (!(id >= 0) || id > std::numeric_limits<std::uint32_t>::max() || id != std::floor(id)) {
@@ -440,11 +473,17 @@ class Reader {
     return f;
   }
 
-  std::string path_;
-  std::string data_;
+  std::string_view data_;
+  const std::string& name_;
+  int end_header_line_ = 0;
 };
 
 std::string read_file(const std::string& path) {
+  // a device or a pipe has no end to read up to (/dev/zero): frames are regular files
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    throw InputError(path + ": cannot read: not a regular file");
   errno = 0;
   FilePtr fp(std::fopen(path.c_str(), "rb"));
   if (!fp) throw InputError(path + ": cannot open: " + system_reason(errno));
@@ -515,8 +554,12 @@ void write_ply(const std::string& path, const FrameData& f, UpAxis up) {
   if (std::rename(tmp.c_str(), path.c_str()) != 0) fail("cannot rename " + tmp, errno);
 }
 
+FrameData parse_frame_ply(std::string_view bytes, const std::string& name) {
+  return Reader(bytes, name).read();
+}
+
 FrameData read_ply(const std::string& path) {
-  return Reader(path, read_file(path)).read();
+  return parse_frame_ply(read_file(path), path);
 }
 
 }  // namespace sandflow

@@ -15,7 +15,9 @@
 // crashing. Missing optional properties default to: velocity 0, id = vertex index, state 0.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <string_view>
 
 #include "io/frame.hpp"
 #include "scene/scene_config.hpp"
@@ -27,8 +29,16 @@ namespace sandflow {
 /// array must have f.size() entries (std::invalid_argument if not: a bug in the caller).
 void write_ply(const std::string& path, const FrameData& f, UpAxis up = UpAxis::Z);
 
-/// Reads a PLY point cloud written by write_ply (or any PLY described above), in the scene's frame
-/// (z up). Throws InputError naming the file and what is wrong with it.
+/// The most grains a frame may hold: as many as a scene may have (ids are 32-bit).
+inline constexpr std::uint64_t kMaxFrameGrains = 2'000'000'000;
+
+/// Reads a PLY point cloud written by write_ply (or any PLY described above) from a regular
+/// file, in the scene's frame (z up: a y-up file is turned back). Throws InputError naming the file, the place ("header line N", then "line N" in ascii
+/// data or "byte N" in binary data) and what is wrong.
 FrameData read_ply(const std::string& path);
+
+/// Parses PLY data already in memory, `name` standing for the file in messages; the same checks
+/// and messages as read_ply. The entry point for fuzzing.
+FrameData parse_frame_ply(std::string_view bytes, const std::string& name);
 
 }  // namespace sandflow

@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <concepts>
@@ -33,6 +34,7 @@
 #include "geometry/heightmap.hpp"
 #include "io/export_formats.hpp"
 #include "io/png_gray.hpp"
+#include "surface/surface_params.hpp"
 
 namespace sandflow {
 namespace {
@@ -47,6 +49,11 @@ std::string format_real(Real v) {
   char buf[32];
   const auto res = std::to_chars(buf, buf + sizeof buf, v);  // shortest round-trip form
   return std::string(buf, res.ptr);
+}
+
+// A whole number as digits (1e5 -> "100000"), a huge or non-finite one as format_real() has it.
+std::string format_count(Real v) {
+  return std::abs(v) < 9e18 ? std::to_string(static_cast<long long>(v)) : format_real(v);
 }
 
 std::string type_name(const toml::node& n) {
@@ -139,8 +146,9 @@ constexpr Range open(Real lo, Real hi) {
   return {lo, hi, true, true};
 }
 
-// The most grains one emitter may make: far above any scene we run, far below overflow.
-constexpr std::int64_t kMaxEmitterCount = 2'000'000'000;
+// The most grains a scene may make, in one emitter or in all: far above any scene we run, below
+// 2^31 (grain ids are 32-bit) and what `--grains` accepts.
+constexpr std::int64_t kMaxGrains = 2'000'000'000;
 
 template <class E>
 using Choices = std::pair<std::string_view, E>;
@@ -537,8 +545,8 @@ void read_stiffness(TableReader r, StiffnessConfig& k) {
   r.finish("[stiffness]");
 }
 
-// Angles are written in degrees and stored in radians.
-void read_surface(TableReader r, SurfaceConfig& s) {
+// Angles are written in degrees and stored in radians. `diameter` is the default cell size.
+void read_surface(TableReader r, SurfaceConfig& s, Real diameter) {
   r.read("cell_size", s.cell_size, kPositive);
   r.read("exchange_rate", s.exchange_rate, kPositive);
   std::optional<Real> repose_deg;
@@ -572,6 +580,19 @@ void read_surface(TableReader r, SurfaceConfig& s) {
       r.fail_at("extent", r.name("extent") + " = [" + format_real(x0) + ", " + format_real(y0) +
                               ", " + format_real(x1) + ", " + format_real(y1) +
                               "]: expected [x0, y0, x1, y1] with x1 > x0 and y1 > y0");
+    // the grid the extent makes, refused here with its place when too large (without an extent,
+    // surface_params() refuses it once the geometry gives the domain)
+    const Real cell = s.cell_size.value_or(diameter);
+    const Real nx = std::ceil((x1 - x0) / cell), ny = std::ceil((y1 - y0) / cell);
+    if (!(nx * ny <= static_cast<Real>(kMaxHeightFieldColumns)))
+      r.fail_at(s.cell_size ? "cell_size" : "extent",
+                r.name("extent") + " at " +
+                    (s.cell_size ? r.name("cell_size") + " = " + format_real(cell) + " m"
+                                 : "a cell size of " + format_real(cell) +
+                                       " m (the grain diameter: cell_size unset)") +
+                    " makes a height field of " + format_count(nx) + " x " + format_count(ny) +
+                    " columns, more than the limit of " + std::to_string(kMaxHeightFieldColumns) +
+                    ": set a larger cell_size or a smaller extent");
   }
 }
 
@@ -635,7 +656,8 @@ void read_camera(TableReader r, CameraConfig& c) {
 }
 
 // A heightmap's samples: inline `heights`, a grey PNG `file` or procedural `noise`, exactly one.
-void read_heightmap(TableReader& r, GeometryConfig& g, const std::string& scene_path) {
+void read_heightmap(TableReader& r, GeometryConfig& g, const std::string& scene_path,
+                    const ImageReader& read_image) {
   std::optional<std::array<Real, 4>> extent;
   r.require("extent", "[x0, y0, x1, y1], the rectangle the terrain covers");
   r.read("extent", extent);
@@ -690,7 +712,7 @@ void read_heightmap(TableReader& r, GeometryConfig& g, const std::string& scene_
     const std::string what = r.name("file") + " = " + in_quotes(file) + ": ";
     GrayImage img;
     try {
-      img = read_gray_png(g.file, kMaxHeightmapSide);
+      img = read_image(g.file, kMaxHeightmapSide);
     } catch (const InputError& e) {
       r.fail_at("file", what + e.what());
     }
@@ -709,7 +731,8 @@ void read_heightmap(TableReader& r, GeometryConfig& g, const std::string& scene_
   }
 }
 
-GeometryConfig read_geometry(TableReader r, std::size_t index, const std::string& scene_path) {
+GeometryConfig read_geometry(TableReader r, std::size_t index, const std::string& scene_path,
+                             const ImageReader& read_image) {
   GeometryConfig g;
   g.name = "geometry " + std::to_string(index);
   r.read("type", g.type, kGeometryTypes);
@@ -769,7 +792,7 @@ GeometryConfig read_geometry(TableReader r, std::size_t index, const std::string
                                ": expected depth in (0, 2 radius), 2 radius being a closed sphere");
       break;
     case GeometryType::Heightmap:
-      read_heightmap(r, g, scene_path);
+      read_heightmap(r, g, scene_path, read_image);
       break;
     case GeometryType::Mesh: {
       r.read("file", g.mesh_file);
@@ -801,7 +824,7 @@ EmitterConfig read_emitter(TableReader r, std::size_t index) {
   r.read("type", e.type, kEmitterTypes);
   r.read("name", e.name);
   r.require("count", "the number of grains to emit, an integer >= 1");
-  r.read("count", e.count, closed(1, static_cast<Real>(kMaxEmitterCount)));
+  r.read("count", e.count, closed(1, static_cast<Real>(kMaxGrains)));
   r.read("start", e.start, kNonNegative);
   r.read("velocity", e.velocity);
   r.read("jitter", e.jitter, closed(0, 1));
@@ -833,7 +856,8 @@ EmitterConfig read_emitter(TableReader r, std::size_t index) {
   return e;
 }
 
-SceneConfig read_scene(const toml::table& root, const std::string& path) {
+SceneConfig read_scene(const toml::table& root, const std::string& path,
+                       const ImageReader& read_image) {
   const Places places(path);
   SceneConfig c;
   c.path = path;
@@ -851,26 +875,221 @@ SceneConfig read_scene(const toml::table& root, const std::string& path) {
     read_simulation({places, *t, "simulation"}, c.simulation);
   if (const auto* t = doc.table("stiffness"))
     read_stiffness({places, *t, "stiffness"}, c.stiffness);
-  if (const auto* t = doc.table("surface")) read_surface({places, *t, "surface"}, c.surface);
+  if (const auto* t = doc.table("surface"))
+    read_surface({places, *t, "surface"}, c.surface, c.material.diameter);
   if (const auto* t = doc.table("output")) read_output({places, *t, "output"}, c.output);
   if (const auto* t = doc.table("camera")) read_camera({places, *t, "camera"}, c.camera);
 
   if (const auto* a = doc.array_of_tables("geometry")) {
     for (std::size_t i = 0; i < a->size(); ++i) {
       const std::string prefix = "geometry[" + std::to_string(i) + "]";
-      c.geometry.push_back(read_geometry({places, *a->get(i)->as_table(), prefix}, i, path));
+      c.geometry.push_back(
+          read_geometry({places, *a->get(i)->as_table(), prefix}, i, path, read_image));
     }
   }
   const auto* emitters = doc.array_of_tables("emitter");
   if (!emitters || emitters->empty())
     doc.fail_at("emitter", "emitter: a scene needs at least one [[emitter]] table, found none");
+  std::int64_t total = 0;
   for (std::size_t i = 0; i < emitters->size(); ++i) {
     const std::string prefix = "emitter[" + std::to_string(i) + "]";
-    c.emitters.push_back(read_emitter({places, *emitters->get(i)->as_table(), prefix}, i));
+    const TableReader r(places, *emitters->get(i)->as_table(), prefix);
+    c.emitters.push_back(read_emitter(r, i));
+    total += c.emitters.back().count;  // each at most kMaxGrains: the sum cannot overflow here
+    if (total > kMaxGrains)
+      r.fail_at("count", r.name("count") + " = " + std::to_string(c.emitters.back().count) +
+                             " brings the scene to " + std::to_string(total) +
+                             " grains, more than the limit of " + std::to_string(kMaxGrains) +
+                             " in all");
   }
 
   doc.finish("a scene file");
   return c;
+}
+
+// ---- Parsing ------------------------------------------------------------------------------------
+
+// What Debian's toml++ 3.3 cannot be given safely, found before it sees the text:
+// - It recurses once per level of table nesting when it finishes a document, so a dotted key of
+//   100,000 parts (a.a.a...) overflows the stack. It caps the nesting of inline tables and arrays
+//   itself (256 levels); the parts of a dotted key or table name are capped here, so no document
+//   nests deeper than about 256 x 16 levels.
+// - Its test for Unicode whitespace reaches __builtin_unreachable() for most non-ASCII characters
+//   (upstream issues 190 and 295, undefined behaviour), and it makes that test on characters
+//   outside strings and comments (even inside a malformed value: 1'Z'), and after a backslash in
+//   a """multi-line string""". TOML allows non-ASCII characters only in strings and comments, so
+//   the first is an error anyway; the second is refused too.
+// toml_hazard() follows TOML's grammar far enough to know where a string may start: at the start
+// of a key, a table name or a value, never inside another token. A text it misreads is one
+// toml++ refuses at or before that point, so a character it takes for part of a string is one
+// toml++ reads as such or never reads.
+constexpr int kMaxKeyParts = 16;
+
+struct TomlHazard {
+  std::size_t line = 1, column = 1;
+  std::string what;
+};
+
+std::optional<TomlHazard> toml_hazard(std::string_view text) {
+  // What the grammar expects next: a key (at a line's start, after '{' or ',' in an inline table,
+  // after a key's '.'), a table name (after '[' at a line's start, after its '.'), a value (after
+  // '=', '[' or ',' in an array), or nothing a string may start (Other).
+  enum class Expect { Key, KeyPart, Table, TablePart, Value, Other };
+  enum class Open { Array, InlineTable };
+  const auto key_char = [](char ch) {
+    return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-';
+  };
+  const auto value_char = [&](char ch) {  // bare values: numbers, dates, true, inf, nan
+    return key_char(ch) || ch == '+' || ch == '.' || ch == ':';
+  };
+  const auto ascii = [](char ch) { return static_cast<unsigned char>(ch) < 0x80; };
+  std::size_t i = 0, line = 1, line_start = 0;
+  const auto hazard = [&](std::size_t at, std::string what) {
+    return TomlHazard{line, at - line_start + 1, std::move(what)};
+  };
+  Expect expect = Expect::Key;
+  std::vector<Open> open;  // the arrays and inline tables around i
+  int parts = 0;           // parts of the key or table name being read
+  // Skips a string opened at i by `quote`, by TOML's rules (escapes only in "basic" strings; a
+  // multi-line string's closing triple may be followed by one or two quotes of its content).
+  const auto skip_string = [&](char quote) -> std::optional<TomlHazard> {
+    const bool multi = text.substr(i, 3) == std::string(3, quote);
+    i += multi ? 3 : 1;
+    while (i < text.size()) {
+      const char ch = text[i];
+      if (ch == '\\' && quote == '"' && multi) {
+        // an escape, or a line-ending backslash that trims the whitespace after it
+        std::size_t j = i + 1;
+        while (j < text.size() && (text[j] == ' ' || text[j] == '\t' || text[j] == '\r' ||
+                                   text[j] == '\n')) {
+          if (text[j] == '\n') {
+            ++line;
+            line_start = j + 1;
+          }
+          ++j;
+        }
+        if (j < text.size() && !ascii(text[j]))
+          return hazard(j, "a non-ASCII character after a backslash in a multi-line string, "
+                           "which the TOML library cannot read safely: write it as \\uXXXX");
+        i = j == i + 1 ? i + 2 : j;
+      } else if (ch == '\\' && quote == '"') {
+        i += text.substr(i + 1, 1) == "\n" ? 1 : 2;
+      } else if (ch == '\n') {
+        if (!multi) return std::nullopt;  // an unterminated string: toml++ reports it
+        ++line;
+        line_start = ++i;
+      } else if (ch != quote) {
+        ++i;
+      } else if (!multi) {
+        ++i;
+        return std::nullopt;
+      } else if (text.substr(i, 3) == std::string(3, quote)) {
+        i += 3;
+        for (int extra = 0; extra < 2 && i < text.size() && text[i] == quote; ++extra) ++i;
+        return std::nullopt;
+      } else {
+        ++i;
+      }
+    }
+    return std::nullopt;
+  };
+  // One more part of a key or table name.
+  const auto part = [&](std::size_t at) -> std::optional<TomlHazard> {
+    if (++parts > kMaxKeyParts)
+      return hazard(at, "a dotted key or table name of more than " +
+                            std::to_string(kMaxKeyParts) + " parts: expected at most " +
+                            std::to_string(kMaxKeyParts));
+    return std::nullopt;
+  };
+  while (i < text.size()) {
+    const std::size_t at = i;
+    const char ch = text[i];
+    const bool key_like = expect == Expect::Key || expect == Expect::Table;
+    if (ch == '\n') {
+      ++line;
+      line_start = ++i;
+      if (open.empty()) {
+        expect = Expect::Key;
+        parts = 0;
+      }
+    } else if (ch == ' ' || ch == '\t' || ch == '\r') {
+      ++i;
+    } else if (ch == '#') {
+      while (i < text.size() && text[i] != '\n') ++i;
+    } else if (!ascii(ch)) {
+      return hazard(at, "a non-ASCII character outside a string or comment: TOML allows them "
+                        "only in \"strings\" and # comments");
+    } else if (ch == '"' || ch == '\'') {
+      if (key_like || expect == Expect::Value) {
+        if (auto h = skip_string(ch)) return h;
+        if (key_like)
+          if (auto h = part(at)) return h;
+        expect = expect == Expect::Key     ? Expect::KeyPart
+                 : expect == Expect::Table ? Expect::TablePart
+                                           : Expect::Other;
+      } else {
+        expect = Expect::Other;  // not where a string may start: toml++ refuses it
+        ++i;
+      }
+    } else if (key_like && key_char(ch)) {
+      while (i < text.size() && key_char(text[i])) ++i;
+      if (auto h = part(at)) return h;
+      expect = expect == Expect::Key ? Expect::KeyPart : Expect::TablePart;
+    } else if (value_char(ch) && !(ch == '.' && (expect == Expect::KeyPart ||
+                                                 expect == Expect::TablePart))) {
+      while (i < text.size() && value_char(text[i])) ++i;
+      expect = Expect::Other;
+    } else {
+      ++i;
+      const bool in_array = !open.empty() && open.back() == Open::Array;
+      const bool in_table = !open.empty() && open.back() == Open::InlineTable;
+      if (ch == '.' && expect == Expect::KeyPart) {
+        expect = Expect::Key;
+      } else if (ch == '.' && expect == Expect::TablePart) {
+        expect = Expect::Table;
+      } else if (ch == '=' && expect == Expect::KeyPart) {
+        expect = Expect::Value;
+      } else if (ch == '[' && expect == Expect::Key && open.empty() && parts == 0) {
+        expect = Expect::Table;  // [table] or [[array of tables]]
+      } else if (ch == '[' && expect == Expect::Table && parts == 0) {
+        // the second '[' of [[
+      } else if (ch == '[' && expect == Expect::Value) {
+        open.push_back(Open::Array);
+      } else if (ch == '{' && expect == Expect::Value) {
+        open.push_back(Open::InlineTable);
+        expect = Expect::Key;
+        parts = 0;
+      } else if (ch == ']' && in_array && expect != Expect::TablePart) {
+        open.pop_back();
+        expect = Expect::Other;
+      } else if (ch == '}' && in_table) {
+        open.pop_back();
+        expect = Expect::Other;
+      } else if (ch == ',' && in_array) {
+        expect = Expect::Value;
+      } else if (ch == ',' && in_table) {
+        expect = Expect::Key;
+        parts = 0;
+      } else {
+        expect = Expect::Other;
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+// toml::parse of a text checked by toml_hazard(); `name` is the source path of its nodes.
+toml::table parse_toml(std::string_view text, const std::string& name) {
+  if (const auto h = toml_hazard(text))
+    throw InputError(name + ":" + std::to_string(h->line) + ":" + std::to_string(h->column) + ": " +
+                     h->what);
+  try {
+    return toml::parse(text, std::string_view(name));
+  } catch (const toml::parse_error& err) {
+    const auto& at = err.source().begin;
+    throw InputError(name + ":" + std::to_string(at.line) + ":" + std::to_string(at.column) + ": " +
+                     std::string(err.description()));
+  }
 }
 
 // ---- Overrides ----------------------------------------------------------------------------------
@@ -921,15 +1140,21 @@ std::optional<std::size_t> parse_index(const std::string& s) {
 // path. Text that is not a TOML value is taken as a bare string, so --set simulation.mode=dem
 // works.
 toml::table parse_override_value(const Override& o, const std::string& where) {
+  const std::string doc = "v = " + o.value;
   try {
-    toml::table t = toml::parse("v = " + o.value, std::string_view(where));
-    if (t.size() == 1 && t.contains("v")) return t;  // not "1\nw = 2" smuggling in more keys
+    if (!toml_hazard(doc)) {  // else a string (toml++ could not parse it safely)
+      toml::table t = toml::parse(doc, std::string_view(where));
+      if (t.size() == 1 && t.contains("v")) return t;  // not "1\nw = 2" smuggling in more keys
+    }
   } catch (const toml::parse_error&) {
   }
   std::ostringstream quoted;
   quoted << toml::value<std::string>(o.value);
+  const std::string as_string = "v = " + quoted.str();
+  if (const auto h = toml_hazard(as_string))
+    fail(where, "cannot read the value " + in_quotes(o.value) + ": " + h->what);
   try {
-    return toml::parse("v = " + quoted.str(), std::string_view(where));
+    return toml::parse(as_string, std::string_view(where));
   } catch (const toml::parse_error& err) {
     fail(where,
          "cannot read the value " + in_quotes(o.value) + ": " + std::string(err.description()));
@@ -1004,17 +1229,14 @@ Override parse_override(const std::string& arg) {
 }
 
 SceneConfig load_scene_from_string(const std::string& text, const std::string& name,
-                                   const std::vector<Override>& overrides) {
-  toml::table root;
-  try {
-    root = toml::parse(text, std::string_view(name));
-  } catch (const toml::parse_error& err) {
-    const auto& at = err.source().begin;
-    throw InputError(name + ":" + std::to_string(at.line) + ":" + std::to_string(at.column) + ": " +
-                     std::string(err.description()));
-  }
+                                   const std::vector<Override>& overrides,
+                                   const ImageReader& read_image) {
+  if (text.size() > kMaxSceneBytes)
+    throw InputError(name + ": the scene is " + std::to_string(text.size()) +
+                     " bytes, more than the limit of " + std::to_string(kMaxSceneBytes));
+  toml::table root = parse_toml(text, name);
   for (const auto& o : overrides) apply_override(root, o);
-  return read_scene(root, name);
+  return read_scene(root, name, read_image);
 }
 
 SceneConfig load_scene(const std::string& path, const std::vector<Override>& overrides) {
@@ -1023,10 +1245,17 @@ SceneConfig load_scene(const std::string& path, const std::vector<Override>& ove
     throw InputError(path + ": cannot open scene file (it is a directory)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open scene file");
-  std::ostringstream text;
-  text << in.rdbuf();
+  // read in pieces up to the limit: a pipe or a device has no size to check first
+  std::string text;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    if (text.size() + static_cast<std::size_t>(in.gcount()) > kMaxSceneBytes)
+      throw InputError(path + ": the scene file is larger than the limit of " +
+                       std::to_string(kMaxSceneBytes) + " bytes");
+    text.append(buf, static_cast<std::size_t>(in.gcount()));
+  }
   if (in.bad()) throw InputError(path + ": cannot read scene file");
-  return load_scene_from_string(text.str(), path, overrides);
+  return load_scene_from_string(text, path, overrides);
 }
 
 }  // namespace sandflow

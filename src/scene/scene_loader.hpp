@@ -3,9 +3,12 @@
 // outside (0, 1]". Unknown keys, wrong types and out-of-range values are all errors.
 #pragma once
 
+#include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "io/png_gray.hpp"
 #include "scene/scene_config.hpp"
 
 namespace sandflow {
@@ -17,12 +20,21 @@ struct Override {
   std::string value;
 };
 
+/// Largest scene file [bytes]. toml++ takes about 35 times the text in memory at worst (a long
+/// array of "0,"), so this bounds the parse to about 1 GB; a large terrain belongs in a PNG.
+inline constexpr std::size_t kMaxSceneBytes = std::size_t{32} << 20;
+
+/// How the loader reads a heightmap's image file (path, largest side); read_gray_png by default.
+using ImageReader = std::function<GrayImage(const std::string& path, int max_side)>;
+
 /// Parses and validates a scene file, applying the overrides first (with the same validation).
 SceneConfig load_scene(const std::string& path, const std::vector<Override>& overrides = {});
 
 /// Parses and validates a scene given as text (for tests); `name` stands in for the file name.
+/// A heightmap's `file` is read by `read_image`: the fuzzer passes one that opens nothing.
 SceneConfig load_scene_from_string(const std::string& text, const std::string& name,
-                                   const std::vector<Override>& overrides = {});
+                                   const std::vector<Override>& overrides = {},
+                                   const ImageReader& read_image = read_gray_png);
 
 /// Splits "KEY=VALUE"; throws InputError when there is no '='.
 Override parse_override(const std::string& arg);

@@ -11,7 +11,6 @@
 namespace sandflow {
 
 namespace {
-constexpr std::size_t kMaxColumns = 16u << 20;  // 16 M columns: 128 MB per field
 Real gravity_magnitude(const SceneConfig& s) { return norm(s.simulation.gravity); }
 }  // namespace
 
@@ -86,11 +85,11 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   }
   if (!have) x0 = y0 = -heap, x1 = y1 = heap;
   const Real nxf = std::ceil((x1 - x0) / hf.cell), nyf = std::ceil((y1 - y0) / hf.cell);
-  if (nxf * nyf > static_cast<Real>(kMaxColumns))
+  if (!(nxf * nyf <= static_cast<Real>(kMaxHeightFieldColumns)))  // NaN too
     throw InputError(fmt::format(
         "{}: the height field would need {:.0f} x {:.0f} columns of {:.4g} m (at most {}): set a "
         "larger surface.cell_size or a smaller surface.extent",
-        scene.path, nxf, nyf, hf.cell, kMaxColumns));
+        scene.path, nxf, nyf, hf.cell, kMaxHeightFieldColumns));
   hf.nx = std::max(1, static_cast<int>(nxf));
   hf.ny = std::max(1, static_cast<int>(nyf));
   // centre the whole columns on the extent

@@ -11,6 +11,10 @@
 
 namespace sandflow {
 
+/// The most columns a height field may have (16 M: 128 MB per field); the scene loader refuses a
+/// surface.extent that needs more, surface_params() a domain from the geometry that does.
+constexpr std::size_t kMaxHeightFieldColumns = 16u << 20;
+
 /// Random packing fraction of a heap, for the volume the grains of a scene take.
 constexpr Real kHeapPacking = 0.6;
 

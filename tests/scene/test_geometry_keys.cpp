@@ -211,7 +211,7 @@ TEST(GeometryKeys, HeightmapFileErrors) {
   // not a PNG
   tmp.write("text.png", "hello");
   msg = error_loading(scene("text.png"));
-  EXPECT_NE(msg.find("text.png: not a PNG image"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("text.png: byte 0: not a PNG image"), std::string::npos) << msg;
   // colour
   {
     png_image img{};
@@ -223,13 +223,13 @@ TEST(GeometryKeys, HeightmapFileErrors) {
     ASSERT_TRUE(png_image_write_to_file(&img, tmp.path("rgb.png").c_str(), 0, rgb.data(), 0, nullptr));
   }
   msg = error_loading(scene("rgb.png"));
-  EXPECT_NE(msg.find("rgb.png: a colour PNG (RGB): a heightmap must be a grey-scale PNG"),
+  EXPECT_NE(msg.find("rgb.png: byte 25: a colour PNG (RGB): a heightmap must be a grey-scale PNG"),
             std::string::npos)
       << msg;
   // too large: refused from its header
   write_gray_png(tmp.path("wide.png"), 4097, 2, std::vector<double>(2 * 4097, 0.5), 8);
   msg = error_loading(scene("wide.png"));
-  EXPECT_NE(msg.find("wide.png: the image is 4097 x 2 pixels: at most 4096 x 4096"),
+  EXPECT_NE(msg.find("wide.png: byte 16: the image is 4097 x 2 pixels: at most 4096 x 4096"),
             std::string::npos)
       << msg;
   // too small

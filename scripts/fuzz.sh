@@ -1,0 +1,111 @@
+#!/usr/bin/env bash
+# Fuzzes each reader of user files with libFuzzer (docs/fuzzing.md):
+#   scripts/fuzz.sh [SECONDS]     each target for SECONDS (default 300), one after the other
+# Installs clang if missing (Debian 12 packages), builds the targets in build-fuzz/ (ASan + UBSan,
+# the library instrumented for coverage), seeds each from the repository's good and malformed
+# files, and prints per target the number of inputs tried and whether it found anything. What a
+# target finds is left in build-fuzz/findings/TARGET/; what it learnt (its corpus) is kept in
+# build-fuzz/corpus/TARGET/ for the next run. Exit status: 0 no finding, 1 a finding, 2 bad usage.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+seconds=${1:-300}
+if ! [[ "$seconds" =~ ^[0-9]+$ ]] || ((seconds < 1)); then
+  echo "usage: scripts/fuzz.sh [SECONDS]   (SECONDS per target, a whole number >= 1; default 300)" >&2
+  exit 2
+fi
+
+# The targets, one per reader. The checkpoint reader joins with fuzz/fuzz_checkpoint.cpp, its
+# name here and in fuzz/CMakeLists.txt, and a seeds_checkpoint function below.
+targets=(scene mesh frame_ply png)
+
+# 1. Debian packages (only the missing ones are installed), as setup.sh does
+packages=(clang libclang-rt-14-dev libomp-dev cmake make pkg-config libtomlplusplus-dev
+          libcli11-dev libfmt-dev nlohmann-json3-dev libpng-dev zlib1g-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "==> installing: ${missing[*]}"
+  sudo=""; [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# 2. Build (clang, -fsanitize=fuzzer,address,undefined)
+build=build-fuzz
+echo "==> building the fuzz targets in $build"
+mkdir -p "$build"
+CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSANDFLOW_FUZZ=ON \
+  -DSANDFLOW_TESTS=OFF -DSANDFLOW_BENCH=OFF > "$build/cmake.log" 2>&1 ||
+  { cat "$build/cmake.log"; exit 1; }
+cmake --build "$build" -j "$(nproc)" --target "${targets[@]/#/fuzz_}"
+
+# 3. Seeds: the repository's files, copied fresh each run (a seed of the mesh target starts with
+#    the byte that picks its format: fuzz/fuzz_mesh.cpp)
+seeds_scene() {
+  cp scenes/*.toml tests/data/scenes/bad/*.toml "$1/"
+  { cat scenes/floor.toml; printf '\n#--set\nmaterial.friction=0.5\nemitter.0.rate=4000\n'; } \
+    > "$1/floor_with_overrides.toml"
+}
+seeds_mesh() {
+  local f name prefix
+  for f in tests/data/meshes/*.* tests/data/meshes/bad/*; do
+    name=$(basename "$f")
+    case "$name" in
+      *.obj | *.obj.gz) prefix=o ;;
+      *.ply | *.ply.gz) prefix=p ;;
+      *.off | *.off.gz) prefix=f ;;
+      *) continue ;;
+    esac
+    { printf %s "$prefix"; cat "$f"; } > "$1/$name"
+  done
+}
+seeds_frame_ply() { cp tests/data/frames/*.ply tests/data/frames/bad/*.ply "$1/"; }
+seeds_png() { cp tests/data/png/*.png tests/data/png/bad/*.png "$1/"; }
+
+# The dictionaries: TOML syntax plus every key and word the scene loader reads
+{
+  cat fuzz/toml.dict
+  grep -oE '(read|table|array_of_tables|require|has|fail_at)\("[a-z_]+"' src/scene/scene_loader.cpp |
+    sed -E 's/.*\("([a-z_]+)"/"\1"/'
+  grep -oE '\{"[a-z]+", [A-Za-z]+::' src/scene/scene_loader.cpp | sed -E 's/\{("[a-z]+").*/\1/'
+} | sort -u > "$build/scene.dict"
+cat fuzz/ply.dict fuzz/mesh.dict > "$build/mesh.dict"
+cp fuzz/ply.dict "$build/frame_ply.dict"
+cp fuzz/png.dict "$build/png.dict"
+
+# 4. Run each target in turn
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1}
+declare -A tried result
+status=0
+for t in "${targets[@]}"; do
+  seeds="$build/seeds/$t" corpus="$build/corpus/$t" findings="$build/findings/$t"
+  rm -rf "$seeds" && mkdir -p "$seeds" "$corpus" "$findings"
+  "seeds_$t" "$seeds"
+  log="$build/fuzz_$t.log"
+  echo "==> fuzzing $t for $seconds s (log: $log)"
+  # -timeout: an input that takes 10 s is a hang; -rss_limit_mb: 2 GB of memory is a leak or an
+  # unbounded allocation (a single allocation beyond it too)
+  set +e
+  "$build/fuzz/fuzz_$t" "$corpus" "$seeds" -dict="$build/$t.dict" -max_total_time="$seconds" \
+    -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$findings/" > "$log" 2>&1
+  rc=$?
+  set -e
+  tried[$t]=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' | tail -1)
+  found=$(find "$findings" -type f | sort)
+  if [ -n "$found" ] || [ "$rc" -ne 0 ]; then
+    result[$t]="FOUND (exit $rc): ${found:-see $log}"
+    status=1
+  else
+    result[$t]="nothing found"
+  fi
+  echo "    $t: ${tried[$t]:-?} inputs tried, ${result[$t]}"
+done
+
+echo "==> summary ($seconds s per target)"
+printf '%-10s %14s  %s\n' target "inputs tried" result
+for t in "${targets[@]}"; do printf '%-10s %14s  %s\n' "$t" "${tried[$t]:-?}" "${result[$t]}"; done
+exit $status
