@@ -1,7 +1,8 @@
 // The progress line of long commands: frame, grains, speed, ETA. Redrawn in place on a terminal;
-// on a pipe or a file, one plain line every so often instead.
+// on a pipe or a file, one plain line every 5 % of the frames instead.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <string>
@@ -21,7 +22,8 @@ class Progress {
       : label_(std::move(label)),
         total_(total_frames),
         first_(first_frame),
-        tty_(isatty(STDERR_FILENO) != 0) {}
+        tty_(isatty(STDERR_FILENO) != 0),
+        plain_every_(std::max(1, total_frames / 20)) {}
 
   /// `simulated`: grains in the DEM (active + interface), shown when below `grains`.
   void update(int frame, std::int64_t grains, std::int64_t simulated = -1) {
@@ -37,9 +39,8 @@ class Progress {
     if (tty_) {
       std::fprintf(stderr, "\r%s\033[K", line.c_str());
       if (frame == total_) std::fputc('\n', stderr);
-    } else if (elapsed - last_plain_ >= 30.0 || frame == total_) {
-      std::fprintf(stderr, "%s\n", line.c_str());
-      last_plain_ = elapsed;
+    } else if (frame % plain_every_ == 0 || frame == total_) {
+      std::fprintf(stderr, "%s\n", line.c_str());  // a log gets ~20 lines a run, not one a frame
     }
     std::fflush(stderr);
   }
@@ -57,7 +58,7 @@ class Progress {
   int first_;
   bool tty_;
   Stopwatch clock_;
-  double last_plain_ = 0;
+  int plain_every_;  ///< frames between plain lines (stderr not a terminal)
 };
 
 }  // namespace sandflow
