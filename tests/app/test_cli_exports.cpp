@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -15,6 +14,7 @@
 #include "cli_runner.hpp"
 #include "io/ply.hpp"
 #include "io/png_gray.hpp"
+#include "support/xml_tags.hpp"
 
 namespace fs = std::filesystem;
 
@@ -64,13 +64,11 @@ TEST(CliExports, EveryFormatForEveryFrame) {
   EXPECT_TRUE(fs::exists(out / "frames" / "pov_scene.inc"));
   // the series lists the three frames with their times (fps 30)
   const std::string pvd = read_text(out / "frames.pvd");
-  const std::regex re("timestep=\"([^\"]+)\"[^>]*file=\"frames/(\\d{4})\\.vtp\"");
   int k = 0;
-  for (auto it = std::sregex_iterator(pvd.begin(), pvd.end(), re); it != std::sregex_iterator();
-       ++it) {
+  for (const auto& set : sandflow::test::xml_tags(pvd, "DataSet")) {
     ++k;
-    EXPECT_NEAR(std::stod((*it)[1]), k / 30.0, 1e-12);
-    EXPECT_EQ(std::stoi((*it)[2]), k);
+    EXPECT_NEAR(std::stod(set.at("timestep")), k / 30.0, 1e-12);
+    EXPECT_EQ(set.at("file"), "frames/" + frame(k, ".vtp"));
   }
   EXPECT_EQ(k, 3);
   // the height field was not asked for

@@ -14,7 +14,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -32,6 +31,7 @@
 #include "io/pov_writer.hpp"
 #include "scene/scene_loader.hpp"
 #include "scene/world.hpp"
+#include "support/xml_tags.hpp"
 #include "surface/surface_params.hpp"
 
 namespace sandflow {
@@ -206,12 +206,10 @@ TEST_F(ExportTest, VtpAppendedBlocksHoldTheArrays) {
   ASSERT_NE(start, std::string::npos);
   const std::size_t base = s.find('_', start) + 1;
   // every DataArray: its name, type and offset into the appended data
-  const std::regex re("<DataArray type=\"(\\w+)\" Name=\"(\\w+)\"[^>]*offset=\"(\\d+)\"");
   std::map<std::string, std::vector<double>> arrays;
-  for (auto it = std::sregex_iterator(s.begin(), s.begin() + static_cast<long>(start), re);
-       it != std::sregex_iterator(); ++it) {
-    const std::string type = (*it)[1], name = (*it)[2];
-    std::size_t p = base + std::stoul((*it)[3]);
+  for (const auto& a : test::xml_tags(s.substr(0, start), "DataArray")) {
+    const std::string type = a.at("type"), name = a.at("Name");
+    std::size_t p = base + std::stoul(a.at("offset"));
     std::uint64_t bytes = 0;
     std::memcpy(&bytes, s.data() + p, 8);  // little-endian, as the header says (this machine too)
     p += 8;
@@ -253,10 +251,9 @@ TEST_F(ExportTest, PvdListsFilesAndTimesInOrder) {
   write_pvd(path("s.pvd"), {{1.0 / 30, "frames/0001.vtp"}, {2.0 / 30, "frames/0002.vtp"}});
   const std::string s = read_bytes(path("s.pvd"));
   EXPECT_NE(s.find("<VTKFile type=\"Collection\""), std::string::npos);
-  const std::regex re("<DataSet timestep=\"([^\"]+)\"[^>]*file=\"([^\"]+)\"");
   std::vector<std::pair<double, std::string>> got;
-  for (auto it = std::sregex_iterator(s.begin(), s.end(), re); it != std::sregex_iterator(); ++it)
-    got.emplace_back(std::stod((*it)[1]), (*it)[2]);
+  for (const auto& set : test::xml_tags(s, "DataSet"))
+    got.emplace_back(std::stod(set.at("timestep")), set.at("file"));
   ASSERT_EQ(got.size(), 2u);
   EXPECT_EQ(got[0].first, 1.0 / 30);  // printed in full: the times read back exactly
   EXPECT_EQ(got[1].first, 2.0 / 30);
