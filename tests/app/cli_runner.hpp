@@ -1,6 +1,5 @@
 // Running the sandflow binary from a test: a scratch folder per test and the command's exit status
-// with its output. Shared by the tests of the command's subcommands (test_cli.cpp,
-// test_table1.cpp).
+// with its output, and a tiny scene. Shared by the tests of the command's subcommands.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -11,6 +10,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+
+#include <fmt/format.h>
 
 namespace sandflow_test {
 
@@ -59,6 +60,29 @@ inline std::string read_text(const fs::path& path) {
   std::stringstream ss;
   ss << std::ifstream(path).rdbuf();
   return ss.str();
+}
+
+/// The command tests' tiny scene: a block of `count` 1 cm grains, `height` tall and centred at
+/// `z`, settling on a floor; a fraction of a second a run.
+inline std::string tiny_block_scene(int count, double fps = 30, double z = 0.05,
+                                    double height = 0.06) {
+  return fmt::format(R"(
+[scene]
+name = "tiny"
+[material]
+diameter = 0.01
+k_n = 1.0e4
+[output]
+fps = {}
+[[geometry]]
+type = "plane"
+[[emitter]]
+type = "block"
+count = {}
+center = [0.0, 0.0, {}]
+size = [0.1, 0.1, {}]
+)",
+                     fps, count, z, height);
 }
 
 }  // namespace sandflow_test

@@ -25,22 +25,7 @@ using sandflow_test::Sandbox;
 using sandflow_test::sandflow;
 
 // 200 grains settling on a floor: a fraction of a second a run.
-const char* kTinyScene = R"(
-[scene]
-name = "tiny"
-[material]
-diameter = 0.01
-k_n = 1.0e4
-[output]
-fps = 30
-[[geometry]]
-type = "plane"
-[[emitter]]
-type = "block"
-count = 200
-center = [0.0, 0.0, 0.05]
-size = [0.1, 0.1, 0.06]
-)";
+const std::string kTinyScene = sandflow_test::tiny_block_scene(200);
 
 std::string frame(int n, const char* ext) {
   char buf[16];

@@ -24,22 +24,7 @@ using sandflow_test::Sandbox;
 using sandflow_test::sandflow;
 
 // 300 grains in a block resting on a floor: three frames take a fraction of a second.
-const char* kTinyScene = R"(
-[scene]
-name = "tiny"
-[material]
-diameter = 0.01
-k_n = 1.0e4
-[output]
-fps = 24
-[[geometry]]
-type = "plane"
-[[emitter]]
-type = "block"
-count = 300
-center = [0.0, 0.0, 0.08]
-size = [0.1, 0.1, 0.08]
-)";
+const std::string kTinyScene = sandflow_test::tiny_block_scene(300, 24, 0.08, 0.08);
 
 struct Rgb {
   int width = 0, height = 0;

@@ -20,22 +20,7 @@ using sandflow_test::sandflow;
 using sandflow_test::section_of;
 
 // 300 grains dropped a few centimetres onto a floor: a second of work per run
-const char* kTinyScene = R"(
-[scene]
-name = "tiny"
-[material]
-diameter = 0.01
-k_n = 1.0e4
-[output]
-fps = 30
-[[geometry]]
-type = "plane"
-[[emitter]]
-type = "block"
-count = 300
-center = [0.0, 0.0, 0.05]
-size = [0.1, 0.1, 0.06]
-)";
+const std::string kTinyScene = sandflow_test::tiny_block_scene(300);
 
 }  // namespace
 

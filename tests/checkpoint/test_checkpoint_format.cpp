@@ -11,6 +11,7 @@
 #include "checkpoint/checkpoint.hpp"
 #include "core/error.hpp"
 #include "scene/world.hpp"
+#include "support/test_scenes.hpp"
 
 namespace sandflow {
 namespace {
@@ -23,22 +24,13 @@ SceneConfig tiny_scene(Mode mode) {
   s.material.diameter = 0.01;
   s.material.diameter_spread = 0.1;
   s.output.fps = 120;
-  GeometryConfig floor;
-  floor.type = GeometryType::Plane;
-  s.geometry = {floor};
+  s.geometry = {test::floor_plane()};
   EmitterConfig pile;
   pile.type = EmitterType::Lattice;
   pile.center = {0, 0, 0.02};
   pile.size = {0.06, 0.06, 0.03};
   pile.count = 40;
-  EmitterConfig pour;
-  pour.type = EmitterType::Pour;
-  pour.center = {0, 0, 0.08};
-  pour.radius = 0.02;
-  pour.rate = 300;
-  pour.count = 20;
-  pour.velocity = {0, 0, -1};
-  s.emitters = {pile, pour};
+  s.emitters = {pile, test::disk_pour({0, 0, 0.08}, 0.02, 300, 20, {0, 0, -1})};
   return s;
 }
 

@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "scene/scene_loader.hpp"
 #include "scene/world.hpp"
+#include "support/test_scenes.hpp"
 
 namespace sandflow {
 namespace {
@@ -59,10 +60,8 @@ TEST(Guards, ARunawayOverlapWithAWallNamesTheStepTheGrainAndTheWall) {
   // a grain thrown at 20 m/s on a floor of soft springs: it sinks ~20 diameters deep
   SceneConfig s = bare_scene();
   s.material.k_n = 10;
-  GeometryConfig floor;
-  floor.type = GeometryType::Plane;
-  floor.name = "floor";
-  s.geometry = {floor};
+  s.geometry = {test::floor_plane()};
+  s.geometry[0].name = "floor";
   s.emitters = {one_grain({0, 0, 0.05}, {0, 0, -20})};
   World w(s);
   const std::string msg = run_until_stopped(w, 2);
@@ -121,19 +120,13 @@ TEST(Guards, TheDefaultDomainIsTheScenesBoxWidenedByItsExtentAtLeastAMetre) {
   EXPECT_NEAR(w.domain_hi().z, 0.506 + 1, 1e-12);
   // a larger scene widens by its own extent: a 3 m box
   SceneConfig big = thrown_out(OnLeave::Stop);
-  GeometryConfig box;
-  box.type = GeometryType::Box;
-  box.center = {0, 0, -0.1};
-  box.size = {3, 2, 0.2};
-  big.geometry = {box};
+  big.geometry = {test::box_entry({0, 0, -0.1}, {3, 2, 0.2})};
   World wb(big);
   EXPECT_NEAR(wb.domain_lo().x, -1.5 - 3, 1e-12);
   EXPECT_NEAR(wb.domain_hi().y, 1 + 3, 1e-12);
   // a floor has no end: grains may roll on it as far as they go, but not fall through
   SceneConfig floored = thrown_out(OnLeave::Stop);
-  GeometryConfig floor;
-  floor.type = GeometryType::Plane;
-  floored.geometry = {floor};
+  floored.geometry = {test::floor_plane()};
   World wf(floored);
   EXPECT_EQ(wf.domain_lo().x, -std::numeric_limits<Real>::infinity());
   EXPECT_EQ(wf.domain_hi().y, std::numeric_limits<Real>::infinity());

@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "io/run_output.hpp"
 #include "scene/world.hpp"
+#include "support/test_scenes.hpp"
 
 namespace sandflow {
 namespace {
@@ -30,24 +31,15 @@ SceneConfig restart_scene(Mode mode) {
   s.material.k_n = 1e4;
   s.material.rolling_friction = 0.3;
   s.output.fps = 60;
-  GeometryConfig box;
-  box.type = GeometryType::Box;
+  GeometryConfig box = test::box_entry({0, 0, 0.1}, {0.12, 0.12, 0.2});
   box.container = true;
-  box.center = {0, 0, 0.1};
-  box.size = {0.12, 0.12, 0.2};
   s.geometry = {box};
   EmitterConfig pile;
   pile.type = EmitterType::Lattice;
   pile.center = {0, 0, 0.025};
   pile.size = {0.11, 0.11, 0.04};
   pile.count = 250;
-  EmitterConfig pour;
-  pour.type = EmitterType::Pour;
-  pour.center = {0, 0, 0.12};
-  pour.radius = 0.03;
-  pour.rate = 1000;
-  pour.count = 120;
-  pour.velocity = {0, 0, -1};
+  const EmitterConfig pour = test::disk_pour({0, 0, 0.12}, 0.03, 1000, 120, {0, 0, -1});
   // a few grains thrown over the wall and out of the domain
   EmitterConfig throw_out;
   throw_out.type = EmitterType::Block;
@@ -174,9 +166,7 @@ SceneConfig parallel_scene(Mode mode) {
   s.material.diameter = 0.01;
   s.material.k_n = 1e4;
   s.output.fps = 600;  // a frame of a few steps: the test is about exactness
-  GeometryConfig floor;
-  floor.type = GeometryType::Plane;
-  s.geometry = {floor};
+  s.geometry = {test::floor_plane()};
   EmitterConfig pile;
   pile.type = EmitterType::Lattice;
   pile.center = {0, 0, 0.1};
