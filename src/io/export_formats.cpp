@@ -68,6 +68,15 @@ void put_text(std::string& s, double v) {
   fmt::format_to(std::back_inserter(s), "{}", static_cast<float>(v));
 }
 
+// Text: "x y z", each as put_text writes it.
+void put_text3(std::string& s, const Vec3& v) {
+  put_text(s, v.x);
+  s += ' ';
+  put_text(s, v.y);
+  s += ' ';
+  put_text(s, v.z);
+}
+
 }  // namespace
 
 // ---- Choosing exports ----
@@ -289,17 +298,9 @@ void write_houdini_geo(const std::string& path, const FrameData& f, UpAxis up) {
   // each point: x y z w (v pscale id state)
   for (std::size_t i = 0; i < n; ++i) {
     const Grain g = grain(f, i, up);
-    put_text(s, g.x.x);
-    s += ' ';
-    put_text(s, g.x.y);
-    s += ' ';
-    put_text(s, g.x.z);
+    put_text3(s, g.x);
     s += " 1 (";
-    put_text(s, g.v.x);
-    s += ' ';
-    put_text(s, g.v.y);
-    s += ' ';
-    put_text(s, g.v.z);
+    put_text3(s, g.v);
     s += ' ';
     put_text(s, g.r);
     fmt::format_to(std::back_inserter(s), " {} {})\n", g.id, g.state);

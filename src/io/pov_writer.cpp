@@ -653,6 +653,30 @@ std::string run_logged(std::vector<std::string> args, const std::string& work_di
   return "";
 }
 
+// Runs `args` as run_logged does, into the file `partial`, which becomes `out_path` only when the
+// program succeeded and wrote something: no half-made picture or movie is ever left under its
+// name. Throws OutputError with the end of the log (`nothing`: the message when no file came).
+void run_into_file(const std::vector<std::string>& args, const std::string& work_dir,
+                   const std::string& log_path, const std::string& what,
+                   const std::string& partial, const std::string& out_path,
+                   const std::string& nothing) {
+  std::error_code ec;
+  std::string problem = run_logged(args, work_dir, log_path, what);
+  if (problem.empty() && (!fs::exists(partial, ec) || fs::file_size(partial, ec) == 0))
+    problem = nothing;
+  if (!problem.empty()) {
+    fs::remove(partial, ec);
+    throw OutputError(out_path + ": " + problem + "; end of " + log_path + ":\n" +
+                      tail_of(log_path, 1500));
+  }
+  fs::rename(partial, out_path, ec);
+  if (ec) {
+    const std::string reason = ec.message();
+    fs::remove(partial, ec);
+    throw OutputError(out_path + ": cannot rename " + partial + " to it: " + reason);
+  }
+}
+
 }  // namespace
 
 void render_pov(const std::string& pov_path, const std::string& png_path, int width, int height,
@@ -681,20 +705,8 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
                                    "Output_Alpha=off"};
   if (threads > 0) args.push_back("+WT" + std::to_string(threads));
   // POV-Ray's default I/O policy allows the working directory: run it in the scene's folder.
-  std::string problem = run_logged(args, pov_abs.parent_path().string(), log_path, "povray");
-  if (problem.empty() && (!fs::exists(partial, ec) || fs::file_size(partial, ec) == 0))
-    problem = "povray wrote no image";
-  if (!problem.empty()) {
-    fs::remove(partial, ec);
-    throw OutputError(png_path + ": " + problem + "; end of " + log_path + ":\n" +
-                      tail_of(log_path, 1500));
-  }
-  fs::rename(partial, png_path, ec);
-  if (ec) {
-    const std::string reason = ec.message();
-    fs::remove(partial, ec);
-    throw OutputError(png_path + ": cannot rename " + partial + " to it: " + reason);
-  }
+  run_into_file(args, pov_abs.parent_path().string(), log_path, "povray", partial, png_path,
+                "povray wrote no image");
 }
 
 void encode_movie(const std::vector<std::string>& folders, int first, int count, double fps,
@@ -739,21 +751,8 @@ void encode_movie(const std::vector<std::string>& folders, int first, int count,
         std::string("-movflags"), std::string("+faststart"), std::string("-f"), std::string("mp4"),
         partial})
     args.push_back(a);
-  std::string problem =
-      run_logged(args, fs::absolute(folders.front(), ec).string(), log_path, "ffmpeg");
-  if (problem.empty() && (!fs::exists(partial, ec) || fs::file_size(partial, ec) == 0))
-    problem = "ffmpeg wrote no movie";
-  if (!problem.empty()) {
-    fs::remove(partial, ec);
-    throw OutputError(mp4_path + ": " + problem + "; end of " + log_path + ":\n" +
-                      tail_of(log_path, 1500));
-  }
-  fs::rename(partial, mp4_path, ec);
-  if (ec) {
-    const std::string reason = ec.message();
-    fs::remove(partial, ec);
-    throw OutputError(mp4_path + ": cannot rename " + partial + " to it: " + reason);
-  }
+  run_into_file(args, fs::absolute(folders.front(), ec).string(), log_path, "ffmpeg", partial,
+                mp4_path, "ffmpeg wrote no movie");
 }
 
 std::string pov_grain_lines(const FrameData& f) {
