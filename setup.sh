@@ -14,16 +14,7 @@ case "$what" in demo|test|build) ;; *) echo "usage: ./setup.sh demo|test|build" 
 # 1. Debian packages (only the missing ones are installed)
 packages=(g++ cmake make pkg-config libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev
           libgtest-dev libpng-dev zlib1g-dev povray)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if ((${#missing[@]})); then
-  echo "==> installing: ${missing[*]}"
-  sudo=""; [ "$(id -u)" -eq 0 ] || sudo="sudo"
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
+scripts/install_packages.sh "${packages[@]}"
 
 # 2. Build (Release, or the sanitizer build)
 build=${SANDFLOW_BUILD:-build}

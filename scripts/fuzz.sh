@@ -22,16 +22,7 @@ targets=(scene mesh frame_ply png)
 # 1. Debian packages (only the missing ones are installed), as setup.sh does
 packages=(clang libclang-rt-14-dev libomp-dev cmake make pkg-config libtomlplusplus-dev
           libcli11-dev libfmt-dev nlohmann-json3-dev libpng-dev zlib1g-dev)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if ((${#missing[@]})); then
-  echo "==> installing: ${missing[*]}"
-  sudo=""; [ "$(id -u)" -eq 0 ] || sudo="sudo"
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
+scripts/install_packages.sh "${packages[@]}"
 
 # 2. Build (clang, -fsanitize=fuzzer,address,undefined)
 build=build-fuzz
