@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include <fmt/format.h>
 
@@ -9,21 +10,106 @@
 
 namespace sandflow {
 
+namespace {
+
+Real largest_diameter(const MaterialConfig& m) { return m.diameter * (1 + m.diameter_spread); }
+
+// Half extents of the area a pour places grains over (x, y) or of a block's box.
+Vec3 half_extent(const EmitterConfig& e) {
+  if (e.type != EmitterType::Pour) return e.size * 0.5;
+  if (e.shape == PourShape::Disk) return {e.radius, e.radius, 0};
+  return {e.size.x / 2, e.size.y / 2, 0};
+}
+
+}  // namespace
+
+std::optional<EmitterProblem> emitter_problem(const EmitterConfig& e, const MaterialConfig& m) {
+  const Real d = largest_diameter(m);
+  const Real s = e.spacing * d;
+  const Vec3 half = half_extent(e);
+  const char* size_key = e.type == EmitterType::Pour && e.shape == PourShape::Disk ? "radius" : "size";
+
+  const Real far_centre = std::max({std::abs(e.center.x), std::abs(e.center.y), std::abs(e.center.z)});
+  const Real far_half = std::max({half.x, half.y, half.z});
+  const Real reach = s * kMaxSpacingsFromOrigin;
+  if (!(far_centre + far_half <= reach))
+    return EmitterProblem{
+        far_centre >= far_half ? "center" : size_key,
+        fmt::format("reaches {:.3g} m from the origin: slots {:.3g} m apart are placed exactly only "
+                    "within {:.3g} m of it (2^40 spacings)",
+                    far_centre + far_half, s, reach)};
+
+  if (e.type == EmitterType::Pour) {
+    // the pattern's rows and columns over the area's bounding rectangle, counted, not made
+    const Real row = s * std::sqrt(3.0) / 2;
+    const Real rows = std::floor(std::max(0.0, 2 * half.y - d) / row) + 1;
+    const Real cols = std::floor(std::max(0.0, 2 * half.x - d) / s) + 1;
+    const Real slots = rows * cols * (e.shape == PourShape::Disk ? std::numbers::pi / 4 : 1.0);
+    if (slots > kMaxPourSlots)
+      return EmitterProblem{
+          size_key, fmt::format("makes a pour of about {:.3g} slots {:.3g} m apart, more than the "
+                                "limit of {:.0f}; make the pour smaller or the grains larger",
+                                slots, s, kMaxPourSlots)};
+    return std::nullopt;
+  }
+  const char* axis[3] = {"x", "y", "z"};
+  const Real sides[3] = {e.size.x, e.size.y, e.size.z};
+  for (int k = 0; k < 3; ++k)
+    if (sides[k] < d - 2e-12)  // the lattice takes a grain 1e-12 m too wide
+      return EmitterProblem{
+          "size", fmt::format("is {:.3g} m along {}, less than the largest grain ({:.3g} m): the "
+                              "box holds no grain",
+                              sides[k], axis[k], d)};
+  return std::nullopt;
+}
+
+template <class F>
+std::int64_t Emitter::for_each_box_slot(F&& f) const {
+  // a cubic lattice for a block, face-centred cubic for a prefilled pile; every row holds at
+  // least its first point (emitter_problem: the box is a grain wide), so this ends by `count`
+  const Vec3 half = config_.size * 0.5;
+  const Vec3 lo = config_.center - half + Vec3{d_max_, d_max_, d_max_} * 0.5;
+  const Vec3 hi = config_.center + half - Vec3{d_max_, d_max_, d_max_} * 0.5;
+  const bool fcc = config_.type == EmitterType::Lattice;
+  const Real a = fcc ? spacing_ * std::sqrt(2.0) : spacing_;  // FCC edge: neighbours at spacing
+  const Vec3 basis_fcc[4] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
+  const int nb = fcc ? 4 : 1;
+  std::int64_t n = 0;
+  if (config_.count <= 0) return n;
+  for (Real z = lo.z; z <= hi.z + 1e-12; z += a)
+    for (Real y = lo.y; y <= hi.y + 1e-12; y += a)
+      for (Real x = lo.x; x <= hi.x + 1e-12; x += a)
+        for (int b = 0; b < nb; ++b) {
+          const Vec3 p = Vec3{x, y, z} + basis_fcc[b] * a;
+          if (p.x <= hi.x + 1e-12 && p.y <= hi.y + 1e-12 && p.z <= hi.z + 1e-12) {
+            f(p);
+            if (++n == config_.count) return n;
+          }
+        }
+  return n;
+}
+
 Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, const Vec3& gravity,
                  const std::string& where)
     : config_(config), material_(material) {
-  d_max_ = material.diameter * (1 + material.diameter_spread);
+  if (const auto problem = emitter_problem(config, material))
+    throw InputError(fmt::format("{}.{} {}", where, problem->key, problem->what));
+  d_max_ = largest_diameter(material);
   spacing_ = config.spacing * d_max_;
   const Real s = spacing_;
+  // a new grain's surface reaches its slot plus the jitter plus its radius
+  reach_ = config.jitter * std::max(0.0, spacing_ - d_max_) / 2 + d_max_ / 2;
+  next_time_ = config.start;
 
   if (config.type == EmitterType::Pour) {
-    // one layer of slots on a hexagonal pattern inside the disk or rectangle
-    const Real hx = config.shape == PourShape::Disk ? config.radius : config.size.x / 2;
-    const Real hy = config.shape == PourShape::Disk ? config.radius : config.size.y / 2;
+    // one layer of slots on a hexagonal pattern inside the disk or rectangle (at most
+    // kMaxPourSlots, and each step of x and y moves them: emitter_problem saw to both)
+    const Vec3 half = half_extent(config);
     const Real row = s * std::sqrt(3.0) / 2;
     int k = 0;
-    for (Real y = -hy + d_max_ / 2; y <= hy - d_max_ / 2 + 1e-12; y += row, ++k) {
-      for (Real x = -hx + d_max_ / 2 + (k % 2) * s / 2; x <= hx - d_max_ / 2 + 1e-12; x += s) {
+    for (Real y = -half.y + d_max_ / 2; y <= half.y - d_max_ / 2 + 1e-12; y += row, ++k) {
+      for (Real x = -half.x + d_max_ / 2 + (k % 2) * s / 2; x <= half.x - d_max_ / 2 + 1e-12;
+           x += s) {
         if (config.shape == PourShape::Disk &&
             std::hypot(x, y) > config.radius - d_max_ / 2 + 1e-12)
           continue;
@@ -47,37 +133,24 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
           "{}: rate {} grains/s is more than this pour can emit without overlaps ({:.0f} "
           "grains/s); enlarge the pour area or its downward speed",
           where, config.rate, max_rate));
-  } else {
-    // fill the box with a lattice: cubic for a block, face-centred cubic for a prefilled pile
-    const Vec3 half = config.size * 0.5;
-    const Vec3 lo = config.center - half + Vec3{d_max_, d_max_, d_max_} * 0.5;
-    const Vec3 hi = config.center + half - Vec3{d_max_, d_max_, d_max_} * 0.5;
-    const bool fcc = config.type == EmitterType::Lattice;
-    const Real a = fcc ? s * std::sqrt(2.0) : s;  // FCC cube edge: nearest neighbours at s
-    const Vec3 basis_fcc[4] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
-    const int nb = fcc ? 4 : 1;
-    for (Real z = lo.z; z <= hi.z + 1e-12; z += a)
-      for (Real y = lo.y; y <= hi.y + 1e-12; y += a)
-        for (Real x = lo.x; x <= hi.x + 1e-12; x += a)
-          for (int b = 0; b < nb; ++b) {
-            const Vec3 p = Vec3{x, y, z} + basis_fcc[b] * a;
-            if (p.x <= hi.x + 1e-12 && p.y <= hi.y + 1e-12 && p.z <= hi.z + 1e-12 &&
-                static_cast<std::int64_t>(slots_.size()) < config.count)
-              slots_.push_back(p);
-          }
-    if (static_cast<std::int64_t>(slots_.size()) < config.count)
-      throw InputError(fmt::format(
-          "{}: the box holds only {} grains at spacing {}, fewer than count = {}; enlarge size",
-          where, slots_.size(), config.spacing, config.count));
+    slot_lo_ = slot_hi_ = slots_.front();
+    for (const Vec3& p : slots_) {
+      slot_lo_ = min(slot_lo_, p);
+      slot_hi_ = max(slot_hi_, p);
+    }
+    return;
   }
-  next_time_ = config.start;
-  // a new grain's surface reaches its slot plus the jitter plus its radius
-  reach_ = config.jitter * std::max(0.0, spacing_ - d_max_) / 2 + d_max_ / 2;
-  slot_lo_ = slot_hi_ = slots_.front();
-  for (const Vec3& p : slots_) {
-    slot_lo_ = min(slot_lo_, p);
-    slot_hi_ = max(slot_hi_, p);
-  }
+  // a block or lattice: its grains are counted here and placed when emitted
+  bool first = true;
+  const std::int64_t fits = for_each_box_slot([&](const Vec3& p) {
+    slot_lo_ = first ? p : min(slot_lo_, p);
+    slot_hi_ = first ? p : max(slot_hi_, p);
+    first = false;
+  });
+  if (fits < config.count)
+    throw InputError(fmt::format(
+        "{}: the box holds only {} grains at spacing {}, fewer than count = {}; enlarge size",
+        where, fits, config.spacing, config.count));
 }
 
 bool Emitter::near_slots(const Vec3& x, Real r) const {
@@ -109,7 +182,10 @@ void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vect
   };
 
   if (config_.type != EmitterType::Pour) {
-    for (const Vec3& p : slots_) out.push_back({jittered(p), config_.velocity, draw_radius(rng)});
+    out.reserve(out.size() + static_cast<std::size_t>(config_.count));
+    for_each_box_slot([&](const Vec3& p) {
+      out.push_back({jittered(p), config_.velocity, draw_radius(rng)});
+    });
     emitted_ = config_.count;
     return;
   }

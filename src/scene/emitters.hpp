@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,21 @@
 
 namespace sandflow {
 
+/// The most slots a pour's pattern (one layer over its disk or rectangle) may hold: 2^24, 400 MB
+/// of slot centres. A larger one is refused before any slot is made.
+inline constexpr Real kMaxPourSlots = 16'777'216;
+/// Slots are placed by adding spacings to a corner: 2^40 spacings from the origin, a double still
+/// tells neighbouring slots apart to a part in 4,000 of the spacing; farther, it soon does not.
+inline constexpr Real kMaxSpacingsFromOrigin = 1'099'511'627'776.0;
+
+/// What makes an emitter impossible whatever its count: a pour of more than kMaxPourSlots slots,
+/// a box too thin for one grain, or coordinates too far out for its spacing.
+struct EmitterProblem {
+  const char* key;   ///< the scene key at fault ("radius", "size", "center")
+  std::string what;  ///< the rest of the message, after the key's name
+};
+std::optional<EmitterProblem> emitter_problem(const EmitterConfig& e, const MaterialConfig& m);
+
 struct NewGrain {
   Vec3 x, v;
   Real r;
@@ -23,7 +39,8 @@ struct NewGrain {
 
 class Emitter {
  public:
-  /// Validates the emitter against the material and gravity (InputError naming `where`).
+  /// Validates the emitter against the material and gravity (InputError naming `where`). Nothing
+  /// of the size of `count` is made here: block and lattice grains are placed when emitted.
   Emitter(const EmitterConfig& config, const MaterialConfig& material, const Vec3& gravity,
           const std::string& where);
 
@@ -64,18 +81,22 @@ class Emitter {
 
  private:
   Real draw_radius(Rng& rng) const;
+  /// Calls f(p) on the first `count` points of a block's or lattice's box, in emission order;
+  /// returns how many there were (fewer than count when the box is too small).
+  template <class F>
+  std::int64_t for_each_box_slot(F&& f) const;
 
   EmitterConfig config_;
   MaterialConfig material_;
   Real d_max_;               ///< largest diameter [m]
   Real spacing_;             ///< slot spacing [m]
-  std::vector<Vec3> slots_;  ///< slot centres (pour: one layer; block/lattice: all)
+  std::vector<Vec3> slots_;  ///< pour: slot centres (one layer)
   Real batch_interval_ = 0;  ///< pour: time between batches [s]
   Real per_batch_ = 0;       ///< pour: grains per batch (fractional)
   Real owed_ = 0;            ///< pour: fractional grains carried to the next batch
   Real next_time_ = 0;       ///< time of the next batch [s]
   Real reach_ = 0;           ///< largest distance of a new grain's surface from its slot [m]
-  Vec3 slot_lo_, slot_hi_;   ///< bounds of the slot centres [m]
+  Vec3 slot_lo_, slot_hi_;   ///< bounds of the slot centres (pour) or of the grains (box) [m]
   std::int64_t emitted_ = 0;
   std::int64_t delayed_ = 0;
 };

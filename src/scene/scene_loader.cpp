@@ -34,6 +34,7 @@
 #include "geometry/heightmap.hpp"
 #include "io/export_formats.hpp"
 #include "io/png_gray.hpp"
+#include "scene/emitters.hpp"
 #include "surface/surface_params.hpp"
 
 namespace sandflow {
@@ -818,7 +819,7 @@ GeometryConfig read_geometry(TableReader r, std::size_t index, const std::string
   return g;
 }
 
-EmitterConfig read_emitter(TableReader r, std::size_t index) {
+EmitterConfig read_emitter(TableReader r, std::size_t index, const MaterialConfig& material) {
   EmitterConfig e;
   e.name = "emitter " + std::to_string(index);
   r.read("type", e.type, kEmitterTypes);
@@ -853,6 +854,9 @@ EmitterConfig read_emitter(TableReader r, std::size_t index) {
       r.finish("a lattice emitter");
       break;
   }
+  // sizes that no count makes possible, refused before anything of their size is made
+  if (const auto problem = emitter_problem(e, material))
+    r.fail_at(problem->key, r.name(problem->key) + " " + problem->what);
   return e;
 }
 
@@ -894,7 +898,7 @@ SceneConfig read_scene(const toml::table& root, const std::string& path,
   for (std::size_t i = 0; i < emitters->size(); ++i) {
     const std::string prefix = "emitter[" + std::to_string(i) + "]";
     const TableReader r(places, *emitters->get(i)->as_table(), prefix);
-    c.emitters.push_back(read_emitter(r, i));
+    c.emitters.push_back(read_emitter(r, i, c.material));
     total += c.emitters.back().count;  // each at most kMaxGrains: the sum cannot overflow here
     if (total > kMaxGrains)
       r.fail_at("count", r.name("count") + " = " + std::to_string(c.emitters.back().count) +

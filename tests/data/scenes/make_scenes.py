@@ -39,6 +39,18 @@ CASES = {
     "heights_ragged.toml": ("every row must have the same length",
                             '[[geometry]]\ntype = "heightmap"\nextent = [0, 0, 1, 1]\n'
                             'heights = [[0, 1, 2], [3, 4]]\n\n' + EMITTER),
+    # emitters that no count makes possible (before these, `run --check --mode dem` hung on them)
+    "pour_radius_1000m_of_1mm_grains.toml": ("emitter[0].radius makes a pour of about 3.29e+12 slots "
+                                             "0.00105 m apart, more than the limit of 16777216",
+                                             "[material]\ndiameter = 0.001\n\n" + EMITTER
+                                             + "radius = 1000\n"),
+    "emitter_center_1e308.toml": ("emitter[0].center reaches 1.7e+308 m from the origin",
+                                  '[[emitter]]\ntype = "block"\ncount = 10\n'
+                                  'center = [1.7e308, 0, 1]\nsize = [0.1, 0.1, 0.1]\n'),
+    "block_thinner_than_a_grain.toml": ("emitter[0].size is 0.005 m along x, less than the largest "
+                                        "grain (0.01 m)",
+                                        '[[emitter]]\ntype = "block"\ncount = 10\n'
+                                        'center = [0, 0, 50]\nsize = [0.005, 100, 100]\n'),
     # NaN and infinity
     "nan_friction.toml": ("material.friction = nan is not a finite number",
                           "[material]\nfriction = nan\n\n" + EMITTER),
