@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes each reader of user files with libFuzzer (docs/fuzzing.md):
-#   scripts/fuzz.sh [SECONDS]     each target for SECONDS (default 300), one after the other
+#   scripts/fuzz.sh [SECONDS] [TARGET...]   each target (default: all) for SECONDS (default 300),
+#                                           one after the other
 # Installs clang if missing (Debian 12 packages), builds the targets in build-fuzz/ (ASan + UBSan,
 # the library instrumented for coverage), seeds each from the repository's good and malformed
 # files, and prints per target the number of inputs tried and whether it found anything. What a
@@ -9,15 +10,25 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# The targets, one per reader (each also named in fuzz/CMakeLists.txt, with a seeds_ function below)
+all_targets=(scene mesh frame_ply png checkpoint)
+usage="usage: scripts/fuzz.sh [SECONDS] [TARGET...]   (SECONDS per target, a whole number >= 1,
+default 300; TARGET among: ${all_targets[*]}; default all)"
+
 seconds=${1:-300}
 if ! [[ "$seconds" =~ ^[0-9]+$ ]] || ((seconds < 1)); then
-  echo "usage: scripts/fuzz.sh [SECONDS]   (SECONDS per target, a whole number >= 1; default 300)" >&2
+  echo "$usage" >&2
   exit 2
 fi
-
-# The targets, one per reader. The checkpoint reader joins with fuzz/fuzz_checkpoint.cpp, its
-# name here and in fuzz/CMakeLists.txt, and a seeds_checkpoint function below.
-targets=(scene mesh frame_ply png)
+shift $(($# > 0 ? 1 : 0))
+targets=("${@:-${all_targets[@]}}")
+for t in "${targets[@]}"; do
+  if ! [[ " ${all_targets[*]} " == *" $t "* ]]; then
+    echo "scripts/fuzz.sh: unknown target '$t'" >&2
+    echo "$usage" >&2
+    exit 2
+  fi
+done
 
 # 1. Debian packages (only the missing ones are installed), as setup.sh does
 packages=(clang libclang-rt-14-dev libomp-dev cmake make pkg-config libtomlplusplus-dev
@@ -55,6 +66,8 @@ seeds_mesh() {
 }
 seeds_frame_ply() { cp tests/data/frames/*.ply tests/data/frames/bad/*.ply "$1/"; }
 seeds_png() { cp tests/data/png/*.png tests/data/png/bad/*.png "$1/"; }
+# checkpoints of the target's own scene in the current format, written by the target itself
+seeds_checkpoint() { SANDFLOW_FUZZ_WRITE_SEEDS="$1" "$build/fuzz/fuzz_checkpoint"; }
 
 # The dictionaries: TOML syntax plus every key and word the scene loader reads
 {
@@ -66,6 +79,7 @@ seeds_png() { cp tests/data/png/*.png tests/data/png/bad/*.png "$1/"; }
 cat fuzz/ply.dict fuzz/mesh.dict > "$build/mesh.dict"
 cp fuzz/ply.dict "$build/frame_ply.dict"
 cp fuzz/png.dict "$build/png.dict"
+cp fuzz/checkpoint.dict "$build/checkpoint.dict"
 
 # 4. Run each target in turn
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1}
