@@ -47,6 +47,7 @@ struct Table1Options {
   std::string scene_dir;
   std::vector<std::string> scenes;
   bool force = false;
+  bool resume = false;  ///< keep what OUT holds: finished scenes are read back, stopped ones go on
 };
 
 struct RenderOptions {
@@ -70,6 +71,13 @@ struct ReportOptions {
 };
 
 std::string mode_name(Mode m);
+/// `a` as a shell word: quoted when it has anything but letters, digits and _-+./=:,@%.
+std::string shell_quote(const std::string& a);
+/// The text of the scene file `path` (InputError when it cannot be read).
+std::string read_scene_text(const std::string& path);
+/// The options a run folder's run.json records (its scene file made absolute from the folder the
+/// run was started in), the record itself and the scene text the run was started with.
+RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::string& text);
 /// The scene of a run: the file, its --set overrides, --mode, --grains, --frames, --threads,
 /// --export, --up-axis.
 SceneConfig load_for_run(const RunOptions& o);
@@ -109,18 +117,37 @@ struct RunInterrupted {
 RunResult run_scene(const SceneConfig& scene, const std::string& out, const std::string& label = "",
                     const RunControl& control = {});
 
+/// One run of `compare` or `table1` into o.out (o.mode set), resumable as `sandflow run` is:
+/// run.json, a checkpoint every o.checkpoint_every frames (default 30), the stop signals. With
+/// `resume` and a run.json in o.out, the run there goes on from its checkpoint (a finished one is
+/// read back from its last), provided it was started as `o` asks (InputError otherwise); without,
+/// o.out must be empty or new. `scene_text` is the scene file's text (nullptr: read o.scene);
+/// `resume_with` is the command the messages give to continue. Returns 0, or 128 + the signal
+/// when a stop signal interrupted it (its checkpoint written). `scene`: the scene it ran.
+int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
+             const std::string& resume_with, const std::string& label, RunResult& res,
+             SceneConfig& scene);
+
+/// InputError when o.out holds a run (run.json) started otherwise than `o` with scene `text`
+/// would start it: run_part could not resume it as that run.
+void check_resumable(const RunOptions& o, const std::string& text);
+
 /// Both runs of a scene and the figures compared (what compare.json holds).
 struct Comparison {
+  SceneConfig scene;  ///< as the surface run had it
   RunResult surface, dem;
   SurfaceDiff diff;
   nlohmann::json json;
 };
 
-/// The shared part of `compare` and `table1`: runs `scene` in surface mode into OUT/surface, then
-/// in plain DEM into OUT/dem, compares the two final surfaces and writes OUT/compare.json.
-/// OUT is prepared here (see prepare_compare_dir); `label` prefixes the progress lines.
-Comparison compare_scene(const SceneConfig& scene, const std::string& out, bool force,
-                         const std::string& label = "");
+/// The shared part of `compare` and `table1`: runs `o` in surface mode into OUT/surface, then in
+/// plain DEM into OUT/dem (each with run_part), compares the two final surfaces and writes
+/// OUT/compare.json. OUT is prepared here: refused when not empty unless `force` (which replaces
+/// the comparison) or `resume` (which goes on with it); `scene_text` and `resume_with` as for
+/// run_part; `label` prefixes the progress lines. Returns 0, or 128 + the signal when interrupted.
+int compare_scene(const RunOptions& o, const std::string& out, bool force, bool resume,
+                  const std::string* scene_text, const std::string& resume_with,
+                  const std::string& label, Comparison& c);
 
 /// The last frame file of a run folder (InputError when it has none).
 std::string last_frame(const std::string& dir);

@@ -34,36 +34,47 @@ nlohmann::json angle_json(const HeapFit& f) {
 }
 
 /// Prepares a comparison folder: OUT is refused when not empty unless `force`, in which case the
-/// earlier comparison (compare.json, dem/, surface/) is removed; OUT/dem and OUT/surface are made.
-void prepare_compare_dir(const std::string& out, bool force) {
+/// earlier comparison (compare.json, dem/, surface/) is removed, or `resume`, which keeps it;
+/// OUT/dem and OUT/surface are made.
+void prepare_compare_dir(const std::string& out, bool force, bool resume) {
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
     throw InputError(fmt::format("{}: the output path exists and is not a folder", out));
-  if (fs::exists(out, ec) && !fs::is_empty(out, ec)) {
+  if (fs::exists(out, ec) && !fs::is_empty(out, ec) && !resume) {
     if (!force)
       throw InputError(fmt::format(
-          "{}: the output folder is not empty; pass --force to replace its comparison", out));
+          "{}: the output folder is not empty; pass --force to replace its comparison, or "
+          "--resume to go on with it",
+          out));
     for (const char* name : {"compare.json", "dem", "surface", "report.html"})
       fs::remove_all(fs::path(out) / name, ec);
   }
-  prepare_output_dir((fs::path(out) / "surface").string(), false);
-  prepare_output_dir((fs::path(out) / "dem").string(), false);
+  for (const char* mode : {"surface", "dem"}) {
+    const fs::path dir = fs::path(out) / mode;
+    if (!fs::exists(dir / "run.json", ec)) prepare_output_dir(dir.string(), true);
+  }
 }
 
 }  // namespace
 
-/// The shared part of `compare` and `table1`: runs `scene` in surface mode into OUT/surface, then
-/// in plain DEM into OUT/dem, compares the two final surfaces and writes OUT/compare.json.
-/// OUT is prepared here (see prepare_compare_dir); `label` prefixes the progress lines.
-Comparison compare_scene(const SceneConfig& scene, const std::string& out, bool force,
-                         const std::string& label) {
-  prepare_compare_dir(out, force);
-  SceneConfig surface_scene = scene, dem_scene = scene;
-  surface_scene.simulation.mode = Mode::Surface;
-  dem_scene.simulation.mode = Mode::Dem;
-  Comparison c;
-  c.surface = run_scene(surface_scene, (fs::path(out) / "surface").string(), label);
-  c.dem = run_scene(dem_scene, (fs::path(out) / "dem").string(), label);
+int compare_scene(const RunOptions& o, const std::string& out, bool force, bool resume,
+                  const std::string* scene_text, const std::string& resume_with,
+                  const std::string& label, Comparison& c) {
+  prepare_compare_dir(out, force, resume);
+  const std::string text = scene_text ? *scene_text : read_scene_text(o.scene);
+  RunOptions part = o;
+  SceneConfig surface_scene, dem_scene;
+  part.mode = "surface";
+  part.out = (fs::path(out) / "surface").string();
+  if (const int stopped =
+          run_part(part, resume, &text, resume_with, label, c.surface, surface_scene))
+    return stopped;
+  part.mode = "dem";
+  part.out = (fs::path(out) / "dem").string();
+  if (const int stopped = run_part(part, resume, &text, resume_with, label, c.dem, dem_scene))
+    return stopped;
+  c.scene = surface_scene;
+  const SceneConfig& scene = c.scene;
   const RunResult& surf = c.surface;
   const RunResult& dem = c.dem;
 
@@ -120,13 +131,49 @@ Comparison compare_scene(const SceneConfig& scene, const std::string& out, bool 
   write_file_atomic((fs::path(out) / "compare.json").string(), c.json.dump(2) + "\n");
   // the page of both runs (and each run's own), without pictures: `sandflow report` adds them
   write_report({out, 6, false});
-  return c;
+  return 0;
+}
+
+std::string compare_resume_command(const std::string& dir) {
+  return "sandflow compare --resume " + shell_quote(dir);
 }
 
 int compare_command(const RunOptions& o) {
-  const SceneConfig scene = load_for_run(o);
-  const std::string out = o.out.empty() ? fmt::format("out/{}-compare", scene.name) : o.out;
-  const Comparison c = compare_scene(scene, out, o.force);
+  Comparison c;
+  std::string out, text;
+  if (!o.resume.empty()) {
+    // the options of the comparison are those its surface run recorded
+    if (!o.scene.empty() || o.grains > 0 || o.frames > 0 || !o.sets.empty() || !o.out.empty() ||
+        o.force || o.exports || !o.up_axis.empty())
+      throw InputError(
+          "compare --resume DIR goes on with the comparison in DIR exactly as it was started: it "
+          "takes no scene, --grains, --frames, --set, --export, --up-axis, --out or --force; "
+          "only --threads");
+    out = o.resume;
+    std::error_code ec;
+    if (!fs::exists(fs::path(out) / "surface" / "run.json", ec))
+      throw InputError(fmt::format(
+          "{}: no comparison to resume here (no surface/run.json); start one with: sandflow "
+          "compare SCENE --out {}",
+          out, shell_quote(out)));
+    nlohmann::json record;
+    RunOptions r = read_run_record((fs::path(out) / "surface").string(), record, text);
+    r.mode.clear();
+    if (o.threads > 0) r.threads = o.threads;
+    r.checkpoint_every = -1;
+    if (const int stopped = compare_scene(r, out, false, true, &text, compare_resume_command(out),
+                                          "", c))
+      return stopped;
+  } else {
+    if (o.scene.empty()) throw InputError("compare: give a scene file, or --resume DIR");
+    text = read_scene_text(o.scene);
+    const SceneConfig named = load_for_run(o);  // the scene's name, for the default folder
+    out = o.out.empty() ? fmt::format("out/{}-compare", named.name) : o.out;
+    if (const int stopped =
+            compare_scene(o, out, o.force, false, &text, compare_resume_command(out), "", c))
+      return stopped;
+  }
+  const SceneConfig& scene = c.scene;
   const RunResult& surf = c.surface;
   const RunResult& dem = c.dem;
   const nlohmann::json& j = c.json;

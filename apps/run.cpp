@@ -251,6 +251,64 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
   return res;
 }
 
+std::string shell_quote(const std::string& a) {
+  if (!a.empty() && a.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                        "0123456789_-+./=:,@%") == std::string::npos)
+    return a;
+  std::string q = "'";
+  for (char ch : a) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+  return q + "'";
+}
+
+std::string read_scene_text(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec))
+    throw InputError(path + ": cannot open scene file (it is a directory)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open scene file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path + ": cannot read scene file");
+  return text.str();
+}
+
+/// The options a run folder's run.json records (its scene file made absolute from the folder the
+/// run was started in), the record itself and the scene text it was started with.
+RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::string& text) {
+  const fs::path record_path = fs::path(dir) / "run.json";
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw InputError(dir + ": no such run folder");
+  if (!fs::exists(record_path, ec))
+    throw InputError(fmt::format(
+        "{}: no run.json: not a sandflow run folder, or its run stopped before it started; start "
+        "it again with: sandflow run SCENE --out {} --force",
+        dir, shell_quote(dir)));
+  RunOptions r;
+  try {
+    std::ifstream in(record_path);
+    record = nlohmann::json::parse(in);
+    text = record.at("start").at("scene_text").get<std::string>();
+    r.scene = record.at("scene_file").get<std::string>();
+    r.sets = record.at("start").at("sets").get<std::vector<std::string>>();
+    r.mode = record.at("start").at("mode").get<std::string>();
+    r.grains = record.at("start").at("grains").get<std::int64_t>();
+    if (const auto& e = record.at("start").at("exports"); !e.is_null())
+      r.exports = e.get<std::string>();
+    r.up_axis = record.at("start").at("up_axis").get<std::string>();
+    r.frames = record.at("frames").get<int>();
+    r.threads = record.at("threads").get<int>();
+    r.checkpoint_every = record.at("checkpoint_every").get<int>();
+    const std::string wd = record.at("working_directory").get<std::string>();
+    // a relative scene path names a file from the folder the run was started in
+    if (fs::path(r.scene).is_relative() && fs::current_path(ec) != fs::path(wd))
+      r.scene = (fs::path(wd) / r.scene).lexically_normal().string();
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("{}: not a run record sandflow can read: {}",
+                                 record_path.string(), e.what()));
+  }
+  return r;
+}
+
 namespace {
 
 // ---- Resumable runs (docs/checkpoints.md) -------------------------------------------------------
@@ -285,15 +343,6 @@ class StopSignals {
   struct sigaction old_int_ {}, old_term_ {};
 };
 
-std::string shell_quote(const std::string& a) {
-  if (!a.empty() && a.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                        "0123456789_-+./=:,@%") == std::string::npos)
-    return a;
-  std::string q = "'";
-  for (char ch : a) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-  return q + "'";
-}
-
 std::string resume_command(const std::string& dir) {
   return "sandflow run --resume " + shell_quote(dir);
 }
@@ -308,18 +357,6 @@ std::string last_checkpoint(const std::string& dir) {
   } catch (const InputError& e) {
     return fmt::format("the start: the checkpoint cannot be read ({})", e.what());
   }
-}
-
-std::string read_scene_text(const std::string& path) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec))
-    throw InputError(path + ": cannot open scene file (it is a directory)");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open scene file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError(path + ": cannot read scene file");
-  return text.str();
 }
 
 /// What DIR/run.json records: everything that decides the run (hashed into its checkpoints),
@@ -353,8 +390,10 @@ struct Started {
 };
 
 /// Runs `run` with checkpoints and the stop signals into `res`; returns the exit status of an
-/// interrupted run (128 + the signal), 0 otherwise.
-int run_resumable(Started& run, RunResult& res) {
+/// interrupted run (128 + the signal), 0 otherwise. `resume_with` is the command that continues
+/// it, for the messages; `label` prefixes the progress line.
+int run_resumable(Started& run, RunResult& res, const std::string& resume_with,
+                  const std::string& label = "") {
   RunControl control;
   control.start_record = run.record["start"].dump();
   control.checkpoint_every = run.record["checkpoint_every"].get<int>();
@@ -363,24 +402,24 @@ int run_resumable(Started& run, RunResult& res) {
   control.stop = &g_stop_signal;
   try {
     const StopSignals signals;
-    res = run_scene(run.scene, run.out, "", control);
+    res = run_scene(run.scene, run.out, label, control);
   } catch (const RunInterrupted& e) {
-    fmt::print(stderr, "\ninterrupted at frame {}; resume with: {}\n", e.frame,
-               resume_command(run.out));
+    fmt::print(stderr, "\ninterrupted at frame {}; resume with: {}\n", e.frame, resume_with);
     return 128 + e.signal;
   } catch (const SimulationError& e) {
     throw SimulationError(fmt::format("{}\n  reproduce it from {}: {}", e.what(),
-                                      last_checkpoint(run.out), resume_command(run.out)));
+                                      last_checkpoint(run.out), resume_with));
   } catch (const OutputError& e) {
     throw OutputError(fmt::format("{}\n  the run can go on from {}: make room (or make the folder "
                                   "writable), then: {}",
-                                  e.what(), last_checkpoint(run.out), resume_command(run.out)));
+                                  e.what(), last_checkpoint(run.out), resume_with));
   }
   return 0;
 }
 
-/// `sandflow run --resume DIR`.
-Started start_resumed(const RunOptions& o) {
+/// `sandflow run --resume DIR`. A finished run has nothing to resume, unless `reload_finished`
+/// (compare and table1): it is then read back from its last checkpoint.
+Started start_resumed(const RunOptions& o, bool reload_finished = false) {
   if (!o.scene.empty() || !o.mode.empty() || o.grains > 0 || o.frames > 0 || !o.sets.empty() ||
       !o.out.empty() || o.force || o.check || o.exports || !o.up_axis.empty())
     throw InputError(
@@ -388,41 +427,13 @@ Started start_resumed(const RunOptions& o) {
         "scene, --mode, --grains, --frames, --set, --export, --up-axis, --out, --force or "
         "--check; only --threads, --checkpoint-every and --profile");
   const std::string dir = o.resume;
-  const fs::path record_path = fs::path(dir) / "run.json";
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw InputError(dir + ": no such run folder");
-  if (!fs::exists(record_path, ec))
-    throw InputError(fmt::format(
-        "{}: no run.json: not a sandflow run folder, or its run stopped before it started; start "
-        "it again with: sandflow run SCENE --out {} --force",
-        dir, shell_quote(dir)));
   nlohmann::json record;
-  RunOptions r;
   std::string text;
-  try {
-    std::ifstream in(record_path);
-    record = nlohmann::json::parse(in);
-    text = record.at("start").at("scene_text").get<std::string>();
-    r.scene = record.at("scene_file").get<std::string>();
-    r.sets = record.at("start").at("sets").get<std::vector<std::string>>();
-    r.mode = record.at("start").at("mode").get<std::string>();
-    r.grains = record.at("start").at("grains").get<std::int64_t>();
-    if (const auto& e = record.at("start").at("exports"); !e.is_null())
-      r.exports = e.get<std::string>();
-    r.up_axis = record.at("start").at("up_axis").get<std::string>();
-    r.frames = record.at("frames").get<int>();
-    r.threads = record.at("threads").get<int>();
-    r.checkpoint_every = record.at("checkpoint_every").get<int>();
-    const std::string wd = record.at("working_directory").get<std::string>();
-    // a relative scene path names a file from the folder the run was started in
-    if (fs::path(r.scene).is_relative() && fs::current_path(ec) != fs::path(wd))
-      r.scene = (fs::path(wd) / r.scene).lexically_normal().string();
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("{}: not a run record sandflow can read: {}",
-                                 record_path.string(), e.what()));
-  }
+  RunOptions r = read_run_record(dir, record, text);
   Started run;
-  if (fs::exists(fs::path(dir) / "summary.json", ec)) {
+  std::error_code ec;
+  const bool finished = fs::exists(fs::path(dir) / "summary.json", ec);
+  if (finished && !reload_finished) {
     fmt::print(stderr, "{}: this run is finished (its summary.json is written); nothing to resume\n",
                dir);
     run.done = true;
@@ -445,18 +456,19 @@ Started start_resumed(const RunOptions& o) {
     }
   }
   const int frame = run.checkpoint ? run.checkpoint->world.frame : 0;
-  if (run.checkpoint)
+  if (finished && run.checkpoint)
+    fmt::print(stderr, "{} is finished: reading it back from its checkpoint at frame {}\n", dir,
+               frame);
+  else if (run.checkpoint)
     fmt::print(stderr, "resuming {} from its checkpoint at frame {}\n", dir, frame);
   else
     fmt::print(stderr, "{} has no checkpoint yet: running it again from the start\n", dir);
   return run;
 }
 
-/// A new run: the scene, its plan (--check), or its prepared folder with its run.json.
-Started start_new(const RunOptions& o) {
-  if (o.scene.empty())
-    throw InputError("run: give a scene file (sandflow run SCENE), or --resume DIR to continue a run");
-  const std::string text = read_scene_text(o.scene);
+/// A new run of `text`, the scene file o.scene as read: the scene, its plan (--check), or its
+/// prepared folder with its run.json.
+Started start_new(const RunOptions& o, const std::string& text) {
   Started run;
   run.scene = apply_run_options(load_scene_from_string(text, o.scene, run_overrides(o)), o);
   const SceneConfig& scene = run.scene;
@@ -499,13 +511,54 @@ Started start_new(const RunOptions& o) {
 
 }  // namespace
 
+void check_resumable(const RunOptions& o, const std::string& text) {
+  std::error_code ec;
+  if (!fs::exists(fs::path(o.out) / "run.json", ec)) return;
+  nlohmann::json record;
+  std::string recorded_text;
+  read_run_record(o.out, record, recorded_text);
+  const nlohmann::json expected = run_record(o, text, 0);
+  if (record["start"] != expected["start"] || record["frames"] != expected["frames"])
+    throw InputError(fmt::format(
+        "{}: holds a run started otherwise (its run.json records another scene text, --set, "
+        "--grains, --frames, --export or --up-axis than now); it cannot be resumed as this one: "
+        "pass --force to run it again",
+        o.out));
+}
+
+int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
+             const std::string& resume_with, const std::string& label, RunResult& res,
+             SceneConfig& scene) {
+  const std::string text = scene_text ? *scene_text : read_scene_text(o.scene);
+  std::error_code ec;
+  Started run;
+  if (resume && fs::exists(fs::path(o.out) / "run.json", ec)) {
+    RunOptions r;
+    r.resume = o.out;
+    r.threads = o.threads;
+    r.checkpoint_every = o.checkpoint_every;
+    check_resumable(o, text);
+    run = start_resumed(r, true);
+  } else {
+    RunOptions n = o;
+    n.force = true;  // the caller's folder, empty or left by a start that never got going
+    if (n.checkpoint_every < 0) n.checkpoint_every = kDefaultCheckpointEvery;
+    run = start_new(n, text);
+  }
+  const int status = run_resumable(run, res, resume_with, label);
+  scene = run.scene;
+  return status;
+}
+
 int run_command(const RunOptions& o) {
-  Started run = o.resume.empty() ? start_new(o) : start_resumed(o);
+  if (o.resume.empty() && o.scene.empty())
+    throw InputError("run: give a scene file (sandflow run SCENE), or --resume DIR to continue a run");
+  Started run = o.resume.empty() ? start_new(o, read_scene_text(o.scene)) : start_resumed(o);
   if (run.done) return 0;
   const SceneConfig& scene = run.scene;
   const std::string& out = run.out;
   RunResult res;
-  if (const int interrupted = run_resumable(run, res)) return interrupted;
+  if (const int interrupted = run_resumable(run, res, resume_command(out))) return interrupted;
   const nlohmann::json& s = res.summary;
   const HeapFit& fit = res.heap;
   const int frames = s["frames"].get<int>();

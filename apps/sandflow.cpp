@@ -103,6 +103,16 @@ int main(int argc, char** argv) {
   add_scene_options(compare, co, "output folder (default out/SCENE-compare)",
                     "override a scene key in both runs");
   compare->add_flag("--force", co.force, "replace a comparison in a non-empty output folder");
+  compare->get_option("scene")->required(false);  // (not with --resume)
+  compare->add_option("--resume", co.resume,
+                      "go on with the comparison in DIR, stopped or killed, from its runs' last "
+                      "checkpoints, exactly as it was started (no scene; --threads may change)");
+  compare->footer(
+      "Runs the scene in surface mode into DIR/surface, then in plain DEM into DIR/dem, each\n"
+      "with run.json and a checkpoint every 30 frames as `sandflow run` writes them; SIGINT or\n"
+      "SIGTERM finishes the frame, writes a checkpoint and exits (130/143), and\n"
+      "`sandflow compare --resume DIR` goes on. Wall times are summed over the frames of each run,\n"
+      "so a resumed comparison reports the time of every frame once.");
 
   Table1Options to;
   auto* table1 = app.add_subcommand(
@@ -126,6 +136,10 @@ int main(int argc, char** argv) {
   table1->add_flag("--force", to.force,
                    "write into a non-empty output folder, replacing its table and the folders of "
                    "the scenes run");
+  table1->add_flag("--resume", to.resume,
+                   "go on with the table in a non-empty output folder, given the same options: "
+                   "finished runs are read back from their last checkpoints, stopped ones go on "
+                   "from theirs");
   table1->footer(
       "Writes DIR/table1.csv (one row per scene that ran), DIR/table1.md (every scene, the\n"
       "command, date, cores and threads, and the paper's figures) and DIR/SCENE/ (compare.json,\n"

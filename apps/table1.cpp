@@ -60,6 +60,42 @@ std::string local_date_time() {
   return std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M %Z", &tm) ? buf : "unknown date";
 }
 
+/// The runs of scene `p` as this table1 command makes them (mode unset; compare_scene sets it).
+RunOptions table1_run(const Table1Options& o, const PaperScene& p, const fs::path& file) {
+  RunOptions ro;
+  ro.scene = file.string();
+  ro.grains = scaled_count(p, o.scale);
+  ro.frames = o.frames;
+  ro.threads = o.threads;
+  return ro;
+}
+
+/// --resume: every run the folder already holds must be the one this command would start, so
+/// that other options are refused before anything is written.
+void check_table1_resumable(const Table1Options& o, const std::vector<const PaperScene*>& scenes,
+                            const std::string& scene_dir) {
+  std::error_code ec;
+  for (const PaperScene* p : scenes) {
+    const fs::path file = fs::path(scene_dir) / (std::string(p->name) + ".toml");
+    if (!fs::exists(file, ec)) continue;
+    RunOptions ro = table1_run(o, *p, file);
+    const std::string text = read_scene_text(ro.scene);
+    for (const char* mode : {"surface", "dem"}) {
+      ro.mode = mode;
+      ro.out = (fs::path(o.out) / p->name / mode).string();
+      check_resumable(ro, text);
+    }
+  }
+}
+
+/// The command that goes on with this table: the one typed, without --force, with --resume.
+std::string table1_resume_command(const std::string& command, bool resumed) {
+  std::string c = " " + command + " ";
+  for (std::size_t at; (at = c.find(" --force ")) != std::string::npos;) c.erase(at, 8);
+  c = c.substr(1, c.size() - 2);
+  return resumed ? c : c + " --resume";
+}
+
 /// The row of a scene that ran, from its comparison.
 Table1Row table1_row(const std::string& name, std::int64_t total, const Comparison& c) {
   Table1Row r;
@@ -95,12 +131,18 @@ int table1_command(const Table1Options& o, const std::string& command) {
   std::error_code ec;
   if (fs::exists(o.out, ec) && !fs::is_directory(o.out, ec))
     throw InputError(fmt::format("{}: the output path exists and is not a folder", o.out));
-  if (fs::exists(o.out, ec) && !fs::is_empty(o.out, ec)) {
+  if (o.force && o.resume)
+    throw InputError("table1: --force replaces what the output folder holds, --resume goes on with "
+                     "it: give one of them");
+  if (fs::exists(o.out, ec) && !fs::is_empty(o.out, ec) && !o.resume) {
     if (!o.force)
       throw InputError(fmt::format(
-          "{}: the output folder is not empty; pass --force to replace its table", o.out));
+          "{}: the output folder is not empty; pass --force to replace its table, or --resume "
+          "(with the same options) to go on with it",
+          o.out));
     for (const char* name : {"table1.csv", "table1.md"}) fs::remove(fs::path(o.out) / name, ec);
   }
+  if (o.resume) check_table1_resumable(o, scenes, scene_dir);
   fs::create_directories(o.out, ec);
   if (ec)
     throw OutputError(fmt::format("{}: cannot create the output folder: {}", o.out, ec.message()));
@@ -142,11 +184,7 @@ int table1_command(const Table1Options& o, const std::string& command) {
       fmt::print(stderr, "\ntable1: {}{} failed: {}\n", label, p.name, row.message);
     };
     try {
-      RunOptions ro;
-      ro.scene = file.string();
-      ro.grains = total;
-      ro.frames = o.frames;
-      ro.threads = o.threads;
+      const RunOptions ro = table1_run(o, p, file);
       const SceneConfig full = load_scene(ro.scene);
       if (full.total_grains() != p.total)
         fmt::print(stderr,
@@ -160,8 +198,15 @@ int table1_command(const Table1Options& o, const std::string& command) {
       ctx.threads = thread_count(scene);
       fmt::print(stderr, "table1: {}{}, {} grains ({} x {}), surface flow then plain DEM -> {}\n",
                  label, p.name, total, o.scale, p.total, (fs::path(o.out) / p.name).string());
-      const Comparison c =
-          compare_scene(scene, (fs::path(o.out) / p.name).string(), o.force, label);
+      Comparison c;
+      const std::string resume_with = table1_resume_command(command, o.resume);
+      if (const int stopped = compare_scene(ro, (fs::path(o.out) / p.name).string(), o.force,
+                                            o.resume, nullptr, resume_with, label, c)) {
+        row.status = RowStatus::Failed;
+        row.message = "interrupted; resume with: " + resume_with;
+        write_table();
+        return stopped;
+      }
       row = table1_row(std::string(p.name), total, c);
       ++ran;
     } catch (const InputError& e) {

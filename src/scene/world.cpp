@@ -29,7 +29,13 @@ TimeStep choose_time_step(const SceneConfig& scene) {
         "time t_c = {:.4g} s for the smallest grains at k_n = {:.4g} N/m)",
         scene.path, dt, ts.stable_bound, ts.t_c, mat.k_n));
   const Real frame_dt = 1.0 / scene.output.fps;
-  ts.substeps = std::max(1, static_cast<int>(std::ceil(frame_dt / dt - 1e-9)));
+  const Real steps = std::ceil(frame_dt / dt - 1e-9);
+  if (!(steps <= kMaxSubsteps))
+    throw InputError(fmt::format(
+        "{}: a frame of {:.4g} s would take {:.4g} steps of dt = {:.4g} s, more than the limit of "
+        "{:.0f}; raise simulation.dt, lower material.k_n or enlarge the grains",
+        scene.path, frame_dt, steps, dt, kMaxSubsteps));
+  ts.substeps = std::max(1, static_cast<int>(steps));
   ts.dt = frame_dt / ts.substeps;
   return ts;
 }

@@ -23,6 +23,9 @@
 namespace sandflow {
 
 /// The time step of a scene and the bound it must respect.
+/// The most steps a frame may take: 10^8 (10 s a frame for a single grain, at best).
+inline constexpr Real kMaxSubsteps = 100'000'000;
+
 struct TimeStep {
   Real t_c;           ///< contact duration of the two smallest grains [s]
   Real stable_bound;  ///< largest dt accepted: t_c / 5 [s]
@@ -31,7 +34,8 @@ struct TimeStep {
 };
 
 /// Derives dt from the scene (t_c * dt_fraction unless simulation.dt is set); throws InputError
-/// with the bound when the scene's dt is above the stable bound.
+/// with the bound when the scene's dt is above the stable bound, or when a frame would take more
+/// than kMaxSubsteps steps.
 TimeStep choose_time_step(const SceneConfig& scene);
 
 /// Contact parameters of the grain-grain law from the material.

@@ -183,6 +183,53 @@ TEST(Resume, SigintFinishesTheFrameCheckpointsAndSaysHowToResume) {
   EXPECT_NE(resumed.find("this run is finished"), std::string::npos) << resumed;
 }
 
+// `compare` is two resumable runs: stopped in its second (plain DEM), it goes on with
+// `compare --resume DIR` to the comparison it would have made uninterrupted.
+TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
+  Sandbox box;
+  box.write("pour.toml", kPourScene);
+  const std::string scene = (box.dir / "pour.toml").string();
+  const fs::path want = box.dir / "straight", out = box.dir / "cmp";
+  std::string log;
+  ASSERT_EQ(sandflow(fmt::format("compare {} --frames {} --out {}", scene, kFrames, want.string()),
+                     &log),
+            0)
+      << log;
+  const pid_t pid = spawn(fmt::format("compare {} --frames {} --out {}", scene, kFrames,
+                                      out.string()),
+                          box.dir / "cmp.log");
+  while (!fs::exists(out / "dem" / "frames" / "0005.ply") && waitpid(pid, nullptr, WNOHANG) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  kill(pid, SIGINT);
+  EXPECT_EQ(wait_for(pid), 130);
+  log = read_text(box.dir / "cmp.log");
+  EXPECT_NE(log.find("; resume with: sandflow compare --resume " + out.string() + "\n"),
+            std::string::npos)
+      << log;
+  EXPECT_FALSE(fs::exists(out / "compare.json"));
+  // options belong to the comparison as it was started
+  EXPECT_EQ(sandflow("compare --resume " + out.string() + " --frames 3", &log), 2);
+  EXPECT_NE(log.find("takes no scene"), std::string::npos) << log;
+  EXPECT_EQ(sandflow("compare --resume " + (box.dir / "nothing").string(), &log), 2);
+  EXPECT_NE(log.find("no comparison to resume here"), std::string::npos) << log;
+
+  ASSERT_EQ(sandflow("compare --resume " + out.string(), &log), 0) << log;
+  EXPECT_NE(log.find((out / "surface").string() + " is finished"), std::string::npos) << log;
+  EXPECT_NE(log.find("resuming " + (out / "dem").string() + " from its checkpoint"),
+            std::string::npos)
+      << log;
+  expect_same_run(want / "surface", out / "surface");
+  expect_same_run(want / "dem", out / "dem");
+  auto figures = [](const fs::path& dir) {
+    auto j = nlohmann::json::parse(read_text(dir / "compare.json"));
+    for (const char* timing : {"speedup", "seconds_per_frame_dem", "seconds_per_frame_surface",
+                               "wall_seconds_dem", "wall_seconds_surface"})
+      j.erase(timing);
+    return j;
+  };
+  EXPECT_EQ(figures(out), figures(want));
+}
+
 // The exports go on where the checkpoint left them: a resumed run's ParaView series lists every
 // frame, the ones before the interruption too, as the same run uninterrupted does.
 TEST(Resume, TheExportsOfAResumedRunAreThoseOfTheRunUninterrupted) {

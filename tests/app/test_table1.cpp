@@ -113,6 +113,37 @@ TEST(Table1, TinyFloorRowHasTheHeaderAndFiniteFigures) {
             std::to_string(std::llround(0.002 * 107687)));
 }
 
+TEST(Table1, ResumeKeepsWhatRanAndRefusesOtherOptions) {
+  Sandbox box;
+  const fs::path out = box.dir / "t1";
+  const std::string cmd = "table1 --scale 0.002 --frames 2 --scenes floor --out " + out.string();
+  std::string log;
+  ASSERT_EQ(sandflow(cmd, &log), 0) << log;
+  const auto first = nlohmann::json::parse(read_text(out / "floor" / "compare.json"));
+  // the same table goes on: both runs are read back from their last checkpoints, not run again
+  ASSERT_EQ(sandflow(cmd + " --resume", &log), 0) << log;
+  for (const char* mode : {"surface", "dem"})
+    EXPECT_NE(log.find((out / "floor" / mode).string() +
+                       " is finished: reading it back from its checkpoint at frame 2"),
+              std::string::npos)
+        << log;
+  const auto again = nlohmann::json::parse(read_text(out / "floor" / "compare.json"));
+  EXPECT_EQ(again["speedup"], first["speedup"]);  // the frames' own times, summed again
+  EXPECT_EQ(again["surface_rms_rel"], first["surface_rms_rel"]);
+  // other options are not this table: refused before anything is written
+  const std::string table = read_text(out / "table1.csv");
+  EXPECT_EQ(sandflow("table1 --scale 0.002 --frames 3 --scenes floor --resume --out " +
+                         out.string(),
+                     &log),
+            2);
+  EXPECT_NE(log.find("holds a run started otherwise"), std::string::npos) << log;
+  EXPECT_EQ(read_text(out / "table1.csv"), table);
+  EXPECT_EQ(nlohmann::json::parse(read_text(out / "floor" / "surface" / "summary.json"))["frames"],
+            2);
+  EXPECT_EQ(sandflow(cmd + " --resume --force", &log), 2);
+  EXPECT_NE(log.find("give one of them"), std::string::npos) << log;
+}
+
 TEST(Table1, MissingSceneIsSkippedAndTheOthersRun) {
   Sandbox box;
   const fs::path scenes = floor_only(box), out = box.dir / "t1";

@@ -179,5 +179,21 @@ TEST(TimeStep, SceneDtAboveTheStableBoundIsRefusedWithTheBound) {
   EXPECT_NEAR(ts.dt * ts.substeps, 1.0 / s.output.fps, 1e-12);
 }
 
+TEST(TimeStep, AFrameOfMoreStepsThanTheLimitIsRefusedBeforeCountingThemInAnInt) {
+  // 10^-15 s steps: 3.3e13 a frame, beyond an int (the cast would be undefined) and any run
+  SceneConfig s;
+  s.path = "x.toml";
+  s.simulation.dt = 1e-15;
+  try {
+    choose_time_step(s);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("more than the limit of 100000000"), std::string::npos)
+        << e.what();
+  }
+  s.simulation.dt = 1e-9;  // 3.3e7 steps a frame: allowed
+  EXPECT_EQ(choose_time_step(s).substeps, 33'333'334);
+}
+
 }  // namespace
 }  // namespace sandflow
