@@ -6,28 +6,15 @@
 
 #include "core/error.hpp"
 #include "scene/scene_loader.hpp"
+#include "support/scene_errors.hpp"
 
 namespace sandflow {
 namespace {
 
 constexpr const char* kEmitter = "[[emitter]]\ncount = 10\n";  // lines 1-2
 
-std::string error_of(const std::string& text, const std::vector<Override>& overrides = {}) {
-  try {
-    load_scene_from_string(text, "t.toml", overrides);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
-void expect_error(const std::string& text, const std::vector<std::string>& pieces,
-                  const std::vector<Override>& overrides = {}) {
-  const std::string msg = error_of(text, overrides);
-  ASSERT_FALSE(msg.empty()) << "expected an InputError for:\n" << text;
-  for (const auto& piece : pieces)
-    EXPECT_NE(msg.find(piece), std::string::npos) << "message: " << msg << "\nmissing: " << piece;
-}
+using test::error_of;
+using test::expect_error;
 
 TEST(CameraTable, DefaultsToTheAutomaticCamera) {
   const SceneConfig s = load_scene_from_string(kEmitter, "t.toml");

@@ -12,6 +12,7 @@
 #include "geometry/heightmap.hpp"
 #include "io/png_gray.hpp"
 #include "scene/scene_loader.hpp"
+#include "support/scene_errors.hpp"
 
 namespace sandflow {
 namespace {
@@ -20,22 +21,8 @@ namespace fs = std::filesystem;
 
 constexpr const char* kEmitter = "[[emitter]]\ncount = 10\n";  // lines 1-2
 
-std::string error_of(const std::string& text, const std::string& name = "t.toml") {
-  try {
-    load_scene_from_string(text, name);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
-void expect_error(const std::string& text, const std::vector<std::string>& pieces,
-                  const std::string& name = "t.toml") {
-  const std::string msg = error_of(text, name);
-  ASSERT_FALSE(msg.empty()) << "expected an InputError for:\n" << text;
-  for (const auto& piece : pieces)
-    EXPECT_NE(msg.find(piece), std::string::npos) << "message: " << msg << "\nmissing: " << piece;
-}
+using test::error_of;
+using test::expect_error;
 
 // A scratch folder for scene files and images, removed afterwards.
 class TempDir {

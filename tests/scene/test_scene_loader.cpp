@@ -13,6 +13,7 @@
 
 #include "core/error.hpp"
 #include "scene/scene_loader.hpp"
+#include "support/scene_errors.hpp"
 
 namespace sandflow {
 namespace {
@@ -22,24 +23,8 @@ constexpr const char* kMinimal =
     "[[emitter]]\n"
     "count = 100\n";
 
-// The message of the InputError the scene raises, or "" when it loads.
-std::string error_of(const std::string& text, const std::vector<Override>& overrides = {}) {
-  try {
-    load_scene_from_string(text, "t.toml", overrides);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
-// The message must contain every piece (a place, a key, what was expected).
-void expect_error(const std::string& text, const std::vector<std::string>& pieces,
-                  const std::vector<Override>& overrides = {}) {
-  const std::string msg = error_of(text, overrides);
-  ASSERT_FALSE(msg.empty()) << "expected an InputError for:\n" << text;
-  for (const auto& piece : pieces)
-    EXPECT_NE(msg.find(piece), std::string::npos) << "message: " << msg << "\nmissing: " << piece;
-}
+using test::error_of;
+using test::expect_error;
 
 TEST(SceneLoader, MinimalSceneTakesTheDefaults) {
   const SceneConfig c = load_scene_from_string(kMinimal, "scenes/floor.toml");
