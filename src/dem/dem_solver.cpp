@@ -187,6 +187,7 @@ void DemSolver::restore_state(DemState s, const Geometry& geometry) {
   acc_t_.assign(rolling_ ? n : 0, Vec3{});
   need_rebuild_ = s.need_rebuild;
   rebuild_count_ = s.rebuild_count;
+  ranges_stale_ = true;
   set_wall_params(geometry);
 }
 
@@ -304,6 +305,29 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
   acc_q_.resize(n);
   acc_t_.resize(rolling_ ? n : 0);
   need_rebuild_ = false;
+  ranges_stale_ = true;
+}
+
+void DemSolver::balance_ranges(const Grains& grains, std::size_t threads) {
+  // the work of a grain: its pair slots, and its integration (walls included) when it moves;
+  // split by grain count, the later ranges (the stream, the top of the pile: more active
+  // grains) kept the other threads waiting at the barrier
+  const std::size_t n = grains.size();
+  constexpr std::uint64_t kMoveCost = 6;  // in pair slots (perf of a 100,000-grain floor)
+  std::uint64_t total = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    total += pairs_.start[i + 1] - pairs_.start[i] +
+             (grains.state[i] == GrainState::Active ? kMoveCost : 0);
+  range_start_.assign(threads + 1, n);
+  range_start_[0] = 0;
+  std::uint64_t acc = 0;
+  std::size_t t = 1;
+  for (std::size_t i = 0; i < n && t < threads; ++i) {
+    acc += pairs_.start[i + 1] - pairs_.start[i] +
+           (grains.state[i] == GrainState::Active ? kMoveCost : 0);
+    while (t < threads && acc * threads >= total * t) range_start_[t++] = i + 1;
+  }
+  ranges_stale_ = false;
 }
 
 // The force pass and the integration are one sweep over the grains in storage order. Each pair
@@ -312,7 +336,7 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
 // every pair that touches i has been computed (the others belong to grains below i) and nobody
 // reads i's state again this step, so i is integrated on the spot, while its data are in cache.
 //
-// With T threads each takes a contiguous range of grains. The pairs that reach into a later range
+// With T threads each takes a contiguous range of grains (of about equal work). The pairs that reach into a later range
 // are computed first, by one thread in grain order, before anyone moves; their results wait in
 // their slots until their grain's turn. Every grain therefore adds the same terms in the same
 // order as a single thread would — its accumulator in ascending order of the other grain, its own
@@ -390,28 +414,32 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
 
     // 1. pairs that reach into a later thread's range, in grain order, before any grain moves
     const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
+    const std::vector<std::size_t>& range = range_start_;
 #pragma omp single
-    for (std::size_t t = 0; t < threads; ++t) {
-      const std::size_t lo = n * t / threads, hi = n * (t + 1) / threads;
-      for (std::size_t i = lo; i < hi; ++i) {
-        std::uint32_t first = pl.start[i + 1];  // rows are sorted by j
-        while (first > pl.start[i] && pl.j[first - 1] >= hi) --first;
-        split[i] = first;
-        for (std::uint32_t s = first; s < pl.start[i + 1]; ++s) {
-          ContactForce cf;
-          if (!compute_pair(i, s, cf)) continue;
-          pl.force[s] = cf.force_i;
-          pl.q[s] = cf.q;
-          if constexpr (kRolling) pl.t_roll[s] = cf.t_roll;
-          scatter(pl.j[s], cf);
+    {
+      if (ranges_stale_ || range.size() != threads + 1 || range.back() != n)
+        balance_ranges(grains, threads);
+      for (std::size_t t = 0; t < threads; ++t) {
+        const std::size_t lo = range[t], hi = range[t + 1];
+        for (std::size_t i = lo; i < hi; ++i) {
+          std::uint32_t first = pl.start[i + 1];  // rows are sorted by j
+          while (first > pl.start[i] && pl.j[first - 1] >= hi) --first;
+          split[i] = first;
+          for (std::uint32_t s = first; s < pl.start[i + 1]; ++s) {
+            ContactForce cf;
+            if (!compute_pair(i, s, cf)) continue;
+            pl.force[s] = cf.force_i;
+            pl.q[s] = cf.q;
+            if constexpr (kRolling) pl.t_roll[s] = cf.t_roll;
+            scatter(pl.j[s], cf);
+          }
         }
       }
     }
 
     // 2. the sweep: i's remaining pairs, its waiting ones, then i moves
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
-    const std::size_t lo = n * t / threads, hi = n * (t + 1) / threads;
-    for (std::size_t i = lo; i < hi; ++i) {
+    for (std::size_t i = range[t]; i < range[t + 1]; ++i) {
       Vec3 f{}, q{}, tr{};
       for (std::uint32_t s = pl.start[i]; s < split[i]; ++s) {
         ContactForce cf;

@@ -116,6 +116,8 @@ class DemSolver {
   /// allowance since the last rebuild.
   template <bool kRolling>
   bool sweep(Grains& grains, const Geometry& geometry, Real dt);
+  /// Splits the grains into `threads` contiguous ranges of about equal work for the sweep.
+  void balance_ranges(const Grains& grains, std::size_t threads);
 
   DemParams params_;
   bool rolling_;
@@ -132,6 +134,9 @@ class DemSolver {
   std::vector<Real> allow_, allow2_;  ///< per grain: how far it may move before a rebuild [m, m^2]
   std::vector<Vec3> acc_f_, acc_q_, acc_t_;  ///< per grain: reversed pair results of this step
   std::vector<std::uint32_t> split_;         ///< per grain: first slot reaching a later thread
+  /// The sweep's ranges, one per thread, of about equal work (set after each rebuild).
+  std::vector<std::size_t> range_start_;
+  bool ranges_stale_ = true;
   bool need_rebuild_ = true;
   std::int64_t rebuild_count_ = 0;
   DemCounters counters_;

@@ -105,25 +105,44 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   // One pass: each thread lists a contiguous range of grains into its own buffer; the buffers
   // are then joined in thread order, so the list is in grain order for any thread count. A pair
   // found by its higher-index grain goes to a side list and joins the lower one's row after.
+  // The ranges are of about equal work: a grain searches (2k + 1)^3 cells, k = 1 for most and
+  // 2-3 for the fast grains of a stream, which sit together at the end of the storage order.
   std::vector<std::uint32_t> own_count(n + 1, 0);
+  std::vector<std::uint8_t> reach(n);
+  std::uint64_t work = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const int k = std::max(1, static_cast<int>(std::ceil((r[i] + r_max + 2 * allow[i]) * inv_cell)));
+    reach[i] = static_cast<std::uint8_t>(std::min(k, 255));
+    work += static_cast<std::uint64_t>((2 * k + 1) * (2 * k + 1) * (2 * k + 1));
+  }
+  std::vector<std::size_t> range_start;
   std::vector<std::vector<std::uint32_t>> buffers;
   std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> side_buffers;
 #pragma omp parallel if (n >= kParallelMinGrains)
   {
 #pragma omp single
     {
-      buffers.resize(omp_get_num_threads());
-      side_buffers.resize(omp_get_num_threads());
+      const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
+      buffers.resize(threads);
+      side_buffers.resize(threads);
+      range_start.assign(threads + 1, n);
+      range_start[0] = 0;
+      std::uint64_t acc = 0;
+      std::size_t t = 1;
+      for (std::size_t i = 0; i < n && t < threads; ++i) {
+        const std::uint64_t k = reach[i];
+        acc += (2 * k + 1) * (2 * k + 1) * (2 * k + 1);
+        while (t < threads && acc * threads >= work * t) range_start[t++] = i + 1;
+      }
     }
-    std::vector<std::uint32_t>& buf = buffers[omp_get_thread_num()];
-    auto& side = side_buffers[omp_get_thread_num()];
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    std::vector<std::uint32_t>& buf = buffers[t];
+    auto& side = side_buffers[t];
     buf.clear();
     side.clear();
-#pragma omp for schedule(static)
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = range_start[t]; i < range_start[t + 1]; ++i) {
       const std::size_t first = buf.size();
-      const int k = std::max(1, static_cast<int>(std::ceil((r[i] + r_max + 2 * allow[i]) *
-                                                           inv_cell)));
+      const int k = reach[i];
       grid.for_each_within(x[i], k, [&](std::uint32_t j) {
         if (!listed(i, j)) return;
         if (j > i)

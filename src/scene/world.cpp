@@ -231,13 +231,23 @@ std::string World::where(std::int64_t step) const {
 
 void World::check_grains() {
   const Vec3 lo = domain_lo_, hi = domain_hi_;
-  for (std::size_t i = 0; i < grains_.size(); ++i) {
-    if (grains_.state[i] != GrainState::Active) continue;  // frozen grains do not move
+  auto fine = [&](std::size_t i) {
+    if (grains_.state[i] != GrainState::Active) return true;  // frozen grains do not move
     const Vec3& x = grains_.x[i];
     // (a NaN fails the comparisons too: the usual case costs one test per axis)
-    if (x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y && x.z >= lo.z && x.z <= hi.z &&
-        is_finite(grains_.v[i]))
-      continue;
+    return x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y && x.z >= lo.z &&
+           x.z <= hi.z && is_finite(grains_.v[i]);
+  };
+  // every step: a parallel look first, the grain-ordered walk below only when something is wrong
+  const std::size_t n = grains_.size();
+  int wrong = 0;
+#pragma omp parallel for schedule(static) reduction(max : wrong) if (n >= kParallelMinGrains)
+  for (std::size_t i = 0; i < n; ++i)
+    if (!fine(i)) wrong = 1;
+  if (!wrong) return;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (fine(i)) continue;
+    const Vec3& x = grains_.x[i];
     if (!is_finite(x) || !is_finite(grains_.v[i]))
       throw SimulationError(fmt::format(
           "{}: grain {} has a non-finite position or velocity; the time step {:.3g} s may be too "

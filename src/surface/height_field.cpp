@@ -91,6 +91,8 @@ void HeightField::measure(const Grains& hot, const std::vector<Real>& static_top
         hits_[fill[c]++] = {bottom, top};
       });
 
+  // (columns are independent: each thread walks its own)
+#pragma omp parallel for schedule(dynamic, 256) if (hits_.size() >= 4096)
   for (std::size_t c = 0; c < nc; ++c) {
     std::sort(hits_.begin() + hit_start_[c], hits_.begin() + hit_start_[c + 1],
               [](const Hit& a, const Hit& b) { return a.bottom < b.bottom; });
