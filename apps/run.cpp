@@ -229,6 +229,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
         {"rolling_min", hf.params().rolling_min},
         {"interface_thickness", sf->params().interface.thickness},
         {"trap_speed", sf->params().interface.trap_speed},
+        {"flow_speed", sf->params().flow_speed},
     };
     summary["transitions"] = {{"trapped", transitions.trapped},
                               {"dislodged", transitions.dislodged},

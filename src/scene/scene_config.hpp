@@ -53,6 +53,8 @@ struct SurfaceConfig {
   std::optional<Real> interface_thickness;  ///< T [m]; default one mean diameter
   std::optional<Real> update_interval;      ///< time between height-field updates [s]
   std::optional<Real> trap_speed;           ///< grains slower than this may be trapped [m/s]
+  /// a grain touching the pile faster than this makes the rolling layer flow and digs [m/s]
+  std::optional<Real> flow_speed;
   std::optional<std::array<Real, 4>> extent;  ///< [x0, y0, x1, y1] of the grid [m]; unset: auto
 };
 

@@ -558,6 +558,7 @@ void read_surface(TableReader r, SurfaceConfig& s, Real diameter) {
   r.read("interface_thickness", s.interface_thickness, kPositive);
   r.read("update_interval", s.update_interval, kPositive);
   r.read("trap_speed", s.trap_speed, kNonNegative);
+  r.read("flow_speed", s.flow_speed, kNonNegative);
   r.read("extent", s.extent);
   r.finish("[surface]");
 

@@ -7,9 +7,19 @@ namespace sandflow {
 void InterfaceLayer::static_tops(const HeightField& hf, const StaticStore& st,
                                  std::vector<Real>& out) const {
   out = hf.terrain();
-  for (std::size_t k = 0; k < st.size(); ++k)
-    hf.for_each_ray_hit(st.x[k], st.r[k],
-                        [&](std::size_t c, Real, Real top) { out[c] = std::max(out[c], top); });
+  // each thread takes its share of the grains into its own copy, then the copies are joined: a
+  // maximum, so the result does not depend on the thread count
+  const std::size_t n = st.size();
+#pragma omp parallel if (n >= kParallelMinGrains)
+  {
+    std::vector<Real> mine(out);
+#pragma omp for schedule(static) nowait
+    for (std::size_t k = 0; k < n; ++k)
+      hf.for_each_ray_hit(st.x[k], st.r[k],
+                          [&](std::size_t c, Real, Real top) { mine[c] = std::max(mine[c], top); });
+#pragma omp critical
+    for (std::size_t c = 0; c < out.size(); ++c) out[c] = std::max(out[c], mine[c]);
+  }
 }
 
 TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticStore& st,

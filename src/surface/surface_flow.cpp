@@ -24,9 +24,11 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
     counts_[i] = hot.state[i] != GrainState::Active || (contacts_[i] & DemSolver::kTouches);
   interface_.static_tops(hf_, st, static_top_);
   hf_.measure(hot, static_top_, counts_);
-  // The columns where grains move: a fast grain in contact with the pile. There the rolling
-  // layer flows (BCRE with theta0); elsewhere it is at rest and deposits up to theta_max.
-  const Real v2_fast = p_.interface.trap_speed * p_.interface.trap_speed;
+  // The columns where grains move: a grain in contact with the pile faster than flow_speed. There
+  // the rolling layer flows (BCRE with theta0); elsewhere it is at rest and deposits up to
+  // theta_max.
+  const Real v2_fast = p_.flow_speed * p_.flow_speed;
+  const Real v2_trap = p_.interface.trap_speed * p_.interface.trap_speed;
   flowing_.assign(hf_.columns(), 0);
   fast_.clear();
   for (std::size_t i = 0; i < hot.size(); ++i) {
@@ -74,7 +76,7 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
     if (hf_.column_of(x.x, x.y) < 0 || below_level(x)) continue;
     const Real static_centres = hf_.static_top_at(x.x, x.y) - T;
     const Real lowest = x.z + std::min(v.z, 0.0) * dt;
-    const bool trapped_next = norm2(v) < v2_fast && (contacts_[i] & DemSolver::kTouches);
+    const bool trapped_next = norm2(v) < v2_trap && (contacts_[i] & DemSolver::kTouches);
     const bool inside = x.z < static_centres;
     const bool reaching = !trapped_next && lowest < static_centres + 2 * hot.r[i];
     if (!inside && !reaching) continue;

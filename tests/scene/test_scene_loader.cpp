@@ -329,12 +329,14 @@ TEST(SceneLoader, SurfaceTableIsReadWithAnglesInRadians) {
       "interface_thickness = 0.015\n"
       "update_interval = 0.004\n"
       "trap_speed = 0.05\n"
+      "flow_speed = 0.2\n"
       "extent = [-1, -0.5, 1, 2]\n" +
       std::string(kMinimal);
   const SceneConfig c = load_scene_from_string(text, "t.toml");
   const SurfaceConfig& s = c.surface;
   ASSERT_TRUE(s.cell_size && s.exchange_rate && s.max_angle && s.rolling_min &&
-              s.interface_thickness && s.update_interval && s.trap_speed && s.extent);
+              s.interface_thickness && s.update_interval && s.trap_speed && s.flow_speed &&
+              s.extent);
   EXPECT_EQ(*s.cell_size, 0.012);
   EXPECT_EQ(*s.exchange_rate, 25.0);
   EXPECT_DOUBLE_EQ(s.repose_angle, kPi / 6);
@@ -343,6 +345,7 @@ TEST(SceneLoader, SurfaceTableIsReadWithAnglesInRadians) {
   EXPECT_EQ(*s.interface_thickness, 0.015);
   EXPECT_EQ(*s.update_interval, 0.004);
   EXPECT_EQ(*s.trap_speed, 0.05);
+  EXPECT_EQ(*s.flow_speed, 0.2);
   EXPECT_EQ(*s.extent, (std::array<Real, 4>{-1, -0.5, 1, 2}));
 }
 
@@ -378,6 +381,7 @@ TEST(SceneLoader, BadSurfaceValuesNameTheKey) {
   expect_error(s + "update_interval = 0\n", {"t.toml:4:1: surface.update_interval = 0 is not > 0"});
   expect_error(s + "trap_speed = -1\n", {"t.toml:4:1: surface.trap_speed = -1 is not >= 0"});
   expect_error(s + "trap_speed = inf\n", {"surface.trap_speed = inf is not a finite number"});
+  expect_error(s + "flow_speed = -0.1\n", {"t.toml:4:1: surface.flow_speed = -0.1 is not >= 0"});
 }
 
 TEST(SceneLoader, UnknownSurfaceKeyIsNamed) {
