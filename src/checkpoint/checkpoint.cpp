@@ -189,6 +189,7 @@ std::string section(std::uint32_t tag, const Checkpoint& c) {
           w.reals(*a, "a height-field column");
         w.reals(s.surface->h_seen, "the interface's h");
         w.reals(s.surface->L_seen, "the interface's L");
+        w.u8(s.surface->pending ? 1 : 0);
       }
       break;
   }
@@ -398,6 +399,9 @@ void read_section(std::uint32_t tag, Reader& r, Checkpoint& c) {
         *a = r.reals("a height-field array");
       sf.h_seen = r.reals("the interface's h");
       sf.L_seen = r.reals("the interface's L");
+      const std::uint8_t pending = r.u8("the interface's waiting flag");
+      if (pending > 1) r.fail("the interface's waiting flag is neither 0 nor 1");
+      sf.pending = pending == 1;
       s.surface = std::move(sf);
       break;
     }

@@ -100,6 +100,7 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
   // a new grain's surface reaches its slot plus the jitter plus its radius
   reach_ = config.jitter * std::max(0.0, spacing_ - d_max_) / 2 + d_max_ / 2;
   next_time_ = config.start;
+  gravity_ = gravity;
 
   if (config.type == EmitterType::Pour) {
     // one layer of slots on a hexagonal pattern inside the disk or rectangle (at most
@@ -133,6 +134,8 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
           "{}: rate {} grains/s is more than this pour can emit without overlaps ({:.0f} "
           "grains/s); enlarge the pour area or its downward speed",
           where, config.rate, max_rate));
+    const Real wait = max_wait();
+    drop_ = norm(config.velocity) * wait + g * wait * wait / 2;
     slot_lo_ = slot_hi_ = slots_.front();
     for (const Vec3& p : slots_) {
       slot_lo_ = min(slot_lo_, p);
@@ -154,7 +157,7 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
 }
 
 bool Emitter::near_slots(const Vec3& x, Real r) const {
-  const Real m = reach_ + r;
+  const Real m = reach_ + drop_ + r;
   return x.x > slot_lo_.x - m && x.x < slot_hi_.x + m && x.y > slot_lo_.y - m &&
          x.y < slot_hi_.y + m && x.z > slot_lo_.z - m && x.z < slot_hi_.z + m;
 }
@@ -189,7 +192,12 @@ void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vect
     emitted_ = config_.count;
     return;
   }
-  // pour: a batch of randomly chosen free slots
+  // pour: a batch of randomly chosen free slots, emitted tau after its time (it waited for a
+  // rebuild of the pair list, or for the step): placed and moving as free fall since its time
+  // would have them, so that the wait changes nothing while they fly
+  const Real tau = std::max(0.0, t - next_time_);
+  const Vec3 shift = config_.velocity * tau + gravity_ * (tau * tau / 2);
+  const Vec3 velocity = config_.velocity + gravity_ * tau;
   owed_ += per_batch_;
   auto k = static_cast<std::int64_t>(owed_);
   k = std::min<std::int64_t>(
@@ -211,8 +219,9 @@ void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vect
     const auto pick =
         q + static_cast<std::size_t>(rng.uniform() * static_cast<Real>(order.size() - q));
     std::swap(order[q], order[std::min(pick, order.size() - 1)]);
-    if (occupied(slots_[order[q]])) continue;
-    out.push_back({jittered(slots_[order[q]]), config_.velocity, draw_radius(rng)});
+    const Vec3 slot = slots_[order[q]] + shift;
+    if (occupied(slot)) continue;
+    out.push_back({jittered(slot), velocity, draw_radius(rng)});
     ++placed;
   }
   owed_ += static_cast<Real>(k - placed);  // the grains of taken slots come with later batches

@@ -52,6 +52,12 @@ class Emitter {
 
   /// True when a batch is due at time t.
   bool due(Real t) const { return !done() && t >= next_time_; }
+  /// How long a due batch of a pour may wait (to join the next rebuild of the pair list): half
+  /// the time between batches, so that batches never merge. Its grains are placed where their
+  /// free fall since the batch's time has brought them. 0 for a block or a lattice.
+  Real max_wait() const { return config_.type == EmitterType::Pour ? batch_interval_ / 2 : 0; }
+  /// Time of the next batch [s].
+  Real next_time() const { return next_time_; }
   /// True when a grain centred at x with radius r may overlap a new grain of this pour.
   bool near_slots(const Vec3& x, Real r) const;
   /// Grains a pour owed but could not place because its slots were occupied (summed per batch).
@@ -95,7 +101,9 @@ class Emitter {
   Real per_batch_ = 0;       ///< pour: grains per batch (fractional)
   Real owed_ = 0;            ///< pour: fractional grains carried to the next batch
   Real next_time_ = 0;       ///< time of the next batch [s]
+  Vec3 gravity_;             ///< [m/s^2]
   Real reach_ = 0;           ///< largest distance of a new grain's surface from its slot [m]
+  Real drop_ = 0;            ///< pour: largest fall of a batch during its wait [m]
   Vec3 slot_lo_, slot_hi_;   ///< bounds of the slot centres (pour) or of the grains (box) [m]
   std::int64_t emitted_ = 0;
   std::int64_t delayed_ = 0;

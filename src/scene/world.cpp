@@ -186,6 +186,8 @@ void World::emit() {
     // ones placed this step by an earlier emitter
     nearby_x_.clear();
     nearby_r_.clear();
+    // new grains need a new pair list: a batch waits for the list's next rebuild, a little
+    if (e.due(time_) && !dem_.needs_rebuild() && time_ < e.next_time() + e.max_wait()) continue;
     if (e.due(time_) && e.type() == EmitterType::Pour) {
       auto consider = [&](const Vec3& x, Real r) {
         if (e.near_slots(x, r)) {
@@ -216,6 +218,9 @@ void World::step() {
     transitions_ +=
         surface_->update(grains_, static_, dem_, geometry_, surface_->params().update_interval);
     ++surface_updates_;
+  } else if (surface_ && dem_.needs_rebuild()) {
+    ScopedStage s(profile_, Stage::Surface);
+    transitions_ += surface_->catch_up(grains_, static_, dem_, geometry_);
   }
   if (!leaving_.empty()) remove_leaving();
   dem_.step(grains_, geometry_, ts_.dt, profile_);

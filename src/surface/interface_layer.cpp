@@ -24,7 +24,8 @@ void InterfaceLayer::static_tops(const HeightField& hf, const StaticStore& st,
 
 TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticStore& st,
                                           DemSolver& dem,
-                                          const std::vector<std::uint8_t>& contacts) {
+                                          const std::vector<std::uint8_t>& contacts,
+                                          bool list_changes) {
   TransitionCounts n;
   const Real T = p_.thickness;
   const Real m = p_.margin;
@@ -41,7 +42,7 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
       continue;
     }
     if (x.z < hf.terrain()[static_cast<std::size_t>(c)]) {  // below the column's level
-      if (hot.state[i] != GrainState::Active) {
+      if (hot.state[i] != GrainState::Active && list_changes) {
         hot.state[i] = GrainState::Active;
         dem.invalidate();
         ++n.dislodged;
@@ -50,6 +51,10 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
       continue;
     }
     const Real h = hf.static_top_at(x.x, x.y);
+    if (!list_changes && hot.state[i] != GrainState::Active) {
+      keep.push_back(i);
+      continue;
+    }
     if (hot.state[i] == GrainState::Active) {
       // only a grain resting on something: a slow grain at the top of a bounce stays free
       if (x.z < h && norm2(hot.v[i]) < v2_trap && (contacts[i] & DemSolver::kTouches)) {
@@ -75,6 +80,7 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
     keep.push_back(i);
   }
   if (keep.size() != hot.size()) hot.permute(keep);
+  if (!list_changes) return n;
 
   // 2. the static grains where h fell (and around: h is interpolated between column centres)
   const std::size_t nc = hf.columns();

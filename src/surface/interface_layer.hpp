@@ -58,7 +58,7 @@ class InterfaceLayer {
   /// step where the hot set changed. A woken grain starts without contact history.
   /// `contacts` is DemSolver::contacts_of for the hot grains.
   TransitionCounts transfer(const HeightField& hf, Grains& hot, StaticStore& st, DemSolver& dem,
-                            const std::vector<std::uint8_t>& contacts);
+                            const std::vector<std::uint8_t>& contacts, bool list_changes = true);
 
   const InterfaceParams& params() const { return p_; }
   /// For restarts: h and L as the last transfer saw them (empty before the first).

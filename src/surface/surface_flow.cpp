@@ -82,7 +82,19 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
     if (!inside && !reaching) continue;
     clear_path(x, v, hot.r[i], lowest - hot.r[i] - T);
   }
-  return interface_.transfer(hf_, hot, st, dem, contacts_);
+  // Dislodging, sleeping and waking change the pair list: unless it is rebuilt anyway at this
+  // step, they wait for its next rebuild, and at most until the next update.
+  const bool now = dem.needs_rebuild() || pending_;
+  pending_ = !now;
+  return interface_.transfer(hf_, hot, st, dem, contacts_, now);
+}
+
+TransitionCounts SurfaceFlow::catch_up(Grains& hot, StaticStore& st, DemSolver& dem,
+                                       const Geometry& geometry) {
+  if (!pending_ || !dem.needs_rebuild()) return {};
+  pending_ = false;
+  dem.contacts_of(hot, geometry, contacts_);
+  return interface_.transfer(hf_, hot, st, dem, contacts_, true);
 }
 
 }  // namespace sandflow

@@ -18,6 +18,7 @@ namespace sandflow {
 struct SurfaceState {
   HeightField::State columns;
   std::vector<Real> h_seen, L_seen;
+  bool pending = false;  ///< transitions wait for the pair list's next rebuild
 };
 
 class SurfaceFlow {
@@ -29,16 +30,21 @@ class SurfaceFlow {
   TransitionCounts update(Grains& hot, StaticStore& st, DemSolver& dem, const Geometry& geometry,
                           Real dt);
 
+  /// Applies the transitions the last update left waiting, if `dem` rebuilds its lists anyway.
+  TransitionCounts catch_up(Grains& hot, StaticStore& st, DemSolver& dem,
+                            const Geometry& geometry);
+
   const SurfaceParams& params() const { return p_; }
   const HeightField& height_field() const { return hf_; }
 
   SurfaceState save_state() const {
-    return {hf_.state(), interface_.h_seen(), interface_.L_seen()};
+    return {hf_.state(), interface_.h_seen(), interface_.L_seen(), pending_};
   }
   /// Restores a saved state (sizes checked by the caller).
   void restore_state(SurfaceState s) {
     hf_.restore(std::move(s.columns));
     interface_.restore_seen(std::move(s.h_seen), std::move(s.L_seen));
+    pending_ = s.pending;
   }
 
  private:
@@ -51,6 +57,7 @@ class SurfaceFlow {
   std::vector<Real> static_top_;
   std::vector<std::uint8_t> contacts_, counts_, flowing_;
   std::vector<std::uint32_t> fast_;
+  bool pending_ = false;  ///< transitions that change the pair list wait for its next rebuild
 };
 
 }  // namespace sandflow
