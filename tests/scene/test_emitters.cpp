@@ -49,6 +49,36 @@ TEST(Emitters, ABlockFarLargerThanItsCountPlacesExactlyTheCountFromItsLowCorner)
   }
 }
 
+TEST(Emitters, ALatePourBatchIsWhereAndAsFastAsFreeFallSinceItsTimeMakesIt) {
+  // a batch may wait for the pair list's next rebuild; its grains must not notice
+  EmitterConfig pour;
+  pour.type = EmitterType::Pour;
+  pour.center = {0, 0, 0.5};
+  pour.radius = 0.01;
+  pour.count = 1000;
+  pour.rate = 50000;  // about 35 grains a batch
+  pour.velocity = {0.2, 0, -1.5};
+  pour.jitter = 0.5;
+  Emitter on_time(pour, millimetre_grains(), kGravity, "test");
+  Emitter late(pour, millimetre_grains(), kGravity, "test");
+  ASSERT_GT(late.max_wait(), 0.0);
+  const Real t0 = late.next_time(), tau = 0.9 * late.max_wait();
+  Rng rng_a(7), rng_b(7);
+  std::vector<NewGrain> a, b;
+  on_time.emit(t0, rng_a, a);
+  late.emit(t0 + tau, rng_b, b);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 0u);
+  const Vec3 shift = pour.velocity * tau + kGravity * (tau * tau / 2);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_LT(norm(b[i].x - (a[i].x + shift)), 1e-12) << i;
+    EXPECT_LT(norm(b[i].v - (a[i].v + kGravity * tau)), 1e-12) << i;
+    EXPECT_EQ(a[i].r, b[i].r);
+    EXPECT_TRUE(late.near_slots(b[i].x, b[i].r));  // the slot check sees where it lands
+  }
+  EXPECT_EQ(on_time.next_time(), late.next_time());  // the schedule does not slip
+}
+
 TEST(Emitters, ABoxTooSmallForItsCountIsRefusedWithWhatItHolds) {
   // 3 x 3 x 3 slots at 1.05 mm in a 3.2 mm box
   const EmitterConfig e = block({0, 0, 1}, {0.0032, 0.0032, 0.0032}, 28);

@@ -96,6 +96,39 @@ TEST(Interface, ErosionDislodgesAndDeepGrainsSleep) {
   f.expect_conserved(2);
 }
 
+TEST(Interface, WithoutListChangesOnlyTrappingHappensAndTheRestWaits) {
+  // what a surface update does when the pair list is fresh: a trap keeps the list (the pair of
+  // two frozen grains only leaves it at the next rebuild); dislodging, sleeping and waking wait
+  Fixture f(0.05);
+  f.hot.add(0, {0.05, 0.05, 0.045}, {0.01, 0, 0}, kR, 2600);  // slow, below h: trapped
+  f.st.add(2, {0.03, 0.03, 0.035}, kR, 3 * 10 + 3);            // static
+  f.st.file_by_column(100);
+  EXPECT_EQ(f.transfer().trapped, 1);
+  f.hot.add(1, {0.05, 0.05, 0.005}, {}, kR, 2600);  // frozen, deep below the new h - T - m
+  f.hot.state[1] = GrainState::Interface;
+  f.hot.add(3, {0.07, 0.07, 0.025}, {0.01, 0, 0}, kR, 2600);  // slow, below the new h
+  f.set_h(0.03);  // 0 is now above h + m, 1 below h - T - m, and 2 within T of h
+  std::vector<std::uint8_t> contacts(f.hot.size(), DemSolver::kTouches);
+  TransitionCounts n = f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts, false);
+  EXPECT_EQ(n.trapped, 1);
+  EXPECT_EQ(f.state_of(3), GrainState::Interface);
+  EXPECT_EQ(n.dislodged + n.slept + n.woken, 0);
+  EXPECT_EQ(f.state_of(0), GrainState::Interface);
+  EXPECT_EQ(f.state_of(1), GrainState::Interface);
+  EXPECT_EQ(f.state_of(2), GrainState::Static);
+  // the next transfer that may change the list does what waited, waking where h fell since the
+  // last such transfer (not since the last update)
+  contacts.assign(f.hot.size(), DemSolver::kTouches);
+  n = f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts, true);
+  EXPECT_EQ(n.dislodged, 1);
+  EXPECT_EQ(n.slept, 1);
+  EXPECT_EQ(n.woken, 1);
+  EXPECT_EQ(f.state_of(0), GrainState::Active);
+  EXPECT_EQ(f.state_of(1), GrainState::Static);
+  EXPECT_EQ(f.state_of(2), GrainState::Interface);
+  f.expect_conserved(4);
+}
+
 TEST(Interface, GrainInFlightIsNeverTrapped) {
   Fixture f(0.05);
   f.hot.add(0, {0.05, 0.05, 0.045}, {}, kR, 2600);  // slow and below h, but touching nothing
