@@ -134,7 +134,8 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
           "{}: rate {} grains/s is more than this pour can emit without overlaps ({:.0f} "
           "grains/s); enlarge the pour area or its downward speed",
           where, config.rate, max_rate));
-    const Real wait = max_wait();
+    // a batch is born at the first step past its wait: bound the fall over a whole interval
+    const Real wait = batch_interval_;
     drop_ = norm(config.velocity) * wait + g * wait * wait / 2;
     slot_lo_ = slot_hi_ = slots_.front();
     for (const Vec3& p : slots_) {

@@ -103,7 +103,7 @@ class Emitter {
   Real next_time_ = 0;       ///< time of the next batch [s]
   Vec3 gravity_;             ///< [m/s^2]
   Real reach_ = 0;           ///< largest distance of a new grain's surface from its slot [m]
-  Real drop_ = 0;            ///< pour: largest fall of a batch during its wait [m]
+  Real drop_ = 0;            ///< pour: more than a batch can fall during its wait [m]
   Vec3 slot_lo_, slot_hi_;   ///< bounds of the slot centres (pour) or of the grains (box) [m]
   std::int64_t emitted_ = 0;
   std::int64_t delayed_ = 0;

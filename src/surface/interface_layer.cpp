@@ -35,6 +35,10 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
   std::vector<std::uint32_t> keep;
   keep.reserve(hot.size());
   for (std::uint32_t i = 0; i < hot.size(); ++i) {
+    if (!list_changes && hot.state[i] != GrainState::Active) {  // only a trap keeps the list
+      keep.push_back(i);
+      continue;
+    }
     const Vec3& x = hot.x[i];
     const std::int64_t c = hf.column_of(x.x, x.y);
     if (c < 0) {  // outside the grid a grain is always simulated
@@ -42,7 +46,7 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
       continue;
     }
     if (x.z < hf.terrain()[static_cast<std::size_t>(c)]) {  // below the column's level
-      if (hot.state[i] != GrainState::Active && list_changes) {
+      if (hot.state[i] != GrainState::Active) {
         hot.state[i] = GrainState::Active;
         dem.invalidate();
         ++n.dislodged;
@@ -51,10 +55,6 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
       continue;
     }
     const Real h = hf.static_top_at(x.x, x.y);
-    if (!list_changes && hot.state[i] != GrainState::Active) {
-      keep.push_back(i);
-      continue;
-    }
     if (hot.state[i] == GrainState::Active) {
       // only a grain resting on something: a slow grain at the top of a bounce stays free
       if (x.z < h && norm2(hot.v[i]) < v2_trap && (contacts[i] & DemSolver::kTouches)) {

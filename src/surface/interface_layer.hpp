@@ -56,7 +56,9 @@ class InterfaceLayer {
 
   /// Applies the four transitions against the current h; `dem` rebuilds its lists at the next
   /// step where the hot set changed. A woken grain starts without contact history.
-  /// `contacts` is DemSolver::contacts_of for the hot grains.
+  /// `contacts` is DemSolver::contacts_of for the hot grains. Without `list_changes` only trapping
+  /// happens (it keeps the pair list); the rest waits for a later call with them, which wakes
+  /// grains wherever h fell since the last such call.
   TransitionCounts transfer(const HeightField& hf, Grains& hot, StaticStore& st, DemSolver& dem,
                             const std::vector<std::uint8_t>& contacts, bool list_changes = true);
 
