@@ -116,7 +116,8 @@ class DemSolver {
   /// allowance since the last rebuild.
   template <bool kRolling>
   bool sweep(Grains& grains, const Geometry& geometry, Real dt);
-  /// Splits the grains into `threads` contiguous ranges of about equal work for the sweep.
+  /// Splits the grains into `threads` contiguous ranges of about equal time for the sweep: each
+  /// thread's share of the estimated work follows the speed it showed since the last split.
   void balance_ranges(const Grains& grains, std::size_t threads);
 
   DemParams params_;
@@ -137,6 +138,8 @@ class DemSolver {
   /// The sweep's ranges, one per thread, of about equal work (set after each rebuild).
   std::vector<std::size_t> range_start_;
   bool ranges_stale_ = true;
+  std::vector<double> share_;  ///< per thread: its share of the estimated work
+  std::vector<double> busy_;   ///< per thread: seconds in its range since the last split
   bool need_rebuild_ = true;
   std::int64_t rebuild_count_ = 0;
   DemCounters counters_;
