@@ -5,7 +5,10 @@
 #include <limits>
 #include <utility>
 
+#include <omp.h>
+
 #include "core/error.hpp"
+#include "dem/neighbor_list.hpp"  // kParallelMinGrains
 
 namespace sandflow {
 
@@ -77,19 +80,42 @@ void HeightField::measure(const Grains& hot, const std::vector<Real>& static_top
                           const std::vector<std::uint8_t>& counts) {
   auto skip = [&](std::size_t i) { return !counts.empty() && !counts[i]; };
   const std::size_t nc = columns();
-  // file every ray hit by column (counting sort), then walk each column from the bottom up
+  // File every ray hit by column (counting sort), then walk each column from the bottom up. Each
+  // thread counts and files the hits of its own share of the grains; a column holds the shares
+  // in thread order, so its hits are in grain order for any thread count.
+  const std::size_t n = hot.size();
   hit_start_.assign(nc + 1, 0);
-  for (std::size_t i = 0; i < hot.size(); ++i)
-    if (!skip(i))
-      for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) { ++hit_start_[c + 1]; });
-  for (std::size_t c = 0; c < nc; ++c) hit_start_[c + 1] += hit_start_[c];
-  hits_.resize(hit_start_[nc]);
-  std::vector<std::uint32_t> fill(hit_start_.begin(), hit_start_.end() - 1);
-  for (std::size_t i = 0; i < hot.size(); ++i)
-    if (!skip(i))
-      for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real bottom, Real top) {
-        hits_[fill[c]++] = {bottom, top};
-      });
+#pragma omp parallel if (n >= kParallelMinGrains)
+  {
+    const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+#pragma omp single
+    hit_fill_.assign(threads * nc, 0);
+    std::uint32_t* mine = hit_fill_.data() + t * nc;
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i)
+      if (!skip(i))
+        for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) { ++mine[c]; });
+#pragma omp single
+    {
+      std::uint32_t at = 0;
+      for (std::size_t c = 0; c < nc; ++c) {
+        for (std::size_t u = 0; u < threads; ++u) {
+          const std::uint32_t count = hit_fill_[u * nc + c];
+          hit_fill_[u * nc + c] = at;
+          at += count;
+        }
+        hit_start_[c + 1] = at;
+      }
+      hits_.resize(at);
+    }
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i)
+      if (!skip(i))
+        for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real bottom, Real top) {
+          hits_[mine[c]++] = {bottom, top};
+        });
+  }
 
   // (columns are independent: each thread walks its own)
 #pragma omp parallel for schedule(dynamic, 256) if (hits_.size() >= 4096)

@@ -125,6 +125,7 @@ class HeightField {
   std::vector<Real> L_, H_, h_, R_, theta_, Gamma_;
   // scratch of measure(): ray hits filed by column
   std::vector<std::uint32_t> hit_start_;
+  std::vector<std::uint32_t> hit_fill_;  ///< per thread and column: where its next hit goes
   struct Hit { Real bottom, top; };
   std::vector<Hit> hits_;
 };

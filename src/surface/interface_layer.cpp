@@ -1,24 +1,60 @@
 #include "surface/interface_layer.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace sandflow {
 
-void InterfaceLayer::static_tops(const HeightField& hf, const StaticStore& st,
-                                 std::vector<Real>& out) const {
-  out = hf.terrain();
+const std::vector<Real>& InterfaceLayer::static_tops(const HeightField& hf,
+                                                     const StaticStore& st) {
+  if (tops_follow(st) && tops_.size() == hf.columns() && tops_L_ == hf.terrain()) return tops_;
+  tops_ = tops_L_ = hf.terrain();
+  tops_r_max_ = 0;
   // each thread takes its share of the grains into its own copy, then the copies are joined: a
   // maximum, so the result does not depend on the thread count
   const std::size_t n = st.size();
 #pragma omp parallel if (n >= kParallelMinGrains)
   {
-    std::vector<Real> mine(out);
+    std::vector<Real> mine(tops_);
+    Real r_max = 0;
 #pragma omp for schedule(static) nowait
-    for (std::size_t k = 0; k < n; ++k)
+    for (std::size_t k = 0; k < n; ++k) {
       hf.for_each_ray_hit(st.x[k], st.r[k],
                           [&](std::size_t c, Real, Real top) { mine[c] = std::max(mine[c], top); });
+      r_max = std::max(r_max, st.r[k]);
+    }
 #pragma omp critical
-    for (std::size_t c = 0; c < out.size(); ++c) out[c] = std::max(out[c], mine[c]);
+    {
+      for (std::size_t c = 0; c < tops_.size(); ++c) tops_[c] = std::max(tops_[c], mine[c]);
+      tops_r_max_ = std::max(tops_r_max_, r_max);
+    }
+  }
+  tops_of_ = n;
+  return tops_;
+}
+
+void InterfaceLayer::recompute_tops(const HeightField& hf, const StaticStore& st,
+                                    const std::vector<std::uint8_t>& dirty) {
+  // a grain filed in column c reaches the columns within r + cell/2 of its centre
+  const int nx = hf.nx(), ny = hf.ny();
+  const int reach = static_cast<int>(std::ceil((tops_r_max_ + 0.5 * hf.cell()) / hf.cell()));
+  std::vector<std::uint8_t> scan(dirty.size(), 0);
+  for (std::size_t c = 0; c < dirty.size(); ++c) {
+    if (!dirty[c]) continue;
+    tops_[c] = tops_L_[c];
+    const int i = static_cast<int>(c % nx), j = static_cast<int>(c / nx);
+    for (int jj = std::max(j - reach, 0); jj <= std::min(j + reach, ny - 1); ++jj)
+      for (int ii = std::max(i - reach, 0); ii <= std::min(i + reach, nx - 1); ++ii)
+        scan[static_cast<std::size_t>(jj) * nx + ii] = 1;
+  }
+  for (std::size_t c = 0; c < scan.size(); ++c) {
+    if (!scan[c]) continue;
+    for (std::uint32_t q = st.column_start[c]; q < st.column_start[c + 1]; ++q) {
+      const std::uint32_t k = st.by_column[q];
+      hf.for_each_ray_hit(st.x[k], st.r[k], [&](std::size_t cc, Real, Real top) {
+        if (dirty[cc]) tops_[cc] = std::max(tops_[cc], top);
+      });
+    }
   }
 }
 
@@ -72,6 +108,13 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
       ++n.dislodged;
     } else if (x.z < h - T - m && !(contacts[i] & DemSolver::kNearActive)) {
       // (an active grain within reach would sink into it: static grains push nothing)
+      if (tops_follow(st)) {
+        hf.for_each_ray_hit(x, hot.r[i], [&](std::size_t cc, Real, Real top) {
+          tops_[cc] = std::max(tops_[cc], top);
+        });
+        tops_r_max_ = std::max(tops_r_max_, hot.r[i]);
+        ++tops_of_;
+      }
       st.add(hot.id[i], x, hot.r[i], static_cast<std::uint32_t>(c));
       dem.invalidate();
       ++n.slept;
@@ -113,6 +156,9 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
         wake[k] = 1;
     }
   }
+  // the tops of the columns the woken grains reached are computed again from the grains that stay
+  const bool follow = tops_follow(st) && tops_.size() == nc;
+  std::vector<std::uint8_t> dirty(follow ? nc : 0, 0);
   std::vector<std::uint32_t> stay;
   stay.reserve(st.size());
   for (std::uint32_t k = 0; k < st.size(); ++k) {
@@ -120,6 +166,8 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
       stay.push_back(k);
       continue;
     }
+    if (follow)
+      hf.for_each_ray_hit(st.x[k], st.r[k], [&](std::size_t c, Real, Real) { dirty[c] = 1; });
     hot.add(st.id[k], st.x[k], Vec3{}, st.r[k], p_.density);
     // (one below its column's level moves on its own; transfer() makes it ACTIVE next time)
     hot.state.back() = GrainState::Interface;
@@ -129,6 +177,10 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
   if (n.woken > 0) {
     st.permute(stay);
     st.file_by_column(nc);
+    if (follow) {
+      tops_of_ = st.size();
+      recompute_tops(hf, st, dirty);
+    }
   }
   return n;
 }

@@ -51,8 +51,10 @@ class InterfaceLayer {
  public:
   explicit InterfaceLayer(const InterfaceParams& p) : p_(p) {}
 
-  /// Per column, the highest point a STATIC grain reaches under its thick ray (or L).
-  void static_tops(const HeightField& hf, const StaticStore& st, std::vector<Real>& out) const;
+  /// Per column, the highest point a STATIC grain reaches under its thick ray (or L). transfer()
+  /// keeps it up to date as grains sleep and wake; it is computed from all static grains only
+  /// at the first call, after a restart and where a column's level changed.
+  const std::vector<Real>& static_tops(const HeightField& hf, const StaticStore& st);
 
   /// Applies the four transitions against the current h; `dem` rebuilds its lists at the next
   /// step where the hot set changed. A woken grain starts without contact history.
@@ -69,12 +71,24 @@ class InterfaceLayer {
   void restore_seen(std::vector<Real> h_seen, std::vector<Real> L_seen) {
     h_seen_ = std::move(h_seen);
     L_seen_ = std::move(L_seen);
+    tops_of_ = kNoTops;
   }
 
  private:
   InterfaceParams p_;
   std::vector<Real> h_seen_;  ///< h at the last transfer: where it fell, static grains may wake
   std::vector<Real> L_seen_;  ///< L at the last transfer: where it rose, grains below it wake
+
+  /// static_tops() of the store when it held tops_of_ grains, over the levels tops_L_.
+  static constexpr std::size_t kNoTops = static_cast<std::size_t>(-1);
+  std::vector<Real> tops_, tops_L_;
+  std::size_t tops_of_ = kNoTops;
+  Real tops_r_max_ = 0;  ///< the largest static grain's radius
+  /// Whether the tops follow the store (before it changes).
+  bool tops_follow(const StaticStore& st) const { return tops_of_ == st.size(); }
+  /// Recomputes the tops of the marked columns from the static grains (filed by column).
+  void recompute_tops(const HeightField& hf, const StaticStore& st,
+                      const std::vector<std::uint8_t>& dirty);
 };
 
 }  // namespace sandflow

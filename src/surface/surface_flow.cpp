@@ -22,8 +22,7 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
   counts_.resize(hot.size());
   for (std::size_t i = 0; i < hot.size(); ++i)
     counts_[i] = hot.state[i] != GrainState::Active || (contacts_[i] & DemSolver::kTouches);
-  interface_.static_tops(hf_, st, static_top_);
-  hf_.measure(hot, static_top_, counts_);
+  hf_.measure(hot, interface_.static_tops(hf_, st), counts_);
   // The columns where grains move: a grain in contact with the pile faster than flow_speed. There
   // the rolling layer flows (BCRE with theta0); elsewhere it is at rest and deposits up to
   // theta_max.

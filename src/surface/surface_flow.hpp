@@ -54,7 +54,6 @@ class SurfaceFlow {
   SurfaceParams p_;
   HeightField hf_;
   InterfaceLayer interface_;
-  std::vector<Real> static_top_;
   std::vector<std::uint8_t> contacts_, counts_, flowing_;
   std::vector<std::uint32_t> fast_;
   bool pending_ = false;  ///< transitions that change the pair list wait for its next rebuild

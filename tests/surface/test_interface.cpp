@@ -4,6 +4,7 @@
 #include <set>
 #include <vector>
 
+#include "core/rng.hpp"
 #include "surface/interface_layer.hpp"
 
 namespace sandflow {
@@ -173,6 +174,43 @@ TEST(Interface, StaticGrainsWakeOnlyWhereTheStaticTopFell) {
   f.st.add(7, {0.05, 0.05, 0.04}, kR, 55);  // within T of h: would wake if its column were visited
   f.transfer();                             // first call: h has not fallen anywhere
   EXPECT_EQ(f.state_of(7), GrainState::Static);
+}
+
+TEST(Interface, StaticTopsFollowSleepAndWakeAsIfComputedAfresh) {
+  // the tops are kept as grains sleep and wake; a layer that never saw the store computes them
+  // from every static grain: the two must agree exactly (both are maxima of the same hits)
+  Fixture f(0.05);
+  Rng rng(7);
+  GrainId id = 0;
+  for (int k = 0; k < 300; ++k, ++id) {
+    const Vec3 x{rng.uniform(0, 0.1), rng.uniform(0, 0.1), rng.uniform(0.0, 0.03)};
+    f.st.add(id, x, rng.uniform(0.0045, 0.0055), static_cast<std::uint32_t>(f.hf.column_of(x.x, x.y)));
+  }
+  f.st.file_by_column(100);
+  for (int k = 0; k < 100; ++k, ++id) {  // frozen grains, some deep enough to sleep
+    f.hot.add(id, {rng.uniform(0, 0.1), rng.uniform(0, 0.1), rng.uniform(0.01, 0.05)}, {},
+              rng.uniform(0.0045, 0.0055), 2600);
+    f.hot.state.back() = GrainState::Interface;
+  }
+  auto afresh = [&]() -> std::vector<Real> {
+    InterfaceLayer fresh(Fixture::interface_params());
+    return fresh.static_tops(f.hf, f.st);
+  };
+  const std::vector<Real> before = f.layer.static_tops(f.hf, f.st);
+  EXPECT_EQ(before, afresh());
+
+  TransitionCounts n = f.transfer();  // h = 0.05: the deep ones sleep
+  EXPECT_GT(n.slept, 10);
+  EXPECT_EQ(f.layer.static_tops(f.hf, f.st), afresh());
+  EXPECT_NE(f.layer.static_tops(f.hf, f.st), before);
+
+  f.set_h(0.02);  // the static top falls: grains above h - T wake
+  const std::vector<Real> asleep = f.layer.static_tops(f.hf, f.st);
+  n = f.transfer();
+  EXPECT_GT(n.woken, 10);
+  EXPECT_EQ(f.layer.static_tops(f.hf, f.st), afresh());
+  EXPECT_NE(f.layer.static_tops(f.hf, f.st), asleep);
+  f.expect_conserved(400);
 }
 
 }  // namespace
