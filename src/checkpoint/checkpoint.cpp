@@ -656,11 +656,13 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
     if (slot != kNoSlot && slot >= n) fail("a slot of the last rebuild is out of range");
   if (d.x_at_build.size() != n || d.allow.size() != n)
     fail("the reference positions or allowances do not match the grains");
-  // allowances as a rebuild clamps them
+  // allowances as a rebuild clamps them (0: frozen at the last rebuild; one that moves since
+  // has left it at once, which rebuilds)
   const DemParams& dp = world.dem().params();
   const Real a_min = dp.skin / 2, a_max = std::max(a_min, dp.skin_max);
   for (std::size_t i = 0; i < n; ++i)
-    if (!(d.allow[i] >= a_min && d.allow[i] <= a_max) || !inside(d.x_at_build[i]))
+    if (!(d.allow[i] == 0 || (d.allow[i] >= a_min && d.allow[i] <= a_max)) ||
+        !inside(d.x_at_build[i]))
       fail("a reference position or allowance is out of range");
 
   // the surface flow: one entry per column, and static grains only where it files them

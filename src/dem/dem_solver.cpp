@@ -242,15 +242,18 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
   ++rebuild_count_;
   ++counters_.rebuilds;
 
-  // allowances: half the skin, or the way a fast grain goes in skin_steps steps at its speed
+  // allowances: half the skin, or the way a fast grain goes in skin_steps steps at its speed; a
+  // frozen grain none (it moves only through a change of state, which rebuilds the lists), so
+  // its pairs reach only as far as the active partner may go and it searches for none itself
   const Real a_min = params_.skin / 2;
   const Real a_max = std::max(a_min, params_.skin_max);
   const Real horizon = dt * params_.skin_steps;
   allow_.resize(n);
   allow2_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const Real a = grains.state[i] == GrainState::Active ? norm(grains.v[i]) * horizon : 0;
-    allow_[i] = std::clamp(a, a_min, a_max);
+    allow_[i] = grains.state[i] == GrainState::Active
+                    ? std::clamp(norm(grains.v[i]) * horizon, a_min, a_max)
+                    : 0;
     allow2_[i] = allow_[i] * allow_[i];
   }
 

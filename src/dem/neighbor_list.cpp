@@ -1,6 +1,8 @@
 #include "dem/neighbor_list.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <omp.h>
 
 namespace sandflow {
@@ -79,12 +81,22 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   const std::size_t n = grains.size();
   const auto& x = grains.x;
   const auto& r = grains.r;
-  Real r_max = 0, a_min = n ? allow[0] : 0;
+  constexpr Real kNone = std::numeric_limits<Real>::infinity();
+  Real r_max = 0, a_min_active = kNone;
   for (std::size_t i = 0; i < n; ++i) {
     r_max = std::max(r_max, r[i]);
-    a_min = std::min(a_min, allow[i]);
+    if (grains.state[i] == GrainState::Active) a_min_active = std::min(a_min_active, allow[i]);
   }
-  // cells fit the pairs of the least mobile grains; a grain with a larger allowance looks further
+  // a frozen grain less mobile than every active one owns no pair (see below): it searches none
+  auto searches = [&](std::size_t i) {
+    return grains.state[i] == GrainState::Active || !(allow[i] < a_min_active);
+  };
+  Real a_min = kNone;
+  for (std::size_t i = 0; i < n; ++i)
+    if (searches(i)) a_min = std::min(a_min, allow[i]);
+  if (a_min == kNone) a_min = 0;
+  // cells fit the pairs of the least mobile searching grains; one with a larger allowance looks
+  // further
   grid.build(x, 2 * r_max + 2 * a_min);
   const Real inv_cell = 1.0 / grid.cell_size();
 
@@ -110,10 +122,14 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   std::vector<std::uint32_t> own_count(n + 1, 0);
   std::vector<std::uint8_t> reach(n);
   std::uint64_t work = 0;
+  auto cells_searched = [&](std::size_t i) -> std::uint64_t {
+    const std::uint64_t k = reach[i];
+    return k == 0 ? 0 : (2 * k + 1) * (2 * k + 1) * (2 * k + 1);
+  };
   for (std::size_t i = 0; i < n; ++i) {
     const int k = std::max(1, static_cast<int>(std::ceil((r[i] + r_max + 2 * allow[i]) * inv_cell)));
-    reach[i] = static_cast<std::uint8_t>(std::min(k, 255));
-    work += static_cast<std::uint64_t>((2 * k + 1) * (2 * k + 1) * (2 * k + 1));
+    reach[i] = searches(i) ? static_cast<std::uint8_t>(std::min(k, 255)) : 0;  // 0: no search
+    work += cells_searched(i);
   }
   std::vector<std::size_t> range_start;
   std::vector<std::vector<std::uint32_t>> buffers;
@@ -130,8 +146,7 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
       std::uint64_t acc = 0;
       std::size_t t = 1;
       for (std::size_t i = 0; i < n && t < threads; ++i) {
-        const std::uint64_t k = reach[i];
-        acc += (2 * k + 1) * (2 * k + 1) * (2 * k + 1);
+        acc += cells_searched(i);
         while (t < threads && acc * threads >= work * t) range_start[t++] = i + 1;
       }
     }
@@ -143,6 +158,7 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
     for (std::size_t i = range_start[t]; i < range_start[t + 1]; ++i) {
       const std::size_t first = buf.size();
       const int k = reach[i];
+      if (k == 0) continue;  // (own_count[i + 1] stays 0)
       grid.for_each_within(x[i], k, [&](std::uint32_t j) {
         if (!listed(i, j)) return;
         if (j > i)
@@ -170,8 +186,17 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
     out.start = std::move(own_start);
     out.j = std::move(own);
   } else {
-    // rows = own pairs merged with the side pairs of the same grain, both ascending
-    std::sort(side.begin(), side.end());
+    // rows = own pairs merged with the side pairs of the same grain, both ascending: the side
+    // pairs come in ascending order of their finder b, so filing them by a (a stable counting
+    // sort) leaves each row's ascending
+    {
+      std::vector<std::uint32_t> at(n + 1, 0);
+      for (const auto& [a, b] : side) ++at[a + 1];
+      for (std::size_t i = 0; i < n; ++i) at[i + 1] += at[i];
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> filed(side.size());
+      for (const auto& p : side) filed[at[p.first]++] = p;
+      side = std::move(filed);
+    }
     out.start.assign(n + 1, 0);
     for (const auto& [a, b] : side) ++out.start[a + 1];
     for (std::size_t i = 0; i < n; ++i)

@@ -35,9 +35,10 @@ const std::vector<Real>& InterfaceLayer::static_tops(const HeightField& hf,
 
 void InterfaceLayer::recompute_tops(const HeightField& hf, const StaticStore& st,
                                     const std::vector<std::uint8_t>& dirty) {
-  // a grain filed in column c reaches the columns within r + cell/2 of its centre
+  // a grain filed in column c reaches the columns whose centres are closer than r + cell/2 to
+  // its centre, which is within the column: at most `reach` columns away
   const int nx = hf.nx(), ny = hf.ny();
-  const int reach = static_cast<int>(std::ceil((tops_r_max_ + 0.5 * hf.cell()) / hf.cell()));
+  const int reach = static_cast<int>(std::ceil((tops_r_max_ + 0.5 * hf.cell()) / hf.cell() - 0.5));
   std::vector<std::uint8_t> scan(dirty.size(), 0);
   for (std::size_t c = 0; c < dirty.size(); ++c) {
     if (!dirty[c]) continue;
@@ -166,8 +167,10 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
       stay.push_back(k);
       continue;
     }
-    if (follow)
-      hf.for_each_ray_hit(st.x[k], st.r[k], [&](std::size_t c, Real, Real) { dirty[c] = 1; });
+    if (follow)  // (a column's top is one of its hits: only the highest one's leaving lowers it)
+      hf.for_each_ray_hit(st.x[k], st.r[k], [&](std::size_t c, Real, Real top) {
+        if (top >= tops_[c]) dirty[c] = 1;
+      });
     hot.add(st.id[k], st.x[k], Vec3{}, st.r[k], p_.density);
     // (one below its column's level moves on its own; transfer() makes it ACTIVE next time)
     hot.state.back() = GrainState::Interface;

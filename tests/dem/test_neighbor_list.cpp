@@ -82,6 +82,32 @@ TEST(NeighbourList, FrozenPairsAreNotListed) {
     EXPECT_TRUE(g.state[i] == GrainState::Active || g.state[j] == GrainState::Active);
 }
 
+// The solver gives frozen grains no allowance: they search for nothing (every pair of theirs is
+// an active grain's), and the cells fit the active grains. A frozen grain with an allowance above
+// the least active one's still searches. The pairs must be the brute-force ones all the same.
+TEST(NeighbourList, FrozenGrainsWithoutAllowanceLoseNoPair) {
+  for (std::uint64_t seed : {8, 9}) {
+    Grains g = random_grains(3000, seed, 0.12);
+    Rng rng(seed);
+    std::vector<Real> allow(g.size());
+    for (std::size_t i = 0; i < g.size(); ++i) {
+      const bool frozen = i % 5 < 3;
+      if (frozen) g.state[i] = GrainState::Interface;
+      allow[i] = frozen ? 0.0 : (i % 11 == 0 ? rng.uniform(0.001, 0.012) : 0.001);
+    }
+    allow[30] = 0.002;  // frozen, more mobile than the least active grain: it searches
+    allow[31] = 0.0005;  // frozen, less mobile: it does not
+    CellGrid grid;
+    PairList pl, none;
+    build_pair_list(g, allow, true, grid, none, {}, pl);
+    auto expected = brute_force_pairs(g, allow);
+    std::sort(expected.begin(), expected.end());
+    ASSERT_GT(expected.size(), 1000u);
+    EXPECT_EQ(listed_pairs(pl), expected) << "seed " << seed;
+    EXPECT_LT(grid.cell_size(), 2 * 0.006 + 2 * 0.001 + 1e-12);  // sized for the active grains
+  }
+}
+
 TEST(NeighbourList, HistorySurvivesARebuildWithResorting) {
   // a compressed random packing, so that many contacts carry tangential history
   Grains g = random_grains(2000, 11, 0.08);
