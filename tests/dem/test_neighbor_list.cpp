@@ -29,6 +29,18 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> listed_pairs(const PairList
   return out;
 }
 
+// Lists the pairs of g for the allowances `allow` into pl (grid as scratch) and checks them
+// against brute force; there must be many, or the check proves little.
+void expect_brute_force_pairs(const Grains& g, const std::vector<Real>& allow, CellGrid& grid,
+                              PairList& pl, std::uint64_t seed) {
+  PairList none;
+  build_pair_list(g, allow, true, grid, none, {}, pl);
+  auto expected = brute_force_pairs(g, allow);
+  std::sort(expected.begin(), expected.end());
+  ASSERT_GT(expected.size(), 1000u);
+  EXPECT_EQ(listed_pairs(pl), expected) << "seed " << seed;
+}
+
 TEST(NeighbourList, SamePairsAsBruteForce) {
   for (std::uint64_t seed : {1, 2, 3}) {
     Grains g = random_grains(3000, seed, 0.15);
@@ -58,12 +70,8 @@ TEST(NeighbourList, LargerAllowancesOfAFewGrainsGiveTheBruteForcePairs) {
     for (std::size_t i = 0; i < g.size(); i += 7) allow[i] = rng.uniform(0.001, 0.012);
     allow[17] = allow[18] = 0.004;  // equal large allowances: found once, by the lower index
     CellGrid grid;
-    PairList pl, none;
-    build_pair_list(g, allow, true, grid, none, {}, pl);
-    auto expected = brute_force_pairs(g, allow);
-    std::sort(expected.begin(), expected.end());
-    ASSERT_GT(expected.size(), 1000u);
-    EXPECT_EQ(listed_pairs(pl), expected) << "seed " << seed;
+    PairList pl;
+    expect_brute_force_pairs(g, allow, grid, pl, seed);
     for (std::size_t i = 0; i + 1 < pl.start.size(); ++i)  // rows ascending, as the sweep needs
       EXPECT_TRUE(std::is_sorted(pl.j.begin() + pl.start[i], pl.j.begin() + pl.start[i + 1]));
   }
@@ -98,12 +106,8 @@ TEST(NeighbourList, FrozenGrainsWithoutAllowanceLoseNoPair) {
     allow[30] = 0.002;  // frozen, more mobile than the least active grain: it searches
     allow[31] = 0.0005;  // frozen, less mobile: it does not
     CellGrid grid;
-    PairList pl, none;
-    build_pair_list(g, allow, true, grid, none, {}, pl);
-    auto expected = brute_force_pairs(g, allow);
-    std::sort(expected.begin(), expected.end());
-    ASSERT_GT(expected.size(), 1000u);
-    EXPECT_EQ(listed_pairs(pl), expected) << "seed " << seed;
+    PairList pl;
+    expect_brute_force_pairs(g, allow, grid, pl, seed);
     EXPECT_LT(grid.cell_size(), 2 * 0.006 + 2 * 0.001 + 1e-12);  // sized for the active grains
   }
 }
