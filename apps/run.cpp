@@ -157,11 +157,15 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
   double simulated_sum = 0;
   Real max_overlap = 0;
   TransitionCounts transitions;
+  Real energy_trapped = 0, energy_woken = 0, energy_preloaded = 0;
   for (const FrameStats& st : res.frames) {
     simulated_sum += static_cast<double>(st.n_active + st.n_interface);
     res.wall_seconds += st.wall_seconds;
     max_overlap = std::max(max_overlap, st.max_overlap_rel);
     transitions += st.transitions;
+    energy_trapped += st.energy_trapped;
+    energy_woken += st.energy_woken;
+    energy_preloaded += st.energy_preloaded;
   }
 
   // the heap of the final state, and what ended up where it must not be
@@ -234,7 +238,11 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
     summary["transitions"] = {{"trapped", transitions.trapped},
                               {"dislodged", transitions.dislodged},
                               {"slept", transitions.slept},
-                              {"woken", transitions.woken}};
+                              {"woken", transitions.woken},
+                              {"woken_by_reach", transitions.woken_by_reach}};
+    summary["transition_energy"] = {{"removed_by_trapping_j", energy_trapped},
+                                    {"added_by_waking_j", energy_woken},
+                                    {"preloaded_j", energy_preloaded}};
   }
   nlohmann::json emitters = nlohmann::json::array();
   for (const Emitter& e : world.emitters())
@@ -579,9 +587,14 @@ int run_command(const RunOptions& o) {
     fmt::print("repose angle     n/a ({})\n", fit.reason);
   if (s.contains("transitions")) {
     const auto& t = s["transitions"];
-    fmt::print("transitions      trapped {}, dislodged {}, slept {}, woken {}\n",
+    fmt::print("transitions      trapped {}, dislodged {}, slept {}, woken {} (and {} within reach "
+               "of a moving grain)\n",
                t["trapped"].get<std::int64_t>(), t["dislodged"].get<std::int64_t>(),
-               t["slept"].get<std::int64_t>(), t["woken"].get<std::int64_t>());
+               t["slept"].get<std::int64_t>(), t["woken"].get<std::int64_t>(),
+               t["woken_by_reach"].get<std::int64_t>());
+    const auto& e = s["transition_energy"];
+    fmt::print("energy           {:.3g} J removed by trapping, {:.3g} J added by waking\n",
+               e["removed_by_trapping_j"].get<double>(), e["added_by_waking_j"].get<double>());
   }
   for (const auto& e : s["emitters"]) {
     const auto emitted = e["emitted"].get<std::int64_t>(), count = e["count"].get<std::int64_t>();

@@ -113,6 +113,9 @@ void write_frame_stats(Writer& w, const FrameStats& s) {
                          s.left_domain})
     w.i64(v);
   w.real(s.wall_seconds, "a frame's wall_seconds");
+  w.i64(s.transitions.woken_by_reach);
+  for (Real e : {s.energy_trapped, s.energy_woken, s.energy_preloaded})
+    w.real(e, "a frame's transition energy");
 }
 
 void write_list(Writer& w, const WallList& l, const char* what) {
@@ -169,6 +172,7 @@ std::string section(std::uint32_t tag, const Checkpoint& c) {
       w.u32s(d.pairs.start);
       w.u32s(d.pairs.j);
       w.u8s(d.pairs.touch);
+      w.reals(d.pairs.delta0, "a pair's rest overlap");
       w.reals(d.pairs.c_n, "a pair's damping");
       w.vecs(d.pairs.xi, "a pair's tangential history");
       w.vecs(d.pairs.psi, "a pair's rolling history");
@@ -307,6 +311,9 @@ FrameStats read_frame_stats(Reader& r) {
                           &s.left_domain})
     *v = r.count_value("a frame's counter");
   s.wall_seconds = r.real("a frame's wall_seconds");
+  s.transitions.woken_by_reach = r.count_value("a frame's counter");
+  for (Real* e : {&s.energy_trapped, &s.energy_woken, &s.energy_preloaded})
+    *e = r.real("a frame's transition energy");
   return s;
 }
 
@@ -375,6 +382,7 @@ void read_section(std::uint32_t tag, Reader& r, Checkpoint& c) {
       d.pairs.start = r.u32s("the pair list's rows");
       d.pairs.j = r.u32s("the pair list");
       d.pairs.touch = r.u8s("the pairs' contact flags");
+      d.pairs.delta0 = r.reals("the pairs' rest overlaps");
       d.pairs.c_n = r.reals("the pairs' damping");
       d.pairs.xi = r.vecs("the pairs' tangential history");
       d.pairs.psi = r.vecs("the pairs' rolling history");
@@ -634,14 +642,22 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   const std::size_t slots = d.pairs.j.size();
   check_rows(d.pairs.start, slots, "the pair list");
   const bool rolling = world.dem().params().contact.mu_r > 0;
-  if (d.pairs.touch.size() != slots || d.pairs.c_n.size() != slots || d.pairs.xi.size() != slots ||
+  if (d.pairs.touch.size() != slots || d.pairs.delta0.size() != slots ||
+      d.pairs.c_n.size() != slots || d.pairs.xi.size() != slots ||
       d.pairs.psi.size() != (rolling ? slots : 0))
     fail("the pairs' history does not match the pair list");
   for (std::size_t i = 0; i < n; ++i)
-    for (std::uint32_t q = d.pairs.start[i]; q < d.pairs.start[i + 1]; ++q)
+    for (std::uint32_t q = d.pairs.start[i]; q < d.pairs.start[i + 1]; ++q) {
+      const std::uint8_t t = d.pairs.touch[q];
       if (d.pairs.j[q] <= i || d.pairs.j[q] >= n ||
-          (q > d.pairs.start[i] && d.pairs.j[q] <= d.pairs.j[q - 1]) || d.pairs.touch[q] > 1)
+          (q > d.pairs.start[i] && d.pairs.j[q] <= d.pairs.j[q - 1]) ||
+          (t != 0 && t != kTouching && t != (kTouching | kPreloaded)))
         fail(fmt::format("the pair list's row {} is malformed", i));
+      // a rest overlap is a part of the grains' overlap, below both radii
+      const Real d0 = d.pairs.delta0[q];
+      if (!(d0 >= 0) || (t & kPreloaded ? !(d0 < 2 * r_hi) : d0 != 0))
+        fail(fmt::format("the pair list's row {} has a rest overlap of {} m", i, d0));
+    }
   auto check_list = [&](const WallList& l, std::size_t objects, const char* what) {
     check_rows(l.start, l.obstacle.size(), what);
     if (l.xi.size() != l.obstacle.size() || l.psi.size() != l.obstacle.size())

@@ -30,7 +30,7 @@
 
 namespace sandflow {
 
-constexpr std::uint32_t kCheckpointFormat = 2;
+constexpr std::uint32_t kCheckpointFormat = 3;
 
 struct Checkpoint {
   std::uint32_t format = kCheckpointFormat;

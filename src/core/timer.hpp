@@ -19,13 +19,15 @@ class Stopwatch {
 };
 
 /// Forces covers the contact forces and the integration, done in one sweep (dem_solver.cpp);
-/// Surface the height-field updates and the transfers through the interface.
-enum class Stage { Emit, Surface, Neighbours, Forces, kCount };
+/// Surface the height-field updates and the transfers through the interface; Reach the invariant
+/// of the layers, held before each rebuild of the pair list (static grains within reach woken).
+enum class Stage { Emit, Surface, Reach, Neighbours, Forces, kCount };
 
 inline std::string_view stage_name(Stage s) {
   switch (s) {
     case Stage::Emit: return "emit";
     case Stage::Surface: return "surface";
+    case Stage::Reach: return "reach";
     case Stage::Neighbours: return "neighbours";
     case Stage::Forces: return "forces";
     default: return "?";

@@ -54,6 +54,12 @@ struct ContactHistory {
   Vec3 psi;  ///< accumulated rolling displacement [m]
 };
 
+/// Energy stored in the springs of a contact with overlap delta (normal, tangential, rolling) [J].
+inline Real elastic_energy(const ContactParams& p, Real delta, const ContactHistory& h) {
+  const Real k_r = p.mu_r > 0 ? p.k_r : 0;  // (without rolling resistance psi is not kept)
+  return 0.5 * (p.k_n * delta * delta + p.k_t * norm2(h.xi) + k_r * norm2(h.psi));
+}
+
 /// Damping coefficient of the normal dashpot: c_n = 2 sqrt(m_eff k_n) beta [kg/s].
 inline Real normal_damping(const ContactParams& p, Real m_eff) {
   return 2.0 * std::sqrt(m_eff * p.k_n) * p.beta;

@@ -21,6 +21,10 @@ struct DemParams {
   int skin_steps = 0;
   Real skin_max = 0;      ///< largest allowance of a fast grain [m]
   int sort_every = 20;    ///< re-sort grains by cell every N rebuilds (0: never)
+  /// A preloaded contact's rest overlap decays with this time constant, so that two grains a
+  /// change of state left inside each other are pushed apart slowly: the dashpot takes up the
+  /// motion, and the spring does only the work of moving them (0: it never decays) [s]
+  Real preload_relax_time = 0;
   Vec3 gravity{0, 0, -9.81};
 };
 
@@ -40,6 +44,12 @@ struct DemCounters {
   std::int64_t wall_contacts = 0;
   Real max_overlap_rel = 0;      ///< largest overlap / smaller diameter, since the last reset
   std::int64_t rebuilds = 0;     ///< neighbour-list rebuilds, since the last reset
+  // Energy through the changes of state (surface mode), since the last reset [J]:
+  Real energy_inert = 0;      ///< in the springs of contacts that went inert as both grains froze
+  Real energy_released = 0;   ///< in the springs of contacts a released grain opened inside an
+                              ///< ACTIVE one (which the invariant of the layers forbids), and
+                              ///< the work of the springs as the preloads relax
+  Real energy_preloaded = 0;  ///< withheld: contacts opened inside between grains frozen before
 };
 
 /// What a restart needs of a DemSolver between two steps (src/checkpoint/): the lists in their
@@ -79,6 +89,20 @@ class DemSolver {
 
   /// Call after grains were added, removed or changed state: the next step rebuilds the lists.
   void invalidate() { need_rebuild_ = true; }
+  /// How far grain i may move before the lists are rebuilt, as a rebuild now would set it: half
+  /// the skin, or for a fast ACTIVE grain the way it goes in skin_steps steps at its speed, up to
+  /// skin_max; a frozen grain none (it moves only through a change of state, which rebuilds) [m].
+  Real allowance(const Grains& grains, std::size_t i, Real dt) const;
+  /// A grain that has just changed state (dislodged, or woken) and rebuilds the lists. A contact it
+  /// opens there with a grain that was frozen too starts at its present overlap: two frozen
+  /// grains may lie inside each other, and the change must not turn that into energy. One it
+  /// opens inside an ACTIVE grain deeper than the two close in one step (how deep any contact
+  /// of the DEM may begin) is counted in DemCounters::energy_released: the invariant of the
+  /// layers says there is none. Consumed by the next rebuild, in the same step.
+  void release(GrainId id) {
+    released_.push_back(id);
+    need_rebuild_ = true;
+  }
   bool needs_rebuild() const { return need_rebuild_; }
   /// Drops the contact history of a grain (its pairs and wall contacts start afresh at the next
   /// rebuild, which this requests): for grains that change state.
@@ -108,6 +132,9 @@ class DemSolver {
 
  private:
   void rebuild(Grains& grains, const Geometry& geometry, Real dt);
+  /// At a rebuild for steps of dt: the contacts of the released grains that open inside another
+  /// grain.
+  void open_released_contacts(const Grains& grains, Real dt);
   void set_wall_params(const Geometry& geometry);
   /// Boundary particles within reach of each ACTIVE grain, history carried by grain id.
   void build_boundary_list(const Grains& grains);
@@ -142,6 +169,7 @@ class DemSolver {
   std::vector<double> busy_;   ///< per thread: seconds in its range since the last split
   bool need_rebuild_ = true;
   std::int64_t rebuild_count_ = 0;
+  std::vector<GrainId> released_;  ///< since the last rebuild (always empty between steps)
   DemCounters counters_;
 };
 

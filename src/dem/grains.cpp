@@ -1,5 +1,6 @@
 #include "dem/grains.hpp"
 
+#include <algorithm>
 #include <utility>
 
 namespace sandflow {
@@ -43,6 +44,7 @@ void StaticStore::add(GrainId gid, const Vec3& pos, Real radius, std::uint32_t c
   x.push_back(pos);
   r.push_back(radius);
   column.push_back(col);
+  ++revision;
 }
 
 void StaticStore::permute(std::span<const std::uint32_t> perm) {
@@ -50,6 +52,7 @@ void StaticStore::permute(std::span<const std::uint32_t> perm) {
   apply_permutation(x, perm);
   apply_permutation(r, perm);
   apply_permutation(column, perm);
+  ++revision;
 }
 
 void StaticStore::file_by_column(std::size_t columns) {
@@ -59,6 +62,13 @@ void StaticStore::file_by_column(std::size_t columns) {
   by_column.resize(size());
   std::vector<std::uint32_t> fill(column_start.begin(), column_start.end() - 1);
   for (std::uint32_t k = 0; k < size(); ++k) by_column[fill[column[k]]++] = k;
+  // by height (then slot: a canonical order), so a query for a band of heights stops early
+  for (std::size_t c = 0; c < columns; ++c)
+    std::sort(by_column.begin() + column_start[c], by_column.begin() + column_start[c + 1],
+              [&](std::uint32_t a, std::uint32_t b) {
+                return x[a].z < x[b].z || (x[a].z == x[b].z && a < b);
+              });
+  ++revision;
 }
 
 }  // namespace sandflow

@@ -49,13 +49,15 @@ struct StaticStore {
   std::vector<std::uint32_t> column;
   // the grains of each column, valid after file_by_column()
   std::vector<std::uint32_t> column_start;  ///< columns+1 offsets into by_column
-  std::vector<std::uint32_t> by_column;     ///< slots, grouped by column
+  std::vector<std::uint32_t> by_column;     ///< slots, grouped by column, each column's by height
+  /// Counts every change, so that an index built on the store knows when it is stale.
+  std::uint64_t revision = 0;
 
   std::size_t size() const { return id.size(); }
   void add(GrainId gid, const Vec3& pos, Real radius, std::uint32_t col);
   /// As Grains::permute (the column index must be rebuilt after).
   void permute(std::span<const std::uint32_t> perm);
-  /// Files every grain by its column (counting sort).
+  /// Files every grain by its column (counting sort), each column's grains in ascending z.
   void file_by_column(std::size_t columns);
 };
 

@@ -222,6 +222,7 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   out.xi.resize(slots);
   out.psi.resize(rolling ? slots : 0);
   out.touch.resize(slots);
+  out.delta0.resize(slots);
   const std::size_t old_n = old.start.empty() ? 0 : old.start.size() - 1;
   auto old_slot = [&](GrainId id) {
     return id < old_slot_of_id.size() ? old_slot_of_id[id] : kNoSlot;
@@ -236,8 +237,9 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
     auto carry = [&](std::uint32_t s, std::uint32_t os, bool flipped) {
       out.xi[s] = os == kNoSlot ? Vec3{} : (flipped ? -old.xi[os] : old.xi[os]);
       if (rolling) out.psi[s] = os == kNoSlot || !old_rolling ? Vec3{} : old.psi[os];
-      // a pair with history is marked touching, so the next force pass clears it if it is not
-      out.touch[s] = os != kNoSlot && old.touch[os];
+      // a pair with history keeps its flags, so the next force pass clears them if it is apart
+      out.touch[s] = os == kNoSlot ? 0 : old.touch[os];
+      out.delta0[s] = os == kNoSlot || !(old.touch[os] & kPreloaded) ? 0 : old.delta0[os];
     };
     if (same_slots) {
       // both rows are sorted by j: walk them together

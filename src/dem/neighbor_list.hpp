@@ -20,11 +20,17 @@
 
 namespace sandflow {
 
+/// PairList::touch flags: the pair touches (at the last step); its normal spring rests at delta0.
+constexpr std::uint8_t kTouching = 1, kPreloaded = 2;
+
 /// Verlet half list in compressed rows, with per-pair history and per-step results.
 struct PairList {
   std::vector<std::uint32_t> start;      ///< n+1 offsets: slots of grain i are [start[i], start[i+1])
   std::vector<std::uint32_t> j;          ///< the other grain of each slot (j > i)
-  std::vector<std::uint8_t> touch;       ///< 1 while the pair touches
+  std::vector<std::uint8_t> touch;       ///< 0, kTouching, or kTouching | kPreloaded
+  /// Overlap at which the normal spring rests, for a preloaded contact (one that a change of
+  /// state opened between two grains already inside each other); it follows the grains apart [m]
+  std::vector<Real> delta0;
   std::vector<Real> c_n;                 ///< normal damping of the pair, fixed by its masses [kg/s]
   std::vector<Vec3> xi;                  ///< tangential history per slot [m]
   std::vector<Vec3> psi;                 ///< rolling history per slot (empty without rolling) [m]

@@ -72,8 +72,10 @@ void scale_grain_count(SceneConfig& scene, std::int64_t total) {
 }
 
 namespace {
-DemParams dem_params(const SceneConfig& scene) {
+DemParams dem_params(const SceneConfig& scene, const TimeStep& ts) {
   DemParams p;
+  // five contact times: slow against the dashpot, which damps a contact within about one
+  p.preload_relax_time = 5 * ts.t_c;
   p.contact = contact_params(scene.material);
   p.skin = scene.simulation.skin * scene.material.diameter;
   p.skin_steps = scene.simulation.skin_steps;
@@ -156,7 +158,7 @@ World::World(const SceneConfig& scene)
       stiffness_(choose_stiffness(scene, scene.simulation.mode, geometry_)),
       scene_(with_stiffness(scene, stiffness_)),
       ts_(choose_time_step(scene_)),
-      dem_(dem_params(scene_)),
+      dem_(dem_params(scene_, ts_)),
       rng_(scene.simulation.seed) {
   if (!geometry_.meshes().empty()) dem_.set_boundary(boundary_particles(geometry_));
   if (scene_.simulation.mode == Mode::Surface)
@@ -223,6 +225,10 @@ void World::step() {
     transitions_ += surface_->catch_up(grains_, static_, dem_, geometry_);
   }
   if (!leaving_.empty()) remove_leaving();
+  if (surface_ && dem_.needs_rebuild()) {
+    ScopedStage s(profile_, Stage::Reach);
+    transitions_ += surface_->wake_within_reach(grains_, static_, dem_, ts_.dt);
+  }
   dem_.step(grains_, geometry_, ts_.dt, profile_);
   check_overlap();
   ++step_;
@@ -358,6 +364,9 @@ FrameStats World::advance_frame() {
   st.wall_contacts = dem_.counters().wall_contacts;
   st.max_overlap_rel = dem_.counters().max_overlap_rel;
   st.rebuilds = dem_.counters().rebuilds;
+  st.energy_trapped = transitions_.energy_trapped + dem_.counters().energy_inert;
+  st.energy_woken = dem_.counters().energy_released;
+  st.energy_preloaded = dem_.counters().energy_preloaded;
   st.kinetic_energy = kinetic_energy();
   // (the guards of each step see the positions before it: this one sees the frame's last step)
   for (std::size_t i = 0; i < grains_.size(); ++i)

@@ -56,6 +56,12 @@ struct FrameStats {
   Real kinetic_energy = 0;           ///< translational + rotational [J]
   std::int64_t rebuilds = 0;         ///< neighbour-list rebuilds during the frame
   TransitionCounts transitions;      ///< grains that changed state during the frame
+  /// Energy through the changes of state during the frame [J]: removed by trapping (the trapped
+  /// grains' kinetic energy, and the springs of their contacts with frozen grains, which go
+  /// inert), added by waking and dislodging (springs opened inside an ACTIVE grain: none while
+  /// the invariant of the layers holds), and withheld by preloading the contacts a change of
+  /// state opened between grains that were frozen inside each other (DemSolver::release).
+  Real energy_trapped = 0, energy_woken = 0, energy_preloaded = 0;
   std::int64_t surface_updates = 0;  ///< height-field updates during the frame
   std::int64_t left_domain = 0;      ///< grains removed on leaving the domain (on_leave = count)
   double wall_seconds = 0;           ///< wall-clock time of the frame [s]

@@ -1,9 +1,16 @@
 #include "surface/interface_layer.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
+#include "dem/neighbor_list.hpp"  // kParallelMinGrains
+
 namespace sandflow {
+
+Real vertical_band(Real thickness, Real theta) {
+  return thickness / std::cos(std::min(std::abs(theta), deg_to_rad(60.0)));
+}
 
 const std::vector<Real>& InterfaceLayer::static_tops(const HeightField& hf,
                                                      const StaticStore& st) {
@@ -85,7 +92,7 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
     if (x.z < hf.terrain()[static_cast<std::size_t>(c)]) {  // below the column's level
       if (hot.state[i] != GrainState::Active) {
         hot.state[i] = GrainState::Active;
-        dem.invalidate();
+        dem.release(hot.id[i]);
         ++n.dislodged;
       }
       keep.push_back(i);
@@ -95,9 +102,10 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
     if (hot.state[i] == GrainState::Active) {
       // only a grain resting on something: a slow grain at the top of a bounce stays free
       if (x.z < h && norm2(hot.v[i]) < v2_trap && (contacts[i] & DemSolver::kTouches)) {
-        // frozen where it is; its pairs with other frozen grains leave the list at the next
-        // rebuild, while those with active grains keep their springs, so that the grains resting
-        // on it do not lose their friction
+        // frozen where it is; its contacts with other frozen grains go inert at the next step,
+        // while those with active grains keep their springs, so that the grains resting on it do
+        // not lose their friction
+        n.energy_trapped += 0.5 * (hot.m[i] * norm2(hot.v[i]) + norm2(hot.w[i]) / hot.inv_I[i]);
         hot.state[i] = GrainState::Interface;
         hot.v[i] = hot.w[i] = {};
         ++n.trapped;
@@ -105,9 +113,10 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
     } else if (x.z > h + m) {
       hot.state[i] = GrainState::Active;
       hot.v[i] = hot.w[i] = {};
-      dem.invalidate();  // its pairs with interface grains enter the list
+      dem.release(hot.id[i]);  // its pairs with interface grains enter the list
       ++n.dislodged;
-    } else if (x.z < h - T - m && !(contacts[i] & DemSolver::kNearActive)) {
+    } else if (x.z < h - vertical_band(T, hf.slope()[static_cast<std::size_t>(c)]) - m &&
+               !(contacts[i] & DemSolver::kNearActive)) {
       // (an active grain within reach would sink into it: static grains push nothing)
       if (tops_follow(st)) {
         hf.for_each_ray_hit(x, hot.r[i], [&](std::size_t cc, Real, Real top) {
@@ -148,22 +157,56 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
   if (n.slept > 0 || st.column_start.size() != nc + 1) st.file_by_column(nc);
   if (!any) return n;
 
-  std::vector<std::uint8_t> wake(st.size(), 0);
+  std::vector<std::uint8_t> flagged(st.size(), 0);
   for (std::size_t c = 0; c < nc; ++c) {
     if (!fell[c]) continue;
+    const Real band = vertical_band(T, hf.slope()[c]);
     for (std::uint32_t q = st.column_start[c]; q < st.column_start[c + 1]; ++q) {
       const std::uint32_t k = st.by_column[q];
-      if (st.x[k].z > hf.static_top_at(st.x[k].x, st.x[k].y) - T || st.x[k].z < L_now[c])
-        wake[k] = 1;
+      if (st.x[k].z > hf.static_top_at(st.x[k].x, st.x[k].y) - band || st.x[k].z < L_now[c])
+        flagged[k] = 1;
     }
   }
+  n.woken = wake(hf, hot, st, dem, flagged);
+  return n;
+}
+
+TransitionCounts InterfaceLayer::wake_within_reach(const HeightField& hf, Grains& hot,
+                                                   StaticStore& st, DemSolver& dem,
+                                                   const std::vector<Real>& allow) {
+  TransitionCounts n;
+  if (st.size() == 0) return n;
+  const std::size_t nh = hot.size();
+  Real reach = 0;
+  for (std::size_t i = 0; i < nh; ++i)
+    if (hot.state[i] == GrainState::Active) reach = std::max(reach, hot.r[i] + allow[i]);
+  if (st.column_start.size() != hf.columns() + 1) st.file_by_column(hf.columns());
+  reach_.prepare(hf, st, reach);
+  std::vector<std::uint8_t> flagged(st.size(), 0);
+  // (flags set by several threads: each write is the same 1, and the set does not depend on the
+  // order)
+#pragma omp parallel for schedule(dynamic, 512) if (nh >= kParallelMinGrains)
+  for (std::size_t i = 0; i < nh; ++i) {
+    if (hot.state[i] != GrainState::Active) continue;
+    reach_.for_each_within(hf, st, hot.x[i], hot.r[i] + allow[i], [&](std::uint32_t k) {
+      std::atomic_ref<std::uint8_t>(flagged[k]).store(1, std::memory_order_relaxed);
+    });
+  }
+  n.woken_by_reach = wake(hf, hot, st, dem, flagged);
+  return n;
+}
+
+std::int64_t InterfaceLayer::wake(const HeightField& hf, Grains& hot, StaticStore& st,
+                                  DemSolver& dem, const std::vector<std::uint8_t>& flagged) {
+  const std::size_t nc = hf.columns();
   // the tops of the columns the woken grains reached are computed again from the grains that stay
   const bool follow = tops_follow(st) && tops_.size() == nc;
   std::vector<std::uint8_t> dirty(follow ? nc : 0, 0);
   std::vector<std::uint32_t> stay;
   stay.reserve(st.size());
+  std::int64_t woken = 0;
   for (std::uint32_t k = 0; k < st.size(); ++k) {
-    if (!wake[k]) {
+    if (!flagged[k]) {
       stay.push_back(k);
       continue;
     }
@@ -175,9 +218,10 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
     // (one below its column's level moves on its own; transfer() makes it ACTIVE next time)
     hot.state.back() = GrainState::Interface;
     dem.forget_history(st.id[k]);
-    ++n.woken;
+    dem.release(st.id[k]);
+    ++woken;
   }
-  if (n.woken > 0) {
+  if (woken > 0) {
     st.permute(stay);
     st.file_by_column(nc);
     if (follow) {
@@ -185,7 +229,7 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
       recompute_tops(hf, st, dirty);
     }
   }
-  return n;
+  return woken;
 }
 
 }  // namespace sandflow

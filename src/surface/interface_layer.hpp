@@ -1,16 +1,21 @@
 // The particle interface (DESIGN.md §5): the band of frozen grains, of constant thickness T just
 // below the static top h, through which matter passes between the grains and the height field.
-// After each height-field update every grain is classified against h at its own (x, y):
+// After each height-field update every grain is classified against h at its own (x, y), with the
+// band measured normal to the local slope (T / cos theta in the vertical):
 //
 //   ACTIVE    centre below h and slow   -> INTERFACE (trapped: v = w = 0; its contacts with
-//                                                     other frozen grains are dropped)
+//                                                     other frozen grains go inert)
 //   INTERFACE centre above h            -> ACTIVE    (dislodged, from rest)
 //   INTERFACE centre below h - T        -> STATIC    (sleeps: leaves the DEM, filed by column)
 //   STATIC    centre above h - T        -> INTERFACE (wakes: only where h fell)
 //
-// Two guards keep the band closed. A grain that an ACTIVE grain touches never sleeps (a grain
-// too fast to be trapped would otherwise fall through the static layer, which does not push).
-// And the band has a margin m of hysteresis: trapped below h, dislodged only above h + m; sleeps
+// The invariant that makes the layers safe: no STATIC grain lies within reach of an ACTIVE grain,
+// reach being what the two can close before the pair list is rebuilt again. STATIC grains push
+// nothing, so a grain that reached one would go into it. wake_within_reach() enforces it exactly
+// before every rebuild, for the allowances that rebuild gives; between rebuilds no grain moves
+// further than its allowance, so no ACTIVE grain ever touches a STATIC one.
+//
+// The band has a margin m of hysteresis: trapped below h, dislodged only above h + m; sleeps
 // below h - T - m, wakes above h - T. H is measured from grains, so h jitters by a fraction of a
 // grain; without the margin the same grains would flip state at every update.
 //
@@ -25,19 +30,24 @@
 #include "dem/dem_solver.hpp"
 #include "dem/grains.hpp"
 #include "surface/height_field.hpp"
+#include "surface/static_reach.hpp"
 
 namespace sandflow {
 
 struct TransitionCounts {
   std::int64_t trapped = 0, dislodged = 0, slept = 0, woken = 0;
+  std::int64_t woken_by_reach = 0;  ///< static grains an ACTIVE grain came within reach of
+  Real energy_trapped = 0;          ///< kinetic energy the trapped grains had [J]
   TransitionCounts& operator+=(const TransitionCounts& o) {
     trapped += o.trapped;
     dislodged += o.dislodged;
     slept += o.slept;
     woken += o.woken;
+    woken_by_reach += o.woken_by_reach;
+    energy_trapped += o.energy_trapped;
     return *this;
   }
-  std::int64_t total() const { return trapped + dislodged + slept + woken; }
+  std::int64_t total() const { return trapped + dislodged + slept + woken + woken_by_reach; }
 };
 
 struct InterfaceParams {
@@ -46,6 +56,10 @@ struct InterfaceParams {
   Real margin = 0.0025;     ///< hysteresis of the band's edges [m]
   Real density = 2600;      ///< to restore the mass of a woken grain [kg/m^3]
 };
+
+/// The thickness in the vertical of a band `thickness` thick normal to a slope `theta` [rad]: T /
+/// cos theta, with theta at most 60 degrees (a column beside a wall sees the wall as its slope).
+Real vertical_band(Real thickness, Real theta);
 
 class InterfaceLayer {
  public:
@@ -64,6 +78,12 @@ class InterfaceLayer {
   TransitionCounts transfer(const HeightField& hf, Grains& hot, StaticStore& st, DemSolver& dem,
                             const std::vector<std::uint8_t>& contacts, bool list_changes = true);
 
+  /// The invariant: wakes (to INTERFACE) every STATIC grain k within reach of an ACTIVE grain i,
+  /// |x_i - x_k| < r_i + r_k + allow[i], allow[i] being how far the coming rebuild lets i move
+  /// (DemSolver::allowance). Call it before every rebuild of the pair list, after the transfer.
+  TransitionCounts wake_within_reach(const HeightField& hf, Grains& hot, StaticStore& st,
+                                     DemSolver& dem, const std::vector<Real>& allow);
+
   const InterfaceParams& params() const { return p_; }
   /// For restarts: h and L as the last transfer saw them (empty before the first).
   const std::vector<Real>& h_seen() const { return h_seen_; }
@@ -72,6 +92,7 @@ class InterfaceLayer {
     h_seen_ = std::move(h_seen);
     L_seen_ = std::move(L_seen);
     tops_of_ = kNoTops;
+    reach_ = {};
   }
 
  private:
@@ -89,6 +110,12 @@ class InterfaceLayer {
   /// Recomputes the tops of the marked columns from the static grains (filed by column).
   void recompute_tops(const HeightField& hf, const StaticStore& st,
                       const std::vector<std::uint8_t>& dirty);
+  /// Moves the static grains flagged in `wake` to the hot grains as INTERFACE, released to the
+  /// DEM (DemSolver::release); returns how many.
+  std::int64_t wake(const HeightField& hf, Grains& hot, StaticStore& st, DemSolver& dem,
+                    const std::vector<std::uint8_t>& wake);
+
+  StaticReach reach_;  ///< the static grains near a point, for wake_within_reach
 };
 
 }  // namespace sandflow

@@ -27,7 +27,6 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
   // the rolling layer flows (BCRE with theta0); elsewhere it is at rest and deposits up to
   // theta_max.
   const Real v2_fast = p_.flow_speed * p_.flow_speed;
-  const Real v2_trap = p_.interface.trap_speed * p_.interface.trap_speed;
   flowing_.assign(hf_.columns(), 0);
   fast_.clear();
   for (std::size_t i = 0; i < hot.size(); ++i) {
@@ -40,7 +39,7 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
   hf_.exchange(dt, flowing_);
   // The static layer retreats to `floor_z` under a grain at x moving at v, along its way until
   // the next update: a grain skidding sideways at 3 m/s crosses a column between two updates, and
-  // the static grains of the column it enters must be awake when it arrives.
+  // the bed of the column it enters must be moving when it arrives, as its contacts would set it.
   const Real half_cell = hf_.cell() / 2;
   auto clear_path = [&](const Vec3& x, const Vec3& v, Real r, Real floor_z) {
     const Real travel = std::min(std::hypot(v.x, v.y) * dt, 1.0);
@@ -51,41 +50,29 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
                            [&](std::size_t c, Real, Real) { hf_.limit_static_top(c, floor_z); });
     }
   };
-  // Impacts: a fast grain striking the pile sets the grains beneath it in motion in DEM, so the
-  // static top stays a grain's diameter below the bottom of every fast grain in contact. Without
-  // this the stream of a pour would hit a frozen apex and build a spike where DEM digs a plateau.
-  // It reaches below the grain as far as the grain can fall before the next update.
+  // Impacts: a grain moving over the pile sets the grains beneath it in motion in DEM, so the
+  // static top stays a grain's diameter below the bottom of every such grain in contact. Without
+  // this the stream of a pour would hit a frozen apex and build a spike where DEM digs a plateau,
+  // and slow grains would run out over a bed that does not yield. It reaches below the grain as
+  // far as the grain can fall before the next update. (Dynamics, not safety: the invariant of the
+  // layers keeps grains out of the static layer.)
   for (std::uint32_t i : fast_) {
     const Vec3& x = hot.x[i];
     const Vec3& v = hot.v[i];
     clear_path(x, v, hot.r[i], x.z - 3 * hot.r[i] - std::max(-v.z, 0.0) * dt);
-  }
-  // Static grains push nothing, and the band of interface grains above them has holes. An
-  // ACTIVE grain that can reach a static grain before the next update (its centre, after its
-  // fall until then, less than a diameter above the static grains' highest centres at h - T) and
-  // that this update will not trap (it is fast, or touches nothing: in flight through a hole)
-  // would go into them, and they would wake inside it (overlaps of 55-77 % of a diameter in the
-  // full-scale bowl). So would one found more than T below h (pushed through between updates).
-  // The static layer retreats T below it along its way, and the grains there wake and push.
-  const Real T = p_.interface.thickness;
-  for (std::size_t i = 0; i < hot.size(); ++i) {
-    if (hot.state[i] != GrainState::Active) continue;
-    const Vec3& x = hot.x[i];
-    const Vec3& v = hot.v[i];
-    if (hf_.column_of(x.x, x.y) < 0 || below_level(x)) continue;
-    const Real static_centres = hf_.static_top_at(x.x, x.y) - T;
-    const Real lowest = x.z + std::min(v.z, 0.0) * dt;
-    const bool trapped_next = norm2(v) < v2_trap && (contacts_[i] & DemSolver::kTouches);
-    const bool inside = x.z < static_centres;
-    const bool reaching = !trapped_next && lowest < static_centres + 2 * hot.r[i];
-    if (!inside && !reaching) continue;
-    clear_path(x, v, hot.r[i], lowest - hot.r[i] - T);
   }
   // Dislodging, sleeping and waking change the pair list: unless it is rebuilt anyway at this
   // step, they wait for its next rebuild, and at most until the next update.
   const bool now = dem.needs_rebuild() || pending_;
   pending_ = !now;
   return interface_.transfer(hf_, hot, st, dem, contacts_, now);
+}
+
+TransitionCounts SurfaceFlow::wake_within_reach(Grains& hot, StaticStore& st, DemSolver& dem,
+                                                Real dt) {
+  allow_.resize(hot.size());
+  for (std::size_t i = 0; i < hot.size(); ++i) allow_[i] = dem.allowance(hot, i, dt);
+  return interface_.wake_within_reach(hf_, hot, st, dem, allow_);
 }
 
 TransitionCounts SurfaceFlow::catch_up(Grains& hot, StaticStore& st, DemSolver& dem,

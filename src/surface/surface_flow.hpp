@@ -34,6 +34,10 @@ class SurfaceFlow {
   TransitionCounts catch_up(Grains& hot, StaticStore& st, DemSolver& dem,
                             const Geometry& geometry);
 
+  /// The invariant of the layers, before `dem` rebuilds its lists for steps of dt: every STATIC
+  /// grain within reach of an ACTIVE grain wakes (InterfaceLayer::wake_within_reach).
+  TransitionCounts wake_within_reach(Grains& hot, StaticStore& st, DemSolver& dem, Real dt);
+
   const SurfaceParams& params() const { return p_; }
   const HeightField& height_field() const { return hf_; }
 
@@ -56,6 +60,7 @@ class SurfaceFlow {
   InterfaceLayer interface_;
   std::vector<std::uint8_t> contacts_, counts_, flowing_;
   std::vector<std::uint32_t> fast_;
+  std::vector<Real> allow_;
   bool pending_ = false;  ///< transitions that change the pair list wait for its next rebuild
 };
 

@@ -19,7 +19,9 @@ Real rolling_min(const SceneConfig& scene) {
 }
 
 Real interface_thickness(const SceneConfig& scene) {
-  return scene.surface.interface_thickness.value_or(scene.material.diameter);
+  // half a diameter: the invariant of the layers, not the band, keeps grains out of the static
+  // layer (docs/physics.md), and a thinner band simulates fewer grains
+  return scene.surface.interface_thickness.value_or(0.5 * scene.material.diameter);
 }
 
 HeapSize largest_heap(const SceneConfig& scene) {
@@ -48,19 +50,16 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   hf.gap = d;  // a quarter of d cut H at gaps left below grains held up from the side
   p.interface.thickness = interface_thickness(scene);
   p.interface.trap_speed = sc.trap_speed.value_or(0.3 * std::sqrt(g * d));
-  // sqrt(g d): a grain this fast has the energy to lift a resting one over half its diameter
-  // out of its pocket; a slower one rolls over the bed without setting it moving. At trap_speed
-  // (the first choice) every column a slow roller crossed flowed and the static top went a
-  // diameter below it: 37 % of a 100,000-grain floor heap's grains simulated over the last half
-  // of the run instead of 28 % (docs/physics.md).
-  p.flow_speed = sc.flow_speed.value_or(std::sqrt(g * d));
+  // 0.6 sqrt(g d), measured (docs/physics.md, "Which grains move the bed"): a lower threshold
+  // makes the small heaps more like plain DEM's and simulates more grains in the large ones
+  p.flow_speed = sc.flow_speed.value_or(0.6 * std::sqrt(g * d));
   if (p.flow_speed < p.interface.trap_speed)
     throw InputError(fmt::format(
         "{}: surface.flow_speed = {:.4g} m/s is less than surface.trap_speed = {:.4g} m/s{}: a "
         "grain would dig the static layer while slow enough to be trapped in it; set flow_speed "
         ">= trap_speed",
         scene.path, p.flow_speed, p.interface.trap_speed,
-        sc.flow_speed ? "" : " (flow_speed unset: its default sqrt(|g| d))"));
+        sc.flow_speed ? "" : " (flow_speed unset: its default 0.6 sqrt(|g| d))"));
   p.interface.density = scene.material.density;
   p.interface.margin = 0.25 * d;
   // a tenth of the time a grain takes to fall its diameter: the surface moves less than that

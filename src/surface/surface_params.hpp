@@ -29,7 +29,7 @@ struct SurfaceParams {
   Real z_top = 1, z_floor = -1;  ///< vertical span searched for the terrain [m]
 };
 
-/// R_min [m] and T [m] of a scene (defaults: d and d).
+/// R_min [m] and T [m] of a scene (defaults: d and d/2).
 Real rolling_min(const SceneConfig& scene);
 Real interface_thickness(const SceneConfig& scene);
 

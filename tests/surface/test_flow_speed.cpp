@@ -23,11 +23,11 @@ SceneConfig bed_scene() {
   return s;
 }
 
-TEST(FlowSpeed, DefaultIsSqrtGdAndItMayNotBeBelowTheTrapSpeed) {
+TEST(FlowSpeed, DefaultIsSixTenthsOfSqrtGdAndItMayNotBeBelowTheTrapSpeed) {
   SceneConfig s = bed_scene();
   const Geometry g = Geometry::from_config(s.geometry, s.material);
   const SurfaceParams p = surface_params(s, g, 1e-4);
-  EXPECT_NEAR(p.flow_speed, std::sqrt(9.81 * kD), 1e-12);
+  EXPECT_NEAR(p.flow_speed, 0.6 * std::sqrt(9.81 * kD), 1e-12);
   EXPECT_LT(p.interface.trap_speed, p.flow_speed);
 
   s.surface.trap_speed = 0.2;
@@ -42,7 +42,7 @@ TEST(FlowSpeed, DefaultIsSqrtGdAndItMayNotBeBelowTheTrapSpeed) {
         << what;
   }
   s.surface.flow_speed.reset();
-  s.surface.trap_speed = 0.5;  // above the default flow speed: the message says it is the default
+  s.surface.trap_speed = 0.25;  // above the default flow speed: the message says it is the default
   try {
     surface_params(s, g, 1e-4);
     FAIL() << "a trap speed above the default flow speed was accepted";
@@ -101,7 +101,7 @@ Real static_top_under_grain_after_update(Real speed) {
 }
 
 TEST(FlowSpeed, SlowRollerLeavesTheStaticTopAndAFastGrainDigs) {
-  const Real trap = 0.3 * std::sqrt(9.81 * kD), flow = std::sqrt(9.81 * kD);
+  const Real trap = 0.3 * std::sqrt(9.81 * kD), flow = 0.6 * std::sqrt(9.81 * kD);
   // between trap_speed and flow_speed: not trapped, and it does not dig; the static top stays
   // at its bottom (R = R_min), where the exchange and R_min put it
   const Real slow = 0.5 * (trap + flow);

@@ -1,0 +1,83 @@
+// Which STATIC grains lie near a point: the question the invariant of the layers asks of the
+// static store at every rebuild of the pair list (InterfaceLayer::wake_within_reach). The store
+// files its grains by height-field column, each column's in ascending z
+// (StaticStore::file_by_column). This index adds, per column, the highest top of the static
+// grains within `reach` of it, so that the many ACTIVE grains well above the static layer are
+// passed over with one look; for the others a binary search finds the band of heights in each
+// column near them. Tested against brute force (tests/surface/test_static_reach.cpp).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "core/vec3.hpp"
+#include "dem/grains.hpp"
+#include "surface/height_field.hpp"
+
+namespace sandflow {
+
+class StaticReach {
+ public:
+  /// Makes the index answer queries of reach up to `reach` [m] (for_each_within's `extra`);
+  /// does nothing when neither the store nor the columns the reach spans changed since.
+  void prepare(const HeightField& hf, const StaticStore& st, Real reach);
+
+  /// Calls f(k) for every static grain k with |x - x_k| < extra + r_k; `extra` at most the
+  /// reach prepare() was given.
+  template <class F>
+  void for_each_within(const HeightField& hf, const StaticStore& st, const Vec3& x, Real extra,
+                       F&& f) const;
+
+  /// The largest radius of a static grain [m] (0 for an empty store).
+  Real r_max() const { return r_max_; }
+
+ private:
+  static constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
+  std::uint64_t revision_ = kNever;  ///< StaticStore::revision the index was built for
+  std::size_t columns_ = 0;
+  int span_ = -1;                    ///< columns the reach covers on each side
+  Real r_max_ = 0;
+  std::vector<Real> top_;            ///< per column: highest z + r of its static grains
+  std::vector<Real> near_top_;       ///< per column: highest z + r of the static grains within span_
+};
+
+// ---------------------------------------------------------------------------------------------
+template <class F>
+void StaticReach::for_each_within(const HeightField& hf, const StaticStore& st, const Vec3& x,
+                                  Real extra, F&& f) const {
+  if (st.size() == 0) return;
+  // a grain k within reach has z_k + r_k > x.z - extra and lies at most span_ columns away
+  const std::int64_t own = hf.column_of(x.x, x.y);
+  if (own >= 0 && !(near_top_[static_cast<std::size_t>(own)] > x.z - extra)) return;
+  const Real R = extra + r_max_;  // horizontal and vertical reach of the centres
+  const Real cell = hf.cell();
+  const HeightFieldParams& g = hf.params();
+  const Real fx0 = std::floor((x.x - R - g.x0) / cell), fx1 = std::floor((x.x + R - g.x0) / cell);
+  const Real fy0 = std::floor((x.y - R - g.y0) / cell), fy1 = std::floor((x.y + R - g.y0) / cell);
+  if (!(fx1 >= 0 && fy1 >= 0 && fx0 < g.nx && fy0 < g.ny)) return;  // (NaN too)
+  const int i0 = static_cast<int>(std::max(fx0, 0.0)), i1 = static_cast<int>(std::min<Real>(fx1, g.nx - 1));
+  const int j0 = static_cast<int>(std::max(fy0, 0.0)), j1 = static_cast<int>(std::min<Real>(fy1, g.ny - 1));
+  const Real z_lo = x.z - R, z_hi = x.z + R;
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * g.nx + i;
+      if (!(top_[c] > x.z - extra)) continue;  // (every grain of the column is too low)
+      // the column's square lies further than R from x: none of its centres is near
+      const Real dx = std::max({g.x0 + i * cell - x.x, x.x - (g.x0 + (i + 1) * cell), 0.0});
+      const Real dy = std::max({g.y0 + j * cell - x.y, x.y - (g.y0 + (j + 1) * cell), 0.0});
+      if (dx * dx + dy * dy >= R * R) continue;
+      const auto begin = st.by_column.begin() + st.column_start[c];
+      const auto end = st.by_column.begin() + st.column_start[c + 1];
+      auto q = std::partition_point(begin, end, [&](std::uint32_t k) { return st.x[k].z <= z_lo; });
+      for (; q != end && st.x[*q].z < z_hi; ++q) {
+        const std::uint32_t k = *q;
+        const Real reach = extra + st.r[k];
+        if (norm2(x - st.x[k]) < reach * reach) f(k);
+      }
+    }
+}
+
+}  // namespace sandflow
