@@ -48,6 +48,7 @@ struct Table1Options {
   std::vector<std::string> scenes;
   bool force = false;
   bool resume = false;  ///< keep what OUT holds: finished scenes are read back, stopped ones go on
+  int seeds = 1;        ///< runs per mode of each scene (CompareOptions::seeds)
 };
 
 struct RenderOptions {
@@ -132,21 +133,37 @@ int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
 /// would start it: run_part could not resume it as that run.
 void check_resumable(const RunOptions& o, const std::string& text);
 
-/// Both runs of a scene and the figures compared (what compare.json holds).
+/// The most seeds per mode a comparison runs.
+constexpr int kMaxSeeds = 100;
+
+/// What a comparison runs besides one run per mode.
+struct CompareOptions {
+  int seeds = 3;                 ///< runs per mode, seeds s0, s0 + 1, ... (s0: the scene's)
+  bool equal_stiffness = false;  ///< and one plain-DEM run at the surface run's k_n and dt
+};
+
+/// The runs of a scene in both modes and the figures compared (what compare.json holds).
 struct Comparison {
-  SceneConfig scene;  ///< as the surface run had it
-  RunResult surface, dem;
-  SurfaceDiff diff;
+  SceneConfig scene;                   ///< as the first surface run had it
+  std::vector<std::int64_t> seeds;     ///< simulation.seed of each pair of runs
+  std::vector<RunResult> surface, dem;  ///< one per seed, in the order of `seeds`
+  std::optional<RunResult> dem_equal_stiffness;
   nlohmann::json json;
 };
 
-/// The shared part of `compare` and `table1`: runs `o` in surface mode into OUT/surface, then in
-/// plain DEM into OUT/dem (each with run_part), compares the two final surfaces and writes
-/// OUT/compare.json. OUT is prepared here: refused when not empty unless `force` (which replaces
-/// the comparison) or `resume` (which goes on with it); `scene_text` and `resume_with` as for
-/// run_part; `label` prefixes the progress lines. Returns 0, or 128 + the signal when interrupted.
-int compare_scene(const RunOptions& o, const std::string& out, bool force, bool resume,
-                  const std::string* scene_text, const std::string& resume_with,
+/// The folder of a comparison's run: OUT/surface and OUT/dem for the first seed, OUT/seed-S/MODE
+/// for the others, OUT/dem-equal-stiffness.
+std::string compare_run_dir(const std::string& out, const std::string& mode, std::size_t index,
+                            std::int64_t seed);
+
+/// The shared part of `compare` and `table1`: runs `o` in surface mode and in plain DEM (each
+/// with run_part) for each seed, and the equal-stiffness run, compares the final surfaces and
+/// heaps and writes OUT/compare.json. OUT is prepared here: refused when not empty unless `force`
+/// (which replaces the comparison) or `resume` (which goes on with it, as OUT/compare_plan.json
+/// records it); `scene_text` and `resume_with` as for run_part; `label` prefixes the progress
+/// lines. Returns 0, or 128 + the signal when interrupted.
+int compare_scene(const RunOptions& o, const CompareOptions& co, const std::string& out, bool force,
+                  bool resume, const std::string* scene_text, const std::string& resume_with,
                   const std::string& label, Comparison& c);
 
 /// The last frame file of a run folder (InputError when it has none).
@@ -154,7 +171,7 @@ std::string last_frame(const std::string& dir);
 
 int run_command(const RunOptions& o);
 int measure_command(const std::string& dir);
-int compare_command(const RunOptions& o);
+int compare_command(const RunOptions& o, const CompareOptions& co);
 /// `command`: the command line as typed, recorded in table1.md.
 int table1_command(const Table1Options& o, const std::string& command);
 int render_command(const RenderOptions& o);

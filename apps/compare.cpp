@@ -1,6 +1,9 @@
-// `sandflow compare`: a scene run in both modes and the two compared.
+// `sandflow compare`: a scene run in both modes, with several seeds each, and the two compared
+// against the spread between the plain-DEM seeds (DESIGN.md §9: sameness is statistics).
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -18,6 +21,9 @@ namespace sandflow {
 
 namespace {
 
+constexpr const char* kPlanFile = "compare_plan.json";
+constexpr const char* kEqualStiffnessDir = "dem-equal-stiffness";
+
 /// Mean of the simulated fraction (active + interface over all grains) over frames [first, end).
 double simulated_fraction(const std::vector<FrameStats>& frames, std::size_t first) {
   double sum = 0;
@@ -29,13 +35,34 @@ double simulated_fraction(const std::vector<FrameStats>& frames, std::size_t fir
   return n ? sum / static_cast<double>(n) : 0.0;
 }
 
-nlohmann::json angle_json(const HeapFit& f) {
-  return f.ok ? nlohmann::json(f.repose_angle_deg) : nlohmann::json();
+double max_overlap(const RunResult& r) {
+  double m = 0;
+  for (const FrameStats& f : r.frames) m = std::max(m, f.max_overlap_rel);
+  return m;
+}
+
+nlohmann::json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+}
+
+/// Mean of the values (NaN when there are none).
+double mean(const std::vector<double>& v) {
+  if (v.empty()) return std::nan("");
+  double s = 0;
+  for (double x : v) s += x;
+  return s / static_cast<double>(v.size());
+}
+
+/// The heap angles of the runs whose fit worked.
+std::vector<double> angles(const std::vector<RunResult>& runs) {
+  std::vector<double> a;
+  for (const RunResult& r : runs)
+    if (r.heap.ok) a.push_back(r.heap.repose_angle_deg);
+  return a;
 }
 
 /// Prepares a comparison folder: OUT is refused when not empty unless `force`, in which case the
-/// earlier comparison (compare.json, dem/, surface/) is removed, or `resume`, which keeps it;
-/// OUT/dem and OUT/surface are made.
+/// earlier comparison is removed, or `resume`, which keeps it.
 void prepare_compare_dir(const std::string& out, bool force, bool resume) {
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
@@ -46,88 +73,248 @@ void prepare_compare_dir(const std::string& out, bool force, bool resume) {
           "{}: the output folder is not empty; pass --force to replace its comparison, or "
           "--resume to go on with it",
           out));
-    for (const char* name : {"compare.json", "dem", "surface", "report.html"})
-      fs::remove_all(fs::path(out) / name, ec);
+    for (const auto& e : fs::directory_iterator(out, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name == "compare.json" || name == kPlanFile || name == "dem" || name == "surface" ||
+          name == "report.html" || name == kEqualStiffnessDir || name.rfind("seed-", 0) == 0)
+        fs::remove_all(e.path(), ec);
+    }
   }
-  for (const char* mode : {"surface", "dem"}) {
-    const fs::path dir = fs::path(out) / mode;
-    if (!fs::exists(dir / "run.json", ec)) prepare_output_dir(dir.string(), true);
+  fs::create_directories(out, ec);
+  if (ec) throw OutputError(fmt::format("{}: cannot create the output folder: {}", out, ec.message()));
+}
+
+/// The plan of a comparison, written when it starts so that --resume goes on with the same one.
+void write_plan(const std::string& out, const CompareOptions& co) {
+  write_file_atomic((fs::path(out) / kPlanFile).string(),
+                    nlohmann::json{{"seeds", co.seeds}, {"equal_stiffness", co.equal_stiffness}}
+                            .dump(2) +
+                        "\n");
+}
+
+/// What `out` records of its plan; a comparison from before plans were kept ran one seed.
+CompareOptions read_plan(const std::string& out) {
+  CompareOptions co;
+  co.seeds = 1;
+  const fs::path path = fs::path(out) / kPlanFile;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return co;
+  try {
+    std::ifstream in(path);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    co.seeds = j.at("seeds").get<int>();
+    co.equal_stiffness = j.at("equal_stiffness").get<bool>();
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("{}: not a comparison plan sandflow can read: {}", path.string(),
+                                 e.what()));
   }
+  if (co.seeds < 1 || co.seeds > kMaxSeeds)
+    throw InputError(fmt::format("{}: seeds = {} is outside [1, {}]", path.string(), co.seeds,
+                                 kMaxSeeds));
+  return co;
+}
+
+/// Mean RMS distance of the surfaces of each pair (a[i], b[j]) from `pairs`, on `grid`.
+double mean_distance(const HeightFieldParams& grid, const std::vector<MeasuredSurface>& a,
+                     const std::vector<MeasuredSurface>& b,
+                     const std::vector<std::pair<std::size_t, std::size_t>>& pairs) {
+  std::vector<double> d;
+  for (const auto& [i, j] : pairs) d.push_back(surface_distance(grid, a[i], b[j]).rms);
+  return mean(d);
 }
 
 }  // namespace
 
-int compare_scene(const RunOptions& o, const std::string& out, bool force, bool resume,
-                  const std::string* scene_text, const std::string& resume_with,
-                  const std::string& label, Comparison& c) {
+std::string compare_run_dir(const std::string& out, const std::string& mode, std::size_t index,
+                            std::int64_t seed) {
+  if (mode == kEqualStiffnessDir) return (fs::path(out) / kEqualStiffnessDir).string();
+  return (index == 0 ? fs::path(out) / mode : fs::path(out) / fmt::format("seed-{}", seed) / mode)
+      .string();
+}
+
+int compare_scene(const RunOptions& o, const CompareOptions& co, const std::string& out,
+                  bool force, bool resume, const std::string* scene_text,
+                  const std::string& resume_with, const std::string& label, Comparison& c) {
+  if (co.seeds < 1 || co.seeds > kMaxSeeds)
+    throw InputError(fmt::format("--seeds {}: expected 1 to {}", co.seeds, kMaxSeeds));
   prepare_compare_dir(out, force, resume);
+  write_plan(out, co);
   const std::string text = scene_text ? *scene_text : read_scene_text(o.scene);
-  RunOptions part = o;
-  SceneConfig surface_scene, dem_scene;
-  part.mode = "surface";
-  part.out = (fs::path(out) / "surface").string();
-  if (const int stopped =
-          run_part(part, resume, &text, resume_with, label, c.surface, surface_scene))
-    return stopped;
-  part.mode = "dem";
-  part.out = (fs::path(out) / "dem").string();
-  if (const int stopped = run_part(part, resume, &text, resume_with, label, c.dem, dem_scene))
-    return stopped;
+  const std::int64_t seed0 = load_for_run(o).simulation.seed;
+
+  // each seed in both modes, surface flow first
+  c.seeds.clear();
+  c.surface.assign(co.seeds, {});
+  c.dem.assign(co.seeds, {});
+  SceneConfig surface_scene;
+  for (int k = 0; k < co.seeds; ++k) {
+    const std::int64_t seed = seed0 + k;
+    c.seeds.push_back(seed);
+    RunOptions part = o;
+    if (k > 0) part.sets.push_back(fmt::format("simulation.seed={}", seed));
+    const std::string tag = co.seeds > 1 ? fmt::format("{}seed {} of {}: ", label, k + 1, co.seeds)
+                                         : label;
+    SceneConfig scene;
+    for (const char* mode : {"surface", "dem"}) {
+      part.mode = mode;
+      part.out = compare_run_dir(out, mode, k, seed);
+      RunResult& res = part.mode == "surface" ? c.surface[k] : c.dem[k];
+      if (const int stopped = run_part(part, resume, &text, resume_with, tag, res, scene))
+        return stopped;
+      if (k == 0 && part.mode == "surface") surface_scene = scene;
+    }
+  }
   c.scene = surface_scene;
   const SceneConfig& scene = c.scene;
-  const RunResult& surf = c.surface;
-  const RunResult& dem = c.dem;
 
-  // both final surfaces on the surface run's grid, from every grain
+  // plain DEM at the surface run's stiffness and time step: what the method gains by simulating
+  // fewer grains alone, apart from the softer springs its thin loaded layer allows
+  const double k_surf = c.surface[0].summary["k_n"].get<double>();
+  const double dt_surf = c.surface[0].summary["dt_mean"].get<double>();
+  c.dem_equal_stiffness.reset();
+  if (co.equal_stiffness) {
+    RunOptions part = o;
+    part.mode = "dem";
+    part.out = compare_run_dir(out, kEqualStiffnessDir, 0, seed0);
+    for (const std::string& set :
+         {std::string("stiffness.from_load=false"), fmt::format("material.k_n={:.17g}", k_surf),
+          fmt::format("simulation.dt={:.17g}", dt_surf)})
+      part.sets.push_back(set);
+    RunResult res;
+    SceneConfig s;
+    if (const int stopped = run_part(part, resume, &text, resume_with,
+                                     label + "equal stiffness: ", res, s))
+      return stopped;
+    c.dem_equal_stiffness = std::move(res);
+  }
+
+  // the final surfaces, all on the first surface run's grid, from every grain
   const Geometry geometry = Geometry::from_config(scene.geometry, scene.material);
-  const SurfaceParams sp =
-      surface_params(surface_scene, geometry, surf.summary["dt_mean"].get<double>());
+  const SurfaceParams sp = surface_params(surface_scene, geometry, dt_surf);
   const TerrainColumns L = terrain_columns(sp, geometry);
-  c.diff = compare_surfaces(measure_surface(sp.grid, L, dem.x, dem.r),
-                            measure_surface(sp.grid, L, surf.x, surf.r));
-  const SurfaceDiff& diff = c.diff;
+  std::vector<MeasuredSurface> s_dem, s_surf;
+  for (const RunResult& r : c.dem) s_dem.push_back(measure_surface(sp.grid, L, r.x, r.r));
+  for (const RunResult& r : c.surface) s_surf.push_back(measure_surface(sp.grid, L, r.x, r.r));
+  std::vector<std::pair<std::size_t, std::size_t>> dem_pairs, cross_pairs;
+  for (std::size_t i = 0; i < s_dem.size(); ++i)
+    for (std::size_t j = i + 1; j < s_dem.size(); ++j) dem_pairs.emplace_back(i, j);
+  for (std::size_t i = 0; i < s_surf.size(); ++i)
+    for (std::size_t j = 0; j < s_dem.size(); ++j) cross_pairs.emplace_back(i, j);
+  const double rms = mean_distance(sp.grid, s_surf, s_dem, cross_pairs);
+  const double rms_noise = mean_distance(sp.grid, s_dem, s_dem, dem_pairs);
+  // a height of the scene, not of one run: the cone that holds all its grains at theta0
+  const double reference = largest_heap(scene).height;
+  const double d = scene.material.diameter;
+  // the column-by-column difference of the first pair, as before (one heap's height as the scale)
+  const SurfaceDiff columns = compare_surfaces(s_dem[0], s_surf[0]);
 
-  const std::size_t n_frames = surf.frames.size();
-  const FrameStats& last = surf.frames.back();
-  const double frac_final = static_cast<double>(last.n_active + last.n_interface) /
-                            static_cast<double>(std::max<std::int64_t>(last.n_total, 1));
-  const double k_dem = dem.summary["k_n"].get<double>(), k_surf = surf.summary["k_n"].get<double>();
-  const double angle_diff = surf.heap.ok && dem.heap.ok
-                                ? std::abs(surf.heap.repose_angle_deg - dem.heap.repose_angle_deg)
-                                : std::nan("");
+  const std::vector<double> a_dem = angles(c.dem), a_surf = angles(c.surface);
+  const double a_dem_mean = mean(a_dem), a_surf_mean = mean(a_surf);
+  const double spread =
+      a_dem.empty() ? std::nan("")
+                    : *std::max_element(a_dem.begin(), a_dem.end()) -
+                          *std::min_element(a_dem.begin(), a_dem.end());
+  double wall_dem = 0, wall_surf = 0, frac_mean = 0, frac_half = 0, frac_final = 0;
+  double sim_mean = 0, sim_final = 0, over_surf = 0, over_dem = 0, e_woken = 0, e_trapped = 0;
+  const std::size_t n_frames = c.surface[0].frames.size();
+  for (const RunResult& r : c.surface) {
+    const FrameStats& last = r.frames.back();
+    wall_surf += r.wall_seconds / co.seeds;
+    frac_mean += simulated_fraction(r.frames, 0) / co.seeds;
+    frac_half += simulated_fraction(r.frames, r.frames.size() / 2) / co.seeds;
+    frac_final += static_cast<double>(last.n_active + last.n_interface) /
+                  static_cast<double>(std::max<std::int64_t>(last.n_total, 1)) / co.seeds;
+    sim_mean += r.summary["n_simulated_mean"].get<double>() / co.seeds;
+    sim_final += static_cast<double>(last.n_active + last.n_interface) / co.seeds;
+    over_surf = std::max(over_surf, max_overlap(r));
+    for (const FrameStats& f : r.frames) {
+      e_woken += f.energy_woken / co.seeds;
+      e_trapped += f.energy_trapped / co.seeds;
+    }
+  }
+  for (const RunResult& r : c.dem) {
+    wall_dem += r.wall_seconds / co.seeds;
+    over_dem = std::max(over_dem, max_overlap(r));
+  }
+  const RunResult& surf = c.surface[0];
+  const RunResult& dem = c.dem[0];
+  const double k_dem = dem.summary["k_n"].get<double>();
+  nlohmann::json runs = nlohmann::json::array();
+  auto add_run = [&](const RunResult& r, const std::string& mode, std::int64_t seed,
+                     const std::string& dir) {
+    runs.push_back({{"mode", mode},
+                    {"seed", seed},
+                    {"folder", fs::relative(dir, out).string()},
+                    {"wall_seconds", r.wall_seconds},
+                    {"repose_angle_deg", r.heap.ok ? nlohmann::json(r.heap.repose_angle_deg)
+                                                   : nlohmann::json()},
+                    {"max_overlap_rel", max_overlap(r)},
+                    {"simulated_fraction_last_half",
+                     simulated_fraction(r.frames, r.frames.size() / 2)},
+                    {"k_n", r.summary["k_n"]},
+                    {"dt", r.summary["dt_mean"]},
+                    {"state_hash", r.summary["state_hash"]}});
+  };
+  for (std::size_t k = 0; k < c.seeds.size(); ++k) {
+    add_run(c.surface[k], "surface", c.seeds[k], compare_run_dir(out, "surface", k, c.seeds[k]));
+    add_run(c.dem[k], "dem", c.seeds[k], compare_run_dir(out, "dem", k, c.seeds[k]));
+  }
   c.json = {
       {"scene", scene.name},
       {"scene_file", scene.path},
       {"frames", n_frames},
-      {"n_total", last.n_total},
-      {"speedup", dem.wall_seconds / std::max(surf.wall_seconds, 1e-12)},
-      {"simulated_fraction_mean", simulated_fraction(surf.frames, 0)},
-      {"simulated_fraction_last_half", simulated_fraction(surf.frames, n_frames / 2)},
+      {"n_total", surf.frames.back().n_total},
+      {"seeds", co.seeds},
+      {"seed_values", c.seeds},
+      {"speedup", wall_dem / std::max(wall_surf, 1e-12)},
+      {"simulated_fraction_mean", frac_mean},
+      {"simulated_fraction_last_half", frac_half},
       {"simulated_fraction_final", frac_final},
-      {"n_simulated_mean", surf.summary["n_simulated_mean"]},
-      {"n_simulated_final", last.n_active + last.n_interface},
+      {"n_simulated_mean", sim_mean},
+      {"n_simulated_final", sim_final},
       {"n_simulated_mean_dem", dem.summary["n_simulated_mean"]},
-      {"seconds_per_frame_dem", dem.wall_seconds / n_frames},
-      {"seconds_per_frame_surface", surf.wall_seconds / n_frames},
-      {"wall_seconds_dem", dem.wall_seconds},
-      {"wall_seconds_surface", surf.wall_seconds},
+      {"seconds_per_frame_dem", wall_dem / n_frames},
+      {"seconds_per_frame_surface", wall_surf / n_frames},
+      {"wall_seconds_dem", wall_dem},
+      {"wall_seconds_surface", wall_surf},
       {"dt_dem", dem.summary["dt_mean"]},
-      {"dt_surface", surf.summary["dt_mean"]},
+      {"dt_surface", dt_surf},
       {"k_n_dem", k_dem},
       {"k_n_surface", k_surf},
       {"same_stiffness", k_dem == k_surf},
-      {"repose_angle_dem_deg", angle_json(dem.heap)},
-      {"repose_angle_surface_deg", angle_json(surf.heap)},
-      {"repose_angle_difference_deg",
-       std::isnan(angle_diff) ? nlohmann::json() : nlohmann::json(angle_diff)},
-      {"surface_rms", diff.rms},
-      {"surface_rms_rel", diff.rms_rel},
-      {"heap_height_dem", diff.heap_height},
-      {"surface_columns_compared", diff.columns},
+      {"repose_angle_dem_deg", number_or_null(a_dem_mean)},
+      {"repose_angle_surface_deg", number_or_null(a_surf_mean)},
+      {"repose_angle_dem_spread_deg", number_or_null(spread)},
+      {"repose_angle_diff_deg", number_or_null(std::abs(a_surf_mean - a_dem_mean))},
+      {"repose_angle_fits", {{"dem", a_dem.size()}, {"surface", a_surf.size()}}},
+      {"reference_height", reference},
+      {"surface_rms", rms},
+      {"surface_rms_rel", rms / reference},
+      {"surface_rms_d", rms / d},
+      {"surface_rms_dem_vs_dem", number_or_null(rms_noise)},
+      {"surface_rms_dem_vs_dem_rel", number_or_null(rms_noise / reference)},
+      {"surface_rms_dem_vs_dem_d", number_or_null(rms_noise / d)},
+      {"surface_columns_rms", columns.rms},
+      {"heap_height_dem", columns.heap_height},
+      {"max_overlap_surface_rel", over_surf},
+      {"max_overlap_dem_rel", over_dem},
+      {"impact_overlap", scene.stiffness.impact_overlap},
+      {"energy_added_by_waking_j", e_woken},
+      {"energy_removed_by_trapping_j", e_trapped},
       {"grains_inside_geometry_dem", dem.summary["grains_inside_geometry"]},
       {"grains_inside_geometry_surface", surf.summary["grains_inside_geometry"]},
       {"threads", thread_count(scene)},
+      {"runs", runs},
   };
+  if (const auto& eq = c.dem_equal_stiffness) {
+    c.json["speedup_equal_stiffness"] = eq->wall_seconds / std::max(wall_surf, 1e-12);
+    c.json["repose_angle_dem_equal_stiffness_deg"] =
+        eq->heap.ok ? nlohmann::json(eq->heap.repose_angle_deg) : nlohmann::json();
+    c.json["max_overlap_dem_equal_stiffness_rel"] = max_overlap(*eq);
+    c.json["wall_seconds_dem_equal_stiffness"] = eq->wall_seconds;
+    add_run(*eq, "dem-equal-stiffness", seed0, compare_run_dir(out, kEqualStiffnessDir, 0, seed0));
+    c.json["runs"] = runs;
+  }
   write_file_atomic((fs::path(out) / "compare.json").string(), c.json.dump(2) + "\n");
   // the page of both runs (and each run's own), without pictures: `sandflow report` adds them
   write_report({out, 6, false});
@@ -138,17 +325,18 @@ std::string compare_resume_command(const std::string& dir) {
   return "sandflow compare --resume " + shell_quote(dir);
 }
 
-int compare_command(const RunOptions& o) {
+int compare_command(const RunOptions& o, const CompareOptions& given) {
   Comparison c;
   std::string out, text;
+  CompareOptions co = given;
   if (!o.resume.empty()) {
-    // the options of the comparison are those its surface run recorded
+    // the options of the comparison are those its surface run and its plan recorded
     if (!o.scene.empty() || o.grains > 0 || o.frames > 0 || !o.sets.empty() || !o.out.empty() ||
         o.force || o.exports || !o.up_axis.empty())
       throw InputError(
           "compare --resume DIR goes on with the comparison in DIR exactly as it was started: it "
-          "takes no scene, --grains, --frames, --set, --export, --up-axis, --out or --force; "
-          "only --threads");
+          "takes no scene, --grains, --frames, --set, --export, --up-axis, --out, --force, --seeds "
+          "or --equal-stiffness; only --threads");
     out = o.resume;
     std::error_code ec;
     if (!fs::exists(fs::path(out) / "surface" / "run.json", ec))
@@ -156,59 +344,77 @@ int compare_command(const RunOptions& o) {
           "{}: no comparison to resume here (no surface/run.json); start one with: sandflow "
           "compare SCENE --out {}",
           out, shell_quote(out)));
+    co = read_plan(out);
     nlohmann::json record;
     RunOptions r = read_run_record((fs::path(out) / "surface").string(), record, text);
     r.mode.clear();
     if (o.threads > 0) r.threads = o.threads;
     r.checkpoint_every = -1;
-    if (const int stopped = compare_scene(r, out, false, true, &text, compare_resume_command(out),
-                                          "", c))
+    if (const int stopped = compare_scene(r, co, out, false, true, &text,
+                                          compare_resume_command(out), "", c))
       return stopped;
   } else {
     if (o.scene.empty()) throw InputError("compare: give a scene file, or --resume DIR");
     text = read_scene_text(o.scene);
     const SceneConfig named = load_for_run(o);  // the scene's name, for the default folder
     out = o.out.empty() ? fmt::format("out/{}-compare", named.name) : o.out;
-    if (const int stopped =
-            compare_scene(o, out, o.force, false, &text, compare_resume_command(out), "", c))
+    if (const int stopped = compare_scene(o, co, out, o.force, false, &text,
+                                          compare_resume_command(out), "", c))
       return stopped;
   }
   const SceneConfig& scene = c.scene;
-  const RunResult& surf = c.surface;
-  const RunResult& dem = c.dem;
   const nlohmann::json& j = c.json;
-  const std::size_t n_frames = surf.frames.size();
-  const FrameStats& last = surf.frames.back();
+  const std::size_t n_frames = c.surface[0].frames.size();
+  const FrameStats& last = c.surface[0].frames.back();
   const double k_dem = j["k_n_dem"].get<double>(), k_surf = j["k_n_surface"].get<double>();
 
-  auto angle = [](const HeapFit& f) {
-    return f.ok ? fmt::format("{:.1f} deg", f.repose_angle_deg) : std::string("n/a");
+  auto num = [&](const char* key, const char* format, const char* unit = "") {
+    return j[key].is_number() ? fmt::format(fmt::runtime(format), j[key].get<double>()) + unit
+                              : std::string("n/a");
   };
-  fmt::print("\n{} ({} grains, {} frames, {} threads)\n", scene.name, last.n_total, n_frames,
-             thread_count(scene));
+  auto pct = [&](const char* key) {
+    return j[key].is_number() ? fmt::format("{:.1f} %", 100 * j[key].get<double>())
+                              : std::string("n/a");
+  };
+  const int seeds = co.seeds;
+  fmt::print("\n{} ({} grains, {} frames, {} threads, {} seed{} per mode)\n", scene.name,
+             last.n_total, n_frames, thread_count(scene), seeds, seeds > 1 ? "s" : "");
   fmt::print("{:<34}{:>16}{:>16}\n", "", "plain DEM", "surface flow");
-  fmt::print("{:<34}{:>16}{:>16}\n", "total grains", dem.frames.back().n_total, last.n_total);
+  fmt::print("{:<34}{:>16}{:>16}\n", "total grains", c.dem[0].frames.back().n_total, last.n_total);
   fmt::print("{:<34}{:>16.0f}{:>16.0f}\n", "simulated grains, mean",
-             dem.summary["n_simulated_mean"].get<double>(),
-             surf.summary["n_simulated_mean"].get<double>());
+             j["n_simulated_mean_dem"].get<double>(), j["n_simulated_mean"].get<double>());
   fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, mean", "100%",
              100 * j["simulated_fraction_mean"].get<double>());
   fmt::print("{:<34}{:>16}{:>15.1f}%\n", "simulated fraction, last half", "100%",
              100 * j["simulated_fraction_last_half"].get<double>());
-  fmt::print("{:<34}{:>16}{:>16}\n", "simulated grains, final", dem.frames.back().n_total,
-             last.n_active + last.n_interface);
-  fmt::print("{:<34}{:>16.3f}{:>16.3f}\n", "seconds per frame", dem.wall_seconds / n_frames,
-             surf.wall_seconds / n_frames);
+  fmt::print("{:<34}{:>16.3f}{:>16.3f}\n", "seconds per frame", j["seconds_per_frame_dem"].get<double>(),
+             j["seconds_per_frame_surface"].get<double>());
   fmt::print("{:<34}{:>16.3g}{:>16.3g}\n", "k_n [N/m]", k_dem, k_surf);
-  fmt::print("{:<34}{:>16.3g}{:>16.3g}\n", "dt [s]", dem.summary["dt_mean"].get<double>(),
-             surf.summary["dt_mean"].get<double>());
-  fmt::print("{:<34}{:>16}{:>16}\n", "repose angle", angle(dem.heap), angle(surf.heap));
-  fmt::print(
-      "speed-up {:.2f}x; surfaces differ by {:.4f} m RMS = {:.1f}% of the heap height "
-      "({:.3f} m); {} stiffness in both modes\n",
-      j["speedup"].get<double>(), c.diff.rms, 100 * c.diff.rms_rel, c.diff.heap_height,
-      k_dem == k_surf ? "the same" : "a different");
-  fmt::print("output           {}/ (compare.json, dem/, surface/)\n", out);
+  fmt::print("{:<34}{:>16.3g}{:>16.3g}\n", "dt [s]", j["dt_dem"].get<double>(),
+             j["dt_surface"].get<double>());
+  fmt::print("{:<34}{:>16}{:>16}\n", seeds > 1 ? "repose angle, mean" : "repose angle",
+             num("repose_angle_dem_deg", "{:.1f}", " deg"),
+             num("repose_angle_surface_deg", "{:.1f}", " deg"));
+  fmt::print("{:<34}{:>16}{:>16}\n", "largest overlap (of a diameter)",
+             pct("max_overlap_dem_rel"), pct("max_overlap_surface_rel"));
+  fmt::print("speed-up {:.2f}x ({})\n", j["speedup"].get<double>(),
+             k_dem == k_surf ? "the same stiffness in both modes" : "each mode at its own stiffness");
+  if (j.contains("speedup_equal_stiffness"))
+    fmt::print("speed-up at equal stiffness {:.2f}x (plain DEM at k_n = {:.4g} N/m, dt = {:.3g} s: "
+               "{}, largest overlap {})\n",
+               j["speedup_equal_stiffness"].get<double>(), k_surf, j["dt_surface"].get<double>(),
+               num("repose_angle_dem_equal_stiffness_deg", "{:.1f}", " deg"),
+               pct("max_overlap_dem_equal_stiffness_rel"));
+  fmt::print("angles differ by {} (plain DEM's seeds spread over {})\n",
+             num("repose_angle_diff_deg", "{:.1f}", " deg"),
+             num("repose_angle_dem_spread_deg", "{:.1f}", " deg"));
+  fmt::print("surfaces {} apart = {} grain diameters = {} of the scene's height {:.3f} m "
+             "(plain DEM's seeds: {} = {} d)\n",
+             num("surface_rms", "{:.4f}", " m"), num("surface_rms_d", "{:.2f}"),
+             pct("surface_rms_rel"), j["reference_height"].get<double>(),
+             num("surface_rms_dem_vs_dem", "{:.4f}", " m"), num("surface_rms_dem_vs_dem_d", "{:.2f}"));
+  fmt::print("output           {}/ (compare.json, dem/, surface/{})\n", out,
+             seeds > 1 ? ", seed-S/" : "");
   fmt::print("report           {} (plots; `sandflow report {}` adds pictures)\n",
              (fs::path(out) / "report.html").string(), out);
   return 0;

@@ -107,12 +107,24 @@ int main(int argc, char** argv) {
   compare->add_option("--resume", co.resume,
                       "go on with the comparison in DIR, stopped or killed, from its runs' last "
                       "checkpoints, exactly as it was started (no scene; --threads may change)");
+  CompareOptions cmp;
+  compare
+      ->add_option("--seeds", cmp.seeds,
+                   "runs per mode, with seeds S, S+1, ... (S: the scene's simulation.seed); the "
+                   "spread of the plain-DEM runs is the noise floor of the comparison (default 3)")
+      ->check(CLI::Range(1, kMaxSeeds));
+  compare->add_flag("--equal-stiffness", cmp.equal_stiffness,
+                    "also run plain DEM at the surface run's k_n and dt (DIR/dem-equal-stiffness): "
+                    "the speed-up without the softer springs");
   compare->footer(
-      "Runs the scene in surface mode into DIR/surface, then in plain DEM into DIR/dem, each\n"
-      "with run.json and a checkpoint every 30 frames as `sandflow run` writes them; SIGINT or\n"
+      "For each seed, runs the scene in surface mode, then in plain DEM: DIR/surface and DIR/dem\n"
+      "for the first seed, DIR/seed-S/surface and DIR/seed-S/dem for the others; each with\n"
+      "run.json and a checkpoint every 30 frames as `sandflow run` writes them. SIGINT or\n"
       "SIGTERM finishes the frame, writes a checkpoint and exits (130/143), and\n"
       "`sandflow compare --resume DIR` goes on. Wall times are summed over the frames of each run,\n"
-      "so a resumed comparison reports the time of every frame once.");
+      "so a resumed comparison reports the time of every frame once. DIR/compare.json holds the\n"
+      "means over the seeds, the spread of the plain-DEM seeds and the distances between the\n"
+      "final sand surfaces (docs/physics.md, Sameness).");
 
   Table1Options to;
   auto* table1 = app.add_subcommand(
@@ -136,6 +148,9 @@ int main(int argc, char** argv) {
   table1->add_flag("--force", to.force,
                    "write into a non-empty output folder, replacing its table and the folders of "
                    "the scenes run");
+  table1->add_option("--seeds", to.seeds,
+                     "runs per mode of each scene, as compare --seeds (default 1)")
+      ->check(CLI::Range(1, kMaxSeeds));
   table1->add_flag("--resume", to.resume,
                    "go on with the table in a non-empty output folder, given the same options: "
                    "finished runs are read back from their last checkpoints, stopped ones go on "
@@ -231,7 +246,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (*run) return run_command(ro);
-    if (*compare) return compare_command(co);
+    if (*compare) return compare_command(co, cmp);
     if (*table1) return table1_command(to, command_line(argc, argv));
     if (*measure) return measure_command(dir);
     if (*render) return render_command(rdo);

@@ -80,10 +80,15 @@ void check_table1_resumable(const Table1Options& o, const std::vector<const Pape
     if (!fs::exists(file, ec)) continue;
     RunOptions ro = table1_run(o, *p, file);
     const std::string text = read_scene_text(ro.scene);
-    for (const char* mode : {"surface", "dem"}) {
-      ro.mode = mode;
-      ro.out = (fs::path(o.out) / p->name / mode).string();
-      check_resumable(ro, text);
+    const std::int64_t seed0 = load_for_run(ro).simulation.seed;
+    for (int k = 0; k < o.seeds; ++k) {
+      RunOptions part = ro;
+      if (k > 0) part.sets.push_back(fmt::format("simulation.seed={}", seed0 + k));
+      for (const char* mode : {"surface", "dem"}) {
+        part.mode = mode;
+        part.out = compare_run_dir((fs::path(o.out) / p->name).string(), mode, k, seed0 + k);
+        check_resumable(part, text);
+      }
     }
   }
 }
@@ -102,15 +107,20 @@ Table1Row table1_row(const std::string& name, std::int64_t total, const Comparis
   r.scene = name;
   r.status = RowStatus::Done;
   r.total = total;
-  r.emitted = c.surface.frames.back().n_total;
-  r.surface_simulated_mean = c.surface.summary["n_simulated_mean"].get<double>();
+  r.emitted = c.surface[0].frames.back().n_total;
+  r.surface_simulated_mean = c.json["n_simulated_mean"].get<double>();
   r.surface_s_per_frame = c.json["seconds_per_frame_surface"].get<double>();
-  r.dem_simulated_mean = c.dem.summary["n_simulated_mean"].get<double>();
+  r.dem_simulated_mean = c.dem[0].summary["n_simulated_mean"].get<double>();
   r.dem_s_per_frame = c.json["seconds_per_frame_dem"].get<double>();
   r.speedup = c.json["speedup"].get<double>();
-  r.surface_rms_rel = c.diff.rms_rel;
-  r.inside_dem = c.dem.summary["grains_inside_geometry"].get<std::int64_t>();
-  r.inside_surface = c.surface.summary["grains_inside_geometry"].get<std::int64_t>();
+  r.surface_rms_rel = c.json["surface_rms_rel"].get<double>();
+  r.max_overlap_surface = c.json["max_overlap_surface_rel"].get<double>();
+  r.impact_overlap = c.json["impact_overlap"].get<double>();
+  r.energy_woken = c.json["energy_added_by_waking_j"].get<double>();
+  for (const RunResult& run : c.dem)
+    r.inside_dem += run.summary["grains_inside_geometry"].get<std::int64_t>();
+  for (const RunResult& run : c.surface)
+    r.inside_surface += run.summary["grains_inside_geometry"].get<std::int64_t>();
   return r;
 }
 
@@ -200,7 +210,9 @@ int table1_command(const Table1Options& o, const std::string& command) {
                  label, p.name, total, o.scale, p.total, (fs::path(o.out) / p.name).string());
       Comparison c;
       const std::string resume_with = table1_resume_command(command, o.resume);
-      if (const int stopped = compare_scene(ro, (fs::path(o.out) / p.name).string(), o.force,
+      CompareOptions co;
+      co.seeds = o.seeds;
+      if (const int stopped = compare_scene(ro, co, (fs::path(o.out) / p.name).string(), o.force,
                                             o.resume, nullptr, resume_with, label, c)) {
         row.status = RowStatus::Failed;
         row.message = "interrupted; resume with: " + resume_with;

@@ -69,13 +69,17 @@ struct Table1Row {
   double surface_simulated_mean = 0, surface_s_per_frame = 0;
   double dem_simulated_mean = 0, dem_s_per_frame = 0;
   double speedup = 0;
-  double surface_rms_rel = 0;  ///< RMS of the two final surfaces over the DEM heap's height
+  double surface_rms_rel = 0;  ///< RMS distance of the final surfaces over the scene's height
   std::int64_t inside_dem = 0, inside_surface = 0;  ///< grains inside geometry at the end
+  double max_overlap_surface = 0;  ///< largest overlap of the surface runs, of a diameter
+  double impact_overlap = 0;       ///< the scene's stiffness.impact_overlap
+  double energy_woken = 0;         ///< energy added by waking and dislodging (mean per run) [J]
 };
 
 inline constexpr std::string_view kTable1CsvHeader =
     "scene,total,surface_simulated_mean,surface_s_per_frame,dem_simulated_mean,dem_s_per_frame,"
-    "speedup,surface_rms_rel,grains_inside_geometry";
+    "speedup,surface_rms_rel,grains_inside_geometry,max_overlap_surface_rel,impact_overlap,"
+    "energy_added_by_waking_j";
 
 /// table1.csv: the header and one row per scene that ran; grains_inside_geometry is the sum of
 /// both modes.
@@ -83,10 +87,11 @@ inline std::string table1_csv(const std::vector<Table1Row>& rows) {
   std::string s = std::string(kTable1CsvHeader) + "\n";
   for (const Table1Row& r : rows)
     if (r.status == RowStatus::Done)
-      s += fmt::format("{},{},{:.1f},{:.6g},{:.1f},{:.6g},{:.6g},{:.6g},{}\n", r.scene, r.total,
-                       r.surface_simulated_mean, r.surface_s_per_frame, r.dem_simulated_mean,
-                       r.dem_s_per_frame, r.speedup, r.surface_rms_rel,
-                       r.inside_dem + r.inside_surface);
+      s += fmt::format("{},{},{:.1f},{:.6g},{:.1f},{:.6g},{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g}\n",
+                       r.scene, r.total, r.surface_simulated_mean, r.surface_s_per_frame,
+                       r.dem_simulated_mean, r.dem_s_per_frame, r.speedup, r.surface_rms_rel,
+                       r.inside_dem + r.inside_surface, r.max_overlap_surface, r.impact_overlap,
+                       r.energy_woken);
   return s;
 }
 
@@ -101,14 +106,14 @@ inline std::string thousands(std::int64_t n) {
 }
 
 /// The cells of a row as the Markdown and the printed table show them.
-inline std::array<std::string, 8> table1_cells(const Table1Row& r) {
+inline std::array<std::string, 10> table1_cells(const Table1Row& r) {
   switch (r.status) {
     case RowStatus::Pending:
-      return {r.scene, "not run", "", "", "", "", "", ""};
+      return {r.scene, "not run", "", "", "", "", "", "", "", ""};
     case RowStatus::Missing:
-      return {r.scene, "missing", "", "", "", "", "", ""};
+      return {r.scene, "missing", "", "", "", "", "", "", "", ""};
     case RowStatus::Failed:
-      return {r.scene, "failed", "", "", "", "", "", ""};
+      return {r.scene, "failed", "", "", "", "", "", "", "", ""};
     case RowStatus::Done:
       break;
   }
@@ -124,10 +129,12 @@ inline std::array<std::string, 8> table1_cells(const Table1Row& r) {
       fmt::format("{:.3g}", r.dem_s_per_frame),
       fmt::format("{:.2f}x", r.speedup),
       fmt::format("{:.1f} %", 100 * r.surface_rms_rel),
-      fmt::format("{} ({} + {})", r.inside_dem + r.inside_surface, r.inside_dem, r.inside_surface)};
+      fmt::format("{} ({} + {})", r.inside_dem + r.inside_surface, r.inside_dem, r.inside_surface),
+      fmt::format("{:.1f} % (of {:.0f} %)", 100 * r.max_overlap_surface, 100 * r.impact_overlap),
+      fmt::format("{:.3g} J", r.energy_woken)};
 }
 
-inline constexpr std::array<std::string_view, 8> kTable1Titles = {
+inline constexpr std::array<std::string_view, 10> kTable1Titles = {
     "scene",
     "total",
     "surface simulated (mean)",
@@ -135,7 +142,9 @@ inline constexpr std::array<std::string_view, 8> kTable1Titles = {
     "DEM s/frame",
     "speed-up",
     "surface_rms_rel",
-    "grains inside geometry (DEM + surface)"};
+    "grains inside geometry (DEM + surface)",
+    "surface max overlap (of impact_overlap)",
+    "energy added by waking"};
 
 /// Why the scenes that did not run did not: one line each, or nothing.
 inline std::string table1_notes(const std::vector<Table1Row>& rows, std::string_view bullet) {
@@ -191,8 +200,12 @@ inline std::string table1_markdown(const std::vector<Table1Row>& rows, const Tab
   s += fmt::format(
       "\nCommand `{}`, {}, on {} logical cores with {} threads; grain counts {} x the paper's, {}. "
       "Surface simulated: mean over the frames of the grains in the DEM (active + interface); "
-      "speed-up: plain DEM's wall time over the surface flow's; surface_rms_rel: RMS difference "
-      "of the two final surfaces over the DEM heap's height.\n",
+      "speed-up: plain DEM's wall time over the surface flow's; surface_rms_rel: RMS distance "
+      "between the two final sand surfaces, over the height of the cone that holds all the "
+      "scene's grains (docs/physics.md, Sameness); surface max overlap: the largest overlap of "
+      "any frame of the surface runs, in diameters, beside the scene's stiffness.impact_overlap; "
+      "energy added by waking: the work of the springs of woken and dislodged grains' contacts "
+      "(docs/physics.md, Transitions and energy).\n",
       c.command, c.date, c.cores, c.threads, c.scale,
       c.frames > 0 ? fmt::format("{} frames each", c.frames) : std::string("each scene's frames"));
   s += "\n" + paper_reference() + "\n";
@@ -201,13 +214,14 @@ inline std::string table1_markdown(const std::vector<Table1Row>& rows, const Tab
 
 /// The table as printed on the terminal: aligned columns, then the notes.
 inline std::string table1_text(const std::vector<Table1Row>& rows) {
-  std::vector<std::array<std::string, 8>> cells;
-  std::array<std::string, 8> titles;
+  std::vector<std::array<std::string, 10>> cells;
+  std::array<std::string, 10> titles;
   for (std::size_t k = 0; k < titles.size(); ++k) titles[k] = std::string(kTable1Titles[k]);
   titles[7] = "inside geometry";
+  titles[8] = "surface max overlap";
   cells.push_back(titles);
   for (const Table1Row& r : rows) cells.push_back(table1_cells(r));
-  std::array<std::size_t, 8> width{};
+  std::array<std::size_t, 10> width{};
   for (const auto& row : cells)
     for (std::size_t k = 0; k < row.size(); ++k) width[k] = std::max(width[k], row[k].size());
   std::string s;

@@ -473,10 +473,10 @@ std::string compare_report_html(const CompareReportData& c) {
              fixed(j, {"wall_seconds_surface"}, 1, " s"));
   sum += row("k_n", count(j, {"k_n_dem"}) + " N/m", count(j, {"k_n_surface"}) + " N/m");
   sum += row("dt", general(j, {"dt_dem"}, " s"), general(j, {"dt_surface"}, " s"));
-  sum += row("angle of repose", fixed(j, {"repose_angle_dem_deg"}, 1, "\u00b0"),
+  sum += row("angle of repose (mean over the seeds)", fixed(j, {"repose_angle_dem_deg"}, 1, "\u00b0"),
              fixed(j, {"repose_angle_surface_deg"}, 1, "\u00b0"));
-  sum += row("largest overlap, of a diameter", percent(sd, {"max_overlap_rel"}),
-             percent(ss, {"max_overlap_rel"}));
+  sum += row("largest overlap, of a diameter (all seeds)", percent(j, {"max_overlap_dem_rel"}),
+             percent(j, {"max_overlap_surface_rel"}));
   sum += row("grains inside geometry", count(j, {"grains_inside_geometry_dem"}),
              count(j, {"grains_inside_geometry_surface"}));
   sum += row("state hash", text(sd, {"state_hash"}), text(ss, {"state_hash"}));
@@ -504,10 +504,23 @@ std::string compare_report_html(const CompareReportData& c) {
   kv("simulated fraction: mean / last half / final",
      percent(j, {"simulated_fraction_mean"}) + " / " + percent(j, {"simulated_fraction_last_half"}) +
          " / " + percent(j, {"simulated_fraction_final"}));
-  kv("final surfaces H, RMS difference",
-     fixed(j, {"surface_rms"}, 4, " m") + " = " + percent(j, {"surface_rms_rel"}) +
-         " of the DEM heap's height (" + fixed(j, {"heap_height_dem"}, 3, " m") + ")");
-  kv("angles of repose, difference", fixed(j, {"repose_angle_difference_deg"}, 1, "\u00b0"));
+  kv("speed-up at equal stiffness (plain DEM at the surface run's k_n and dt)",
+     fixed(j, {"speedup_equal_stiffness"}, 2, "\u00d7"));
+  kv("seeds per mode", count(j, {"seeds"}));
+  kv("final sand surfaces, RMS distance (surface flow to plain DEM)",
+     fixed(j, {"surface_rms"}, 4, " m") + " = " + fixed(j, {"surface_rms_d"}, 2, " d") + " = " +
+         percent(j, {"surface_rms_rel"}) + " of the scene's height (" +
+         fixed(j, {"reference_height"}, 3, " m") + ")");
+  kv("the same between plain-DEM seeds: the noise floor",
+     fixed(j, {"surface_rms_dem_vs_dem"}, 4, " m") + " = " +
+         fixed(j, {"surface_rms_dem_vs_dem_d"}, 2, " d") + " = " +
+         percent(j, {"surface_rms_dem_vs_dem_rel"}));
+  kv("angles of repose, difference of the means", fixed(j, {"repose_angle_diff_deg"}, 1, "\u00b0"));
+  kv("angles of repose, spread of the plain-DEM seeds",
+     fixed(j, {"repose_angle_dem_spread_deg"}, 1, "\u00b0"));
+  kv("energy added by waking / removed by trapping (mean per run)",
+     general(j, {"energy_added_by_waking_j"}, " J") + " / " +
+         general(j, {"energy_removed_by_trapping_j"}, " J"));
   sp += "</table>\n";
   body += section("speedup", "Speed-up and sameness", sp);
 
@@ -555,9 +568,14 @@ const Table1Column kTable1Columns[] = {
     {"dem_simulated_mean", "plain DEM: simulated grains (mean)", [](double v) { return count(v); }},
     {"dem_s_per_frame", "plain DEM: s/frame", [](double v) { return fmt::format("{:.3f}", v); }},
     {"speedup", "speed-up", [](double v) { return fmt::format("{:.2f}\u00d7", v); }},
-    {"surface_rms_rel", "surfaces apart (RMS / heap height)",
+    {"surface_rms_rel", "surfaces apart (RMS / scene height)",
      [](double v) { return fmt::format("{:.1f} %", 100 * v); }},
     {"grains_inside_geometry", "grains inside geometry", [](double v) { return count(v); }},
+    {"max_overlap_surface_rel", "surface flow: largest overlap",
+     [](double v) { return fmt::format("{:.1f} %", 100 * v); }},
+    {"impact_overlap", "impact_overlap", [](double v) { return fmt::format("{:.0f} %", 100 * v); }},
+    {"energy_added_by_waking_j", "energy added by waking",
+     [](double v) { return fmt::format("{:.3g} J", v); }},
 };
 
 std::string table1_report_html(const Table1ReportData& t) {

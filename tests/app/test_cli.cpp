@@ -4,8 +4,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -117,6 +119,68 @@ TEST(Cli, CompareWritesBothRunsAndTheTable) {
   // --mode makes no sense for a comparison
   EXPECT_EQ(sandflow("compare " + (box.dir / "t.toml").string() + " --mode dem --out " +
                      (box.dir / "x").string()),
+            2);
+}
+
+// --seeds K runs each mode K times with seeds S, S+1, ...; the means, the spread of the plain-DEM
+// seeds and the distances between their surfaces are what compare.json reads against.
+TEST(Cli, CompareRunsEachSeedInBothModesAndTheEqualStiffnessRun) {
+  Sandbox box;
+  const auto out = box.dir / "cmp";
+  std::string log;
+  ASSERT_EQ(sandflow("compare " + box.write("t.toml", kTinyScene).string() +
+                         " --frames 8 --seeds 2 --equal-stiffness --set simulation.seed=5 --out " +
+                         out.string(),
+                     &log),
+            0)
+      << log;
+  const auto j = nlohmann::json::parse(std::ifstream(out / "compare.json"));
+  EXPECT_EQ(j["seeds"], 2);
+  EXPECT_EQ(j["seed_values"], nlohmann::json::array({5, 6}));
+  ASSERT_EQ(j["runs"].size(), 5u);
+  std::vector<double> dem_angles, surface_angles;
+  std::set<std::string> dem_hashes;
+  for (const auto& run : j["runs"]) {
+    const fs::path dir = out / run["folder"].get<std::string>();
+    const auto summary = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
+    EXPECT_EQ(summary["state_hash"], run["state_hash"]) << dir;
+    const std::string mode = run["mode"];
+    if (mode == "dem") {
+      dem_hashes.insert(run["state_hash"].get<std::string>());
+      if (run["repose_angle_deg"].is_number()) dem_angles.push_back(run["repose_angle_deg"]);
+    } else if (mode == "surface" && run["repose_angle_deg"].is_number()) {
+      surface_angles.push_back(run["repose_angle_deg"]);
+    }
+  }
+  EXPECT_TRUE(fs::exists(out / "surface" / "summary.json"));
+  EXPECT_TRUE(fs::exists(out / "seed-6" / "dem" / "summary.json"));
+  EXPECT_EQ(dem_hashes.size(), 2u);  // the two seeds made two different runs
+  // the figures follow from the runs
+  if (dem_angles.size() == 2) {
+    EXPECT_NEAR(j["repose_angle_dem_spread_deg"].get<double>(),
+                std::abs(dem_angles[0] - dem_angles[1]), 1e-9);
+    EXPECT_NEAR(j["repose_angle_dem_deg"].get<double>(), 0.5 * (dem_angles[0] + dem_angles[1]),
+                1e-9);
+  }
+  if (dem_angles.size() == 2 && surface_angles.size() == 2) {
+    EXPECT_NEAR(j["repose_angle_diff_deg"].get<double>(),
+                std::abs(0.5 * (surface_angles[0] + surface_angles[1]) -
+                         0.5 * (dem_angles[0] + dem_angles[1])),
+                1e-9);
+  }
+  for (const char* key : {"surface_rms_rel", "surface_rms_d", "surface_rms_dem_vs_dem_rel",
+                          "surface_rms_dem_vs_dem_d", "max_overlap_surface_rel",
+                          "max_overlap_dem_rel", "speedup_equal_stiffness"})
+    EXPECT_TRUE(j[key].is_number()) << key;
+  EXPECT_NEAR(j["surface_rms_d"].get<double>() * 0.01, j["surface_rms"].get<double>(), 1e-12);
+  // the equal-stiffness run is plain DEM at the surface run's k_n and dt
+  const auto eq = nlohmann::json::parse(std::ifstream(out / "dem-equal-stiffness" / "summary.json"));
+  EXPECT_EQ(eq["mode"], "dem");
+  EXPECT_DOUBLE_EQ(eq["k_n"].get<double>(), j["k_n_surface"].get<double>());
+  EXPECT_DOUBLE_EQ(eq["dt_mean"].get<double>(), j["dt_surface"].get<double>());
+  EXPECT_NE(log.find("speed-up at equal stiffness"), std::string::npos) << log;
+  EXPECT_EQ(sandflow("compare " + (box.dir / "t.toml").string() + " --seeds 0 --out " +
+                     (box.dir / "y").string()),
             2);
 }
 

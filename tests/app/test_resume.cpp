@@ -183,22 +183,22 @@ TEST(Resume, SigintFinishesTheFrameCheckpointsAndSaysHowToResume) {
   EXPECT_NE(resumed.find("this run is finished"), std::string::npos) << resumed;
 }
 
-// `compare` is two resumable runs: stopped in its second (plain DEM), it goes on with
-// `compare --resume DIR` to the comparison it would have made uninterrupted.
+// `compare` is resumable runs: stopped in the plain-DEM run of its second seed, it goes on with
+// `compare --resume DIR` (its seeds and equal-stiffness run as it was started) to the comparison
+// it would have made uninterrupted.
 TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   Sandbox box;
   box.write("pour.toml", kPourScene);
   const std::string scene = (box.dir / "pour.toml").string();
   const fs::path want = box.dir / "straight", out = box.dir / "cmp";
   std::string log;
-  ASSERT_EQ(sandflow(fmt::format("compare {} --frames {} --out {}", scene, kFrames, want.string()),
-                     &log),
-            0)
+  const std::string options = fmt::format("--frames {} --seeds 2 --equal-stiffness", kFrames);
+  ASSERT_EQ(sandflow(fmt::format("compare {} {} --out {}", scene, options, want.string()), &log), 0)
       << log;
-  const pid_t pid = spawn(fmt::format("compare {} --frames {} --out {}", scene, kFrames,
-                                      out.string()),
-                          box.dir / "cmp.log");
-  while (!fs::exists(out / "dem" / "frames" / "0005.ply") && waitpid(pid, nullptr, WNOHANG) == 0)
+  const pid_t pid =
+      spawn(fmt::format("compare {} {} --out {}", scene, options, out.string()), box.dir / "cmp.log");
+  while (!fs::exists(out / "seed-2" / "dem" / "frames" / "0005.ply") &&
+         waitpid(pid, nullptr, WNOHANG) == 0)
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   kill(pid, SIGINT);
   EXPECT_EQ(wait_for(pid), 130);
@@ -214,20 +214,24 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   EXPECT_NE(log.find("no comparison to resume here"), std::string::npos) << log;
 
   ASSERT_EQ(sandflow("compare --resume " + out.string(), &log), 0) << log;
-  EXPECT_NE(log.find((out / "surface").string() + " is finished"), std::string::npos) << log;
-  EXPECT_NE(log.find("resuming " + (out / "dem").string() + " from its checkpoint"),
+  EXPECT_NE(log.find((out / "seed-2" / "surface").string() + " is finished"), std::string::npos)
+      << log;
+  EXPECT_NE(log.find("resuming " + (out / "seed-2" / "dem").string() + " from its checkpoint"),
             std::string::npos)
       << log;
-  expect_same_run(want / "surface", out / "surface");
-  expect_same_run(want / "dem", out / "dem");
+  for (const char* run : {"surface", "dem", "seed-2/surface", "seed-2/dem", "dem-equal-stiffness"})
+    expect_same_run(want / run, out / run);
   auto figures = [](const fs::path& dir) {
     auto j = nlohmann::json::parse(read_text(dir / "compare.json"));
-    for (const char* timing : {"speedup", "seconds_per_frame_dem", "seconds_per_frame_surface",
-                               "wall_seconds_dem", "wall_seconds_surface"})
+    for (const char* timing :
+         {"speedup", "seconds_per_frame_dem", "seconds_per_frame_surface", "wall_seconds_dem",
+          "wall_seconds_surface", "speedup_equal_stiffness", "wall_seconds_dem_equal_stiffness"})
       j.erase(timing);
+    for (auto& run : j["runs"]) run.erase("wall_seconds");
     return j;
   };
   EXPECT_EQ(figures(out), figures(want));
+  EXPECT_EQ(figures(out)["runs"].size(), 5u);
 }
 
 // The exports go on where the checkpoint left them: a resumed run's ParaView series lists every

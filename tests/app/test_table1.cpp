@@ -25,7 +25,8 @@ using sandflow_test::sandflow;
 const fs::path kScenes = fs::path(SANDFLOW_SOURCE_DIR) / "scenes";
 const std::string kHeader =
     "scene,total,surface_simulated_mean,surface_s_per_frame,dem_simulated_mean,dem_s_per_frame,"
-    "speedup,surface_rms_rel,grains_inside_geometry";
+    "speedup,surface_rms_rel,grains_inside_geometry,max_overlap_surface_rel,impact_overlap,"
+    "energy_added_by_waking_j";
 
 std::vector<std::string> lines(const std::string& text) {
   std::vector<std::string> out;
@@ -62,7 +63,7 @@ TEST(Table1, TinyFloorRowHasTheHeaderAndFiniteFigures) {
   ASSERT_EQ(csv.size(), 2u) << read_text(out / "table1.csv");
   EXPECT_EQ(csv[0], kHeader);
   const auto f = fields(csv[1]);
-  ASSERT_EQ(f.size(), 9u) << csv[1];
+  ASSERT_EQ(f.size(), 12u) << csv[1];
   EXPECT_EQ(f[0], "floor");
   // round(F x the paper's 107,687 grains)
   EXPECT_EQ(std::stoll(f[1]), std::llround(0.01 * 107687));
@@ -77,6 +78,11 @@ TEST(Table1, TinyFloorRowHasTheHeaderAndFiniteFigures) {
   EXPECT_EQ(std::stoll(f[8]), 0) << "grains inside the floor";
   // plain DEM simulates every grain present, so never fewer than the surface flow
   EXPECT_GE(std::stod(f[4]), std::stod(f[2]));
+  // the surface runs' largest overlap beside the scene's limit, and the energy waking added
+  const auto j0 = nlohmann::json::parse(read_text(out / "floor" / "compare.json"));
+  EXPECT_NEAR(std::stod(f[9]), j0["max_overlap_surface_rel"].get<double>(), 1e-5);
+  EXPECT_DOUBLE_EQ(std::stod(f[10]), 0.25);  // the floor scene's stiffness.impact_overlap
+  EXPECT_GE(std::stod(f[11]), 0.0);
 
   // the scene's comparison, as `compare` writes it
   const auto j = nlohmann::json::parse(read_text(out / "floor" / "compare.json"));
