@@ -216,6 +216,7 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
                           *std::min_element(a_dem.begin(), a_dem.end());
   double wall_dem = 0, wall_surf = 0, frac_mean = 0, frac_half = 0, frac_final = 0;
   double sim_mean = 0, sim_final = 0, over_surf = 0, over_dem = 0, e_woken = 0, e_trapped = 0;
+  double e_inside = 0;
   const std::size_t n_frames = c.surface[0].frames.size();
   for (const RunResult& r : c.surface) {
     const FrameStats& last = r.frames.back();
@@ -230,6 +231,7 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
     for (const FrameStats& f : r.frames) {
       e_woken += f.energy_woken / co.seeds;
       e_trapped += f.energy_trapped / co.seeds;
+      e_inside += f.energy_inside / co.seeds;
     }
   }
   for (const RunResult& r : c.dem) {
@@ -301,6 +303,7 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
       {"impact_overlap", scene.stiffness.impact_overlap},
       {"energy_added_by_waking_j", e_woken},
       {"energy_removed_by_trapping_j", e_trapped},
+      {"energy_opened_inside_active_j", e_inside},
       {"grains_inside_geometry_dem", dem.summary["grains_inside_geometry"]},
       {"grains_inside_geometry_surface", surf.summary["grains_inside_geometry"]},
       {"threads", thread_count(scene)},

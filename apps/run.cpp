@@ -157,7 +157,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
   double simulated_sum = 0;
   Real max_overlap = 0;
   TransitionCounts transitions;
-  Real energy_trapped = 0, energy_woken = 0, energy_preloaded = 0;
+  Real energy_trapped = 0, energy_woken = 0, energy_preloaded = 0, energy_inside = 0;
   for (const FrameStats& st : res.frames) {
     simulated_sum += static_cast<double>(st.n_active + st.n_interface);
     res.wall_seconds += st.wall_seconds;
@@ -166,6 +166,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
     energy_trapped += st.energy_trapped;
     energy_woken += st.energy_woken;
     energy_preloaded += st.energy_preloaded;
+    energy_inside += st.energy_inside;
   }
 
   // the heap of the final state, and what ended up where it must not be
@@ -242,6 +243,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
                               {"woken_by_reach", transitions.woken_by_reach}};
     summary["transition_energy"] = {{"removed_by_trapping_j", energy_trapped},
                                     {"added_by_waking_j", energy_woken},
+                                    {"opened_inside_active_j", energy_inside},
                                     {"preloaded_j", energy_preloaded}};
   }
   nlohmann::json emitters = nlohmann::json::array();
@@ -593,8 +595,10 @@ int run_command(const RunOptions& o) {
                t["slept"].get<std::int64_t>(), t["woken"].get<std::int64_t>(),
                t["woken_by_reach"].get<std::int64_t>());
     const auto& e = s["transition_energy"];
-    fmt::print("energy           {:.3g} J removed by trapping, {:.3g} J added by waking\n",
-               e["removed_by_trapping_j"].get<double>(), e["added_by_waking_j"].get<double>());
+    fmt::print("energy           {:.3g} J removed by trapping, {:.3g} J added by waking ({:.3g} J "
+               "of it inside moving grains)\n",
+               e["removed_by_trapping_j"].get<double>(), e["added_by_waking_j"].get<double>(),
+               e["opened_inside_active_j"].get<double>());
   }
   for (const auto& e : s["emitters"]) {
     const auto emitted = e["emitted"].get<std::int64_t>(), count = e["count"].get<std::int64_t>();

@@ -114,7 +114,7 @@ void write_frame_stats(Writer& w, const FrameStats& s) {
     w.i64(v);
   w.real(s.wall_seconds, "a frame's wall_seconds");
   w.i64(s.transitions.woken_by_reach);
-  for (Real e : {s.energy_trapped, s.energy_woken, s.energy_preloaded})
+  for (Real e : {s.energy_trapped, s.energy_woken, s.energy_preloaded, s.energy_inside})
     w.real(e, "a frame's transition energy");
 }
 
@@ -312,7 +312,7 @@ FrameStats read_frame_stats(Reader& r) {
     *v = r.count_value("a frame's counter");
   s.wall_seconds = r.real("a frame's wall_seconds");
   s.transitions.woken_by_reach = r.count_value("a frame's counter");
-  for (Real* e : {&s.energy_trapped, &s.energy_woken, &s.energy_preloaded})
+  for (Real* e : {&s.energy_trapped, &s.energy_woken, &s.energy_preloaded, &s.energy_inside})
     *e = r.real("a frame's transition energy");
   return s;
 }

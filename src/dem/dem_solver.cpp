@@ -368,8 +368,9 @@ void DemSolver::open_released_contacts(const Grains& grains, Real dt) {
   };
   const ContactParams& cp = params_.contact;
   const std::size_t n = grains.size();
-  Real preloaded = 0, added = 0;
-#pragma omp parallel for schedule(static) reduction(+ : preloaded, added) if (n >= kParallelMinGrains)
+  // per row, then the rows in order: the totals do not depend on the thread count
+  std::vector<Real> row_preloaded(n, 0.0), row_added(n, 0.0);
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i)
     for (std::uint32_t s = pairs_.start[i]; s < pairs_.start[i + 1]; ++s) {
       const std::uint32_t j = pairs_.j[s];
@@ -385,13 +386,16 @@ void DemSolver::open_released_contacts(const Grains& grains, Real dt) {
       if (was_frozen(i) && was_frozen(j)) {
         pairs_.touch[s] = kTouching | kPreloaded;
         pairs_.delta0[s] = delta;
-        preloaded += energy;
+        row_preloaded[i] += energy;
       } else {
-        added += energy;
+        row_added[i] += energy;
       }
     }
-  counters_.energy_preloaded += preloaded;
-  counters_.energy_released += added;
+  for (std::size_t i = 0; i < n; ++i) {
+    counters_.energy_preloaded += row_preloaded[i];
+    counters_.energy_released += row_added[i];
+    counters_.energy_inside += row_added[i];
+  }
 }
 
 void DemSolver::balance_ranges(const Grains& grains, std::size_t threads) {
@@ -466,8 +470,9 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   Vec3* acc_t = acc_t_.data();
   std::int64_t contacts = 0, wall_contacts = 0;
   Real max_ov = counters_.max_overlap_rel;
-  Real inert = 0;    // elastic energy of contacts whose grains are both frozen now
-  Real relaxed = 0;  // work of the springs of preloaded contacts as their rest overlap decays
+  // the energy of contacts going inert and of preloads relaxing: rare, kept per slot and summed
+  // in slot order after the sweep, so that the totals do not depend on the threads
+  std::vector<std::vector<SlotEnergy>>& events = energy_events_;
   const Real decay =
       params_.preload_relax_time > 0 ? std::exp(-dt / params_.preload_relax_time) : 1.0;
   int moved_out = 0;  // some grain left its allowance
@@ -476,8 +481,14 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   split.resize(n);
 
 #pragma omp parallel if (n >= kParallelMinGrains) \
-    reduction(+ : contacts, wall_contacts, inert, relaxed) reduction(max : max_ov, moved_out)
+    reduction(+ : contacts, wall_contacts) reduction(max : max_ov, moved_out)
   {
+    const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+#pragma omp single
+    events.resize(std::max(events.size(), threads));
+    std::vector<SlotEnergy>& ev = events[t];
+    ev.clear();
     // defined inside the parallel region, so they update this thread's reduction copies
 
     // One pair slot: the contact law (true, with the results in cf) or the end of a contact.
@@ -493,7 +504,7 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
         // two frozen grains it goes inert, and the energy in its springs leaves with it
         if (pl.touch[s]) {
           if (dist2 < rsum * rsum) [[unlikely]]
-            inert += inert_energy(cp, pl, s, rsum, dist2, kRolling);
+            ev.push_back({s, inert_energy(cp, pl, s, rsum, dist2, kRolling), 0.0});
           pl.touch[s] = 0;
           pl.delta0[s] = 0;
           pl.xi[s] = {};
@@ -517,7 +528,7 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
       const Real d_small = 2 * std::min(r[i], r[j]);
       if (g.delta > max_ov * d_small) max_ov = g.delta / d_small;
       if (pl.touch[s] & kPreloaded) [[unlikely]]
-        relaxed += relax_preload(cp.k_n, decay, pl.delta0[s], g.delta);
+        ev.push_back({s, 0.0, relax_preload(cp.k_n, decay, pl.delta0[s], g.delta)});
       ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
       cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, dt);
       pl.touch[s] |= kTouching;
@@ -537,8 +548,6 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
     // computed into their slots by whichever thread is free (each slot's result depends on its
     // pair alone), then each thread takes those that reach into its range into its accumulators,
     // in grain order
-    const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
-    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::vector<std::size_t>& range = range_start_;
 #pragma omp single
     if (ranges_stale_ || range.size() != threads + 1 || range.back() != n)
@@ -649,8 +658,21 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   counters_.contacts = contacts;
   counters_.wall_contacts = wall_contacts;
   counters_.max_overlap_rel = max_ov;
-  counters_.energy_inert += inert;
-  counters_.energy_released += relaxed;
+  std::vector<SlotEnergy>& all = events_merged_;
+  all.clear();
+  for (auto& e : events) {
+    all.insert(all.end(), e.begin(), e.end());
+    e.clear();  // (a sweep on fewer threads leaves the others' empty)
+  }
+  if (!all.empty()) {
+    // (a slot is computed once a step: one event each)
+    std::sort(all.begin(), all.end(),
+              [](const SlotEnergy& a, const SlotEnergy& b) { return a.slot < b.slot; });
+    for (const SlotEnergy& e : all) {
+      counters_.energy_inert += e.inert;
+      counters_.energy_released += e.relaxed;
+    }
+  }
   return moved_out != 0;
 }
 

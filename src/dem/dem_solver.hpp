@@ -46,9 +46,10 @@ struct DemCounters {
   std::int64_t rebuilds = 0;     ///< neighbour-list rebuilds, since the last reset
   // Energy through the changes of state (surface mode), since the last reset [J]:
   Real energy_inert = 0;      ///< in the springs of contacts that went inert as both grains froze
-  Real energy_released = 0;   ///< in the springs of contacts a released grain opened inside an
-                              ///< ACTIVE one (which the invariant of the layers forbids), and
-                              ///< the work of the springs as the preloads relax
+  Real energy_released = 0;   ///< added: energy_inside, and the work of the springs of
+                              ///< preloaded contacts as their rest overlap decays
+  Real energy_inside = 0;     ///< in the springs of contacts a released grain opened inside an
+                              ///< ACTIVE one, deeper than one step: the invariant says none
   Real energy_preloaded = 0;  ///< withheld: contacts opened inside between grains frozen before
 };
 
@@ -97,7 +98,7 @@ class DemSolver {
   /// opens there with a grain that was frozen too starts at its present overlap: two frozen
   /// grains may lie inside each other, and the change must not turn that into energy. One it
   /// opens inside an ACTIVE grain deeper than the two close in one step (how deep any contact
-  /// of the DEM may begin) is counted in DemCounters::energy_released: the invariant of the
+  /// of the DEM may begin) is counted in DemCounters::energy_inside: the invariant of the
   /// layers says there is none. Consumed by the next rebuild, in the same step.
   void release(GrainId id) {
     released_.push_back(id);
@@ -170,6 +171,13 @@ class DemSolver {
   bool need_rebuild_ = true;
   std::int64_t rebuild_count_ = 0;
   std::vector<GrainId> released_;  ///< since the last rebuild (always empty between steps)
+  /// Energy of one pair slot in one step: its contact going inert, or its preload relaxing [J].
+  struct SlotEnergy {
+    std::uint32_t slot;
+    Real inert, relaxed;
+  };
+  std::vector<std::vector<SlotEnergy>> energy_events_;  ///< per thread, in one sweep
+  std::vector<SlotEnergy> events_merged_;
   DemCounters counters_;
 };
 

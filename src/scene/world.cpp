@@ -367,6 +367,7 @@ FrameStats World::advance_frame() {
   st.energy_trapped = transitions_.energy_trapped + dem_.counters().energy_inert;
   st.energy_woken = dem_.counters().energy_released;
   st.energy_preloaded = dem_.counters().energy_preloaded;
+  st.energy_inside = dem_.counters().energy_inside;
   st.kinetic_energy = kinetic_energy();
   // (the guards of each step see the positions before it: this one sees the frame's last step)
   for (std::size_t i = 0; i < grains_.size(); ++i)

@@ -62,6 +62,9 @@ struct FrameStats {
   /// the invariant of the layers holds), and withheld by preloading the contacts a change of
   /// state opened between grains that were frozen inside each other (DemSolver::release).
   Real energy_trapped = 0, energy_woken = 0, energy_preloaded = 0;
+  /// Of energy_woken: the springs of contacts a woken or dislodged grain opened inside an ACTIVE
+  /// grain, deeper than one step of motion (the invariant of the layers says none) [J].
+  Real energy_inside = 0;
   std::int64_t surface_updates = 0;  ///< height-field updates during the frame
   std::int64_t left_domain = 0;      ///< grains removed on leaving the domain (on_leave = count)
   double wall_seconds = 0;           ///< wall-clock time of the frame [s]

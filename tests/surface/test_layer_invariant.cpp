@@ -97,7 +97,7 @@ void expect_creep_stopped_at_the_layer(Real theta) {
   EXPECT_GT(woken, 0);
   // the grain met the woken (INTERFACE) grains and went back the way it came
   EXPECT_GT(dot(c.hot.v[0], c.n), 0.0);
-  EXPECT_EQ(c.dem.counters().energy_released, 0.0);  // none woke inside it
+  EXPECT_EQ(c.dem.counters().energy_inside, 0.0);  // none woke inside it
 }
 
 TEST(LayerInvariant, AGrainCannotCreepIntoTheStaticLayerOnTheFlat) {
@@ -118,7 +118,7 @@ TEST(LayerInvariant, WithoutItTheGrainGoesIntoTheStaticLayer) {
 
 // Erosion after the creep: the static top falls below the whole layer and every static grain
 // wakes. The energy that contacts opened inside an ACTIVE grain would add (DemCounters::
-// energy_released) is what a grain that crept in gets back when the grains around it wake.
+// energy_inside) is what a grain that crept in gets back when the grains around it wake.
 Real energy_when_the_layer_wakes(bool hold_invariant) {
   Creep c(deg_to_rad(20.0));
   for (int s = 0; s < 1500; ++s) c.step(hold_invariant);
@@ -132,7 +132,7 @@ Real energy_when_the_layer_wakes(bool hold_invariant) {
   EXPECT_EQ(n.woken, static_cast<std::int64_t>(static_before));
   EXPECT_EQ(c.st.size(), 0u);
   c.step(hold_invariant);  // the rebuild that opens the woken grains' contacts
-  return c.dem.counters().energy_released;
+  return c.dem.counters().energy_inside;
 }
 
 TEST(LayerInvariant, NoGrainWakesInsideAnActiveOne) {
