@@ -117,18 +117,18 @@ std::string frame_path(const std::string& dir, int frame) {
 std::string stats_header() {
   return "frame,time,substeps,dt,n_total,n_active,n_interface,n_static,contacts,wall_contacts,"
          "max_overlap_rel,kinetic_energy,rebuilds,trapped,dislodged,slept,woken,surface_updates,"
-         "left_domain,woken_by_reach,energy_trapped,energy_woken,energy_preloaded,wall_seconds\n";
+         "left_domain,woken_by_reach,energy_trapped,energy_woken,energy_preloaded,energy_inside,wall_seconds\n";
 }
 
 std::string stats_row(const FrameStats& s) {
   return fmt::format(
       "{},{:.6f},{},{:.6e},{},{},{},{},{},{},{:.6e},{:.6e},{},{},{},{},{},{},{},{},{:.6e},{:.6e},"
-      "{:.6e},{:.4f}\n",
+      "{:.6e},{:.6e},{:.4f}\n",
       s.frame, s.time, s.substeps, s.dt, s.n_total, s.n_active, s.n_interface, s.n_static,
       s.contacts, s.wall_contacts, s.max_overlap_rel, s.kinetic_energy, s.rebuilds,
       s.transitions.trapped, s.transitions.dislodged, s.transitions.slept, s.transitions.woken,
       s.surface_updates, s.left_domain, s.transitions.woken_by_reach, s.energy_trapped,
-      s.energy_woken, s.energy_preloaded, s.wall_seconds);
+      s.energy_woken, s.energy_preloaded, s.energy_inside, s.wall_seconds);
 }
 
 StatsWriter::StatsWriter(const std::string& path, const std::vector<FrameStats>& rows)
