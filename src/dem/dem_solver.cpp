@@ -72,12 +72,10 @@ void DemSolver::build_boundary_list(const Grains& grains) {
   bounds_.obstacle.clear();
   if (boundary_.size() == 0) return;
   const Real rb = boundary_.radius;
-  const Real inv_cell = 1.0 / boundary_grid_.cell_size();
   auto each_near = [&](std::size_t i, auto&& f) {
     if (grains.state[i] != GrainState::Active) return;
     const Real reach = grains.r[i] + rb + 2 * allow_[i];  // (a particle does not move: spare)
-    const int k = std::max(1, static_cast<int>(std::ceil(reach * inv_cell)));
-    boundary_grid_.for_each_within(grains.x[i], k, [&](std::uint32_t b) {
+    boundary_grid_.for_each_in_ball(grains.x[i], reach, [&](std::uint32_t b) {
       if (norm2(grains.x[i] - boundary_.x[b]) < reach * reach) f(b);
     });
   };

@@ -159,7 +159,7 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
       const std::size_t first = buf.size();
       const int k = reach[i];
       if (k == 0) continue;  // (own_count[i + 1] stays 0)
-      grid.for_each_within(x[i], k, [&](std::uint32_t j) {
+      grid.for_each_in_ball(x[i], r[i] + r_max + 2 * allow[i], [&](std::uint32_t j) {
         if (!listed(i, j)) return;
         if (j > i)
           buf.push_back(j);

@@ -67,6 +67,12 @@ class CellGrid {
   /// Calls f(j) for every grain j in the cells at most k cells away from p's along each axis.
   template <class F>
   void for_each_within(const Vec3& p, int k, F&& f) const;
+  /// Calls f(j) for every grain j in the cells that the ball of radius `reach` around p meets:
+  /// every grain closer than `reach` to p, and a few more. A fast grain's reach spans several
+  /// cells; the ball holds about a third of the cube around it, so its search checks that many
+  /// fewer candidates.
+  template <class F>
+  void for_each_in_ball(const Vec3& p, Real reach, F&& f) const;
 
   Real cell_size() const { return cell_; }
 
@@ -74,6 +80,13 @@ class CellGrid {
   int coord(Real v, int axis) const {
     const Real c = std::floor((v - lo_[axis]) * inv_cell_);
     return c < 0 ? 0 : (c >= dims_[axis] ? dims_[axis] - 1 : static_cast<int>(c));
+  }
+  /// How far p lies from the slab of cells c along an axis. The border cells reach to infinity:
+  /// they hold the clamped grains outside the box, which must not be missed.
+  Real slab_distance(Real v, int c, int axis) const {
+    const Real below = c > 0 ? lo_[axis] + c * cell_ - v : 0;
+    const Real above = c + 1 < dims_[axis] ? v - (lo_[axis] + (c + 1) * cell_) : 0;
+    return below > 0 ? below : (above > 0 ? above : 0);
   }
   std::size_t index(int cx, int cy, int cz) const {
     return (static_cast<std::size_t>(cz) * dims_[1] + cy) * dims_[0] + cx;
@@ -122,6 +135,25 @@ void CellGrid::for_each_within(const Vec3& p, int k, F&& f) const {
       // the cells along x are contiguous
       const std::uint32_t end = cell_start_[index(x1, y, z) + 1];
       for (std::uint32_t q = cell_start_[index(x0, y, z)]; q < end; ++q) f(items_[q]);
+    }
+  }
+}
+
+template <class F>
+void CellGrid::for_each_in_ball(const Vec3& p, Real reach, F&& f) const {
+  const Real r2 = reach * reach * (1 + 1e-9);  // (a margin for the rounding of the distances)
+  const int z1 = coord(p.z + reach, 2), y0 = coord(p.y - reach, 1), y1 = coord(p.y + reach, 1);
+  for (int z = coord(p.z - reach, 2); z <= z1; ++z) {
+    const Real dz = slab_distance(p.z, z, 2);
+    if (dz * dz >= r2) continue;
+    for (int y = y0; y <= y1; ++y) {
+      const Real dy = slab_distance(p.y, y, 1);
+      const Real left = r2 - dz * dz - dy * dy;
+      if (left <= 0) continue;
+      // the row's cells along x that the ball meets are contiguous, and so are their grains
+      const Real w = std::sqrt(left);
+      const std::uint32_t end = cell_start_[index(coord(p.x + w, 0), y, z) + 1];
+      for (std::uint32_t q = cell_start_[index(coord(p.x - w, 0), y, z)]; q < end; ++q) f(items_[q]);
     }
   }
 }

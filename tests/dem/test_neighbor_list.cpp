@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <set>
 
@@ -74,6 +75,39 @@ TEST(NeighbourList, LargerAllowancesOfAFewGrainsGiveTheBruteForcePairs) {
     expect_brute_force_pairs(g, allow, grid, pl, seed);
     for (std::size_t i = 0; i + 1 < pl.start.size(); ++i)  // rows ascending, as the sweep needs
       EXPECT_TRUE(std::is_sorted(pl.j.begin() + pl.start[i], pl.j.begin() + pl.start[i + 1]));
+  }
+}
+
+// The ball query of a fast grain's search: every grain closer than the reach is visited, also
+// among grains clamped into the border cells (a cluster far outside the central 99 % of the
+// grains, which lie close to each other and to nothing else), and fewer than the cube holds.
+TEST(CellGrid, ABallQueryVisitsEveryGrainWithinReach) {
+  for (std::uint64_t seed : {11, 12}) {
+    Grains g = random_grains(3000, seed, 0.15);
+    Rng rng(seed);
+    for (int k = 0; k < 10; ++k)  // (10 of 3,010: beyond the central 99 %)
+      g.add(7000 + k, {40 + rng.uniform(0, 0.03), -30 + rng.uniform(0, 0.03), 0.07}, {}, 0.005, 2600);
+    CellGrid grid;
+    grid.build(g.x, 0.013);
+    ASSERT_LT(grid.cell_size(), 0.02);  // the outliers are clamped, not covered by coarse cells
+    std::size_t in_ball = 0, in_cube = 0;
+    for (int q = 0; q < 400; ++q) {
+      const Vec3 p = q % 10 == 0 ? g.x[3000 + q / 10 % 10]
+                                 : Vec3{rng.uniform(-0.01, 0.16), rng.uniform(-0.01, 0.16),
+                                        rng.uniform(-0.01, 0.16)};
+      const Real reach = rng.uniform(0.001, 0.04);
+      std::set<std::uint32_t> seen;
+      grid.for_each_in_ball(p, reach, [&](std::uint32_t j) { seen.insert(j); });
+      for (std::uint32_t j = 0; j < g.size(); ++j) {
+        if (norm(g.x[j] - p) < reach) {
+          EXPECT_TRUE(seen.count(j)) << "seed " << seed << ", query " << q;
+        }
+      }
+      const int k = static_cast<int>(std::ceil(reach / grid.cell_size()));
+      in_ball += seen.size();
+      grid.for_each_within(p, k, [&](std::uint32_t) { ++in_cube; });
+    }
+    EXPECT_LT(in_ball, in_cube * 3 / 4) << "seed " << seed;
   }
 }
 
