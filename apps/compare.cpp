@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "io/folder_lock.hpp"
 #include "io/run_output.hpp"
 #include "surface/surface_params.hpp"
 
@@ -61,12 +63,14 @@ std::vector<double> angles(const std::vector<RunResult>& runs) {
   return a;
 }
 
-/// Prepares a comparison folder: OUT is refused when not empty unless `force`, in which case the
-/// earlier comparison is removed, or `resume`, which keeps it.
-void prepare_compare_dir(const std::string& out, bool force, bool resume) {
+/// Prepares a comparison folder and locks it (the lock is returned: hold it while the comparison
+/// runs): OUT is refused when not empty unless `force`, in which case the earlier comparison is
+/// removed, or `resume`, which keeps it.
+std::unique_ptr<FolderLock> prepare_compare_dir(const std::string& out, bool force, bool resume) {
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
     throw InputError(fmt::format("{}: the output path exists and is not a folder", out));
+  auto lock = std::make_unique<FolderLock>(out);
   if (fs::exists(out, ec) && !fs::is_empty(out, ec) && !resume) {
     if (!force)
       throw InputError(fmt::format(
@@ -82,6 +86,7 @@ void prepare_compare_dir(const std::string& out, bool force, bool resume) {
   }
   fs::create_directories(out, ec);
   if (ec) throw OutputError(fmt::format("{}: cannot create the output folder: {}", out, ec.message()));
+  return lock;
 }
 
 /// The plan of a comparison, written when it starts so that --resume goes on with the same one.
@@ -137,7 +142,7 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
                   const std::string& resume_with, const std::string& label, Comparison& c) {
   if (co.seeds < 1 || co.seeds > kMaxSeeds)
     throw InputError(fmt::format("--seeds {}: expected 1 to {}", co.seeds, kMaxSeeds));
-  prepare_compare_dir(out, force, resume);
+  const auto lock = prepare_compare_dir(out, force, resume);
   write_plan(out, co);
   const std::string text = scene_text ? *scene_text : read_scene_text(o.scene);
   const std::int64_t seed0 = load_for_run(o).simulation.seed;

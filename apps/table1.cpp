@@ -11,6 +11,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "io/folder_lock.hpp"
 #include "io/run_output.hpp"
 #include "scene/scene_loader.hpp"
 #include "table1.hpp"
@@ -144,6 +145,7 @@ int table1_command(const Table1Options& o, const std::string& command) {
   if (o.force && o.resume)
     throw InputError("table1: --force replaces what the output folder holds, --resume goes on with "
                      "it: give one of them");
+  const FolderLock lock(o.out);  // held until the table is done
   if (fs::exists(o.out, ec) && !fs::is_empty(o.out, ec) && !o.resume) {
     if (!o.force)
       throw InputError(fmt::format(

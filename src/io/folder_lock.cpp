@@ -1,0 +1,77 @@
+#include "io/folder_lock.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "core/error.hpp"
+
+namespace sandflow {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// The process holding an flock on the inode `ino`, from /proc/locks ("1: FLOCK  ADVISORY  WRITE
+// 4242 fd:01:1234 0 EOF"), with its command line: "pid 4242: sandflow run ...", or "" when
+// /proc does not tell.
+std::string lock_holder(ino_t ino) {
+  std::ifstream locks("/proc/locks");
+  std::string line;
+  const std::string inode = ":" + std::to_string(ino);
+  while (std::getline(locks, line)) {
+    std::istringstream in(line);
+    std::string id, kind, mode, access, pid, device;
+    // (a process waiting for a lock has "->" where the kind stands: skipped)
+    if (!(in >> id >> kind >> mode >> access) || kind != "FLOCK") continue;
+    if (!(in >> pid >> device) || device.size() < inode.size() ||
+        device.compare(device.size() - inode.size(), inode.size(), inode) != 0)
+      continue;
+    std::ifstream cmdline("/proc/" + pid + "/cmdline", std::ios::binary);
+    std::string args((std::istreambuf_iterator<char>(cmdline)), std::istreambuf_iterator<char>());
+    for (char& c : args)
+      if (c == '\0') c = ' ';
+    while (!args.empty() && args.back() == ' ') args.pop_back();
+    return args.empty() ? "pid " + pid : fmt::format("pid {}: {}", pid, args);
+  }
+  return "";
+}
+
+}  // namespace
+
+FolderLock::FolderLock(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw OutputError(fmt::format("{}: cannot create the output folder: {}", dir, ec.message()));
+  fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd_ < 0)
+    throw OutputError(fmt::format("{}: cannot open the output folder: {}", dir, std::strerror(errno)));
+  if (::flock(fd_, LOCK_EX | LOCK_NB) == 0) return;
+  const int err = errno;
+  struct stat st {};
+  const std::string holder = ::fstat(fd_, &st) == 0 ? lock_holder(st.st_ino) : "";
+  ::close(fd_);
+  fd_ = -1;
+  if (err != EWOULDBLOCK)
+    throw OutputError(fmt::format("{}: cannot lock the output folder: {}", dir, std::strerror(err)));
+  throw InputError(fmt::format(
+      "{}: the output folder is in use by another sandflow run{}; wait for it to end, stop it, or "
+      "choose another output folder",
+      dir, holder.empty() ? "" : " (" + holder + ")"));
+}
+
+FolderLock::~FolderLock() {
+  if (fd_ >= 0) ::close(fd_);  // (closing drops the lock)
+}
+
+}  // namespace sandflow

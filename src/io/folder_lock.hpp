@@ -1,0 +1,29 @@
+// An exclusive lock on a run's output folder, so that two runs (or a run and a resume, or two
+// comparisons) never write into one folder at once: the second is refused, told which process
+// holds the folder, before it touches anything there.
+#pragma once
+
+#include <string>
+
+namespace sandflow {
+
+/// Holds the lock on a folder while it lives. The lock is flock(2) on the folder itself: no file
+/// is added to the folder, and the kernel drops the lock when the holder ends, however it ends
+/// (kill -9 included), so a stale lock never stands in the way of a resume. It belongs to this
+/// object's open file description: a second FolderLock on the same folder is refused even in the
+/// same process.
+class FolderLock {
+ public:
+  /// Creates `dir` (and its parents) if needed and locks it. Throws InputError naming the
+  /// process that holds it (its pid and command line, where /proc tells them), OutputError when
+  /// the folder cannot be created or opened.
+  explicit FolderLock(const std::string& dir);
+  ~FolderLock();
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+}  // namespace sandflow
