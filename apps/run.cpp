@@ -7,6 +7,7 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <set>
@@ -20,6 +21,7 @@
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "io/export_formats.hpp"
+#include "io/folder_lock.hpp"
 #include "io/frame_exporter.hpp"
 #include "io/ply.hpp"
 #include "io/run_output.hpp"
@@ -271,17 +273,7 @@ std::string shell_quote(const std::string& a) {
   return q + "'";
 }
 
-std::string read_scene_text(const std::string& path) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec))
-    throw InputError(path + ": cannot open scene file (it is a directory)");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open scene file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError(path + ": cannot read scene file");
-  return text.str();
-}
+std::string read_scene_text(const std::string& path) { return read_scene_file(path); }
 
 /// The options a run folder's run.json records (its scene file made absolute from the folder the
 /// run was started in), the record itself and the scene text it was started with.
@@ -309,6 +301,11 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
     r.frames = record.at("frames").get<int>();
     r.threads = record.at("threads").get<int>();
     r.checkpoint_every = record.at("checkpoint_every").get<int>();
+    if (r.frames < 0 || r.grains < 0 || r.threads < 0 || r.threads > 1024 || r.checkpoint_every < 0)
+      throw InputError(fmt::format(
+          "{}: frames {}, grains {}, threads {} or checkpoint_every {} is out of its range: the "
+          "record was edited or damaged",
+          record_path.string(), r.frames, r.grains, r.threads, r.checkpoint_every));
     const std::string wd = record.at("working_directory").get<std::string>();
     // a relative scene path names a file from the folder the run was started in
     if (fs::path(r.scene).is_relative() && fs::current_path(ec) != fs::path(wd))
@@ -392,6 +389,7 @@ nlohmann::json run_record(const RunOptions& o, const std::string& scene_text, in
 
 /// A run about to go: its scene, folder and record, and the checkpoint it resumes from.
 struct Started {
+  std::shared_ptr<FolderLock> lock;  ///< held until the run ends: no other run writes there
   SceneConfig scene;
   std::string out;
   nlohmann::json record;
@@ -406,7 +404,9 @@ struct Started {
 int run_resumable(Started& run, RunResult& res, const std::string& resume_with,
                   const std::string& label = "") {
   RunControl control;
-  control.start_record = run.record["start"].dump();
+  // (the checkpoint's seal covers how the run was started and how long it is: an edited run.json
+  // cannot resume into another run)
+  control.start_record = run.record["start"].dump() + " frames " + run.record["frames"].dump();
   control.checkpoint_every = run.record["checkpoint_every"].get<int>();
   control.resume = run.checkpoint ? &*run.checkpoint : nullptr;
   control.resumed = run.resumed;
@@ -438,11 +438,13 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
         "scene, --mode, --grains, --frames, --set, --export, --up-axis, --out, --force or "
         "--check; only --threads, --checkpoint-every and --profile");
   const std::string dir = o.resume;
+  Started run;
+  std::error_code ec;
+  // (a folder that is not there is not created: read_run_record says what is missing)
+  if (fs::is_directory(dir, ec)) run.lock = std::make_shared<FolderLock>(dir);
   nlohmann::json record;
   std::string text;
   RunOptions r = read_run_record(dir, record, text);
-  Started run;
-  std::error_code ec;
   const bool finished = fs::exists(fs::path(dir) / "summary.json", ec);
   if (finished && !reload_finished) {
     fmt::print(stderr, "{}: this run is finished (its summary.json is written); nothing to resume\n",
@@ -512,6 +514,10 @@ Started start_new(const RunOptions& o, const std::string& text) {
   started.out =
       o.out.empty() ? fmt::format("out/{}-{}", scene.name, mode_name(scene.simulation.mode))
                     : o.out;
+  std::error_code ec;
+  if (fs::exists(started.out, ec) && !fs::is_directory(started.out, ec))
+    throw InputError(fmt::format("{}: the output path exists and is not a folder", started.out));
+  run.lock = std::make_shared<FolderLock>(started.out);
   prepare_output_dir(started.out, o.force);
   run.out = started.out;
   run.record = run_record(started, text,

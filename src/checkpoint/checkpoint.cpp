@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 #include "core/hash.hpp"
 
 namespace sandflow {
@@ -722,6 +723,7 @@ void restore_checkpoint(World& world, Checkpoint c, std::uint64_t expected_hash,
 }
 
 Checkpoint read_checkpoint(const std::string& path) {
+  refuse_special_file(path, "checkpoint");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open the checkpoint");
   std::ostringstream ss;

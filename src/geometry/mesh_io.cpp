@@ -12,6 +12,7 @@
 #include <limits>
 #include <system_error>
 
+#include "core/file_kind.hpp"
 #include "geometry/mesh_io_detail.hpp"
 
 namespace sandflow {
@@ -21,6 +22,8 @@ namespace {
 using mesh_io::fail_file;
 
 std::string read_file_bytes(const std::string& path) {
+  if (const std::string kind = special_file_kind(path); !kind.empty())
+    fail_file(path, "the mesh file is " + kind + ", not a file");
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) fail_file(path, "cannot read the mesh file (" + ec.message() + ")");

@@ -8,7 +8,9 @@
 #include <fmt/format.h>
 
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 #include "geometry/mesh_io.hpp"
+#include "geometry/mesh_sampling.hpp"
 #include "geometry/shapes.hpp"
 
 namespace sandflow {
@@ -63,6 +65,9 @@ MeshObstacle place_mesh(const GeometryConfig& c, const MaterialConfig& material,
       found = p.string();
       break;
     }
+    if (fs::exists(p, ec))  // (a FIFO or a device: never read, and never "not found")
+      throw InputError(fmt::format("{}: {}: the mesh file '{}' is {}, not a file", scene_path,
+                                   c.name, p.string(), special_file_kind(p.string())));
     looked += (looked.empty() ? "" : ", ") + p.string();
   }
   if (found.empty()) {
@@ -84,6 +89,10 @@ MeshObstacle place_mesh(const GeometryConfig& c, const MaterialConfig& material,
     const Vec3 ext = box.hi - box.lo;
     const Real largest = std::max({ext.x, ext.y, ext.z});
     if (!(largest > 0)) throw InputError(fmt::format("{}: {}: the mesh is flat or empty", found, c.name));
+    if (!std::isfinite(largest))
+      throw InputError(fmt::format("{}: {}: the mesh's coordinates are too large: its extent is "
+                                   "not a finite number of metres",
+                                   found, c.name));
     const Real scale = c.scale ? *c.scale : (c.mesh_size ? *c.mesh_size / largest : 1.0);
     transform(o.mesh, scale, c.rotation_deg, Vec3{});
     box = mesh_bounds(o.mesh);
@@ -96,6 +105,18 @@ MeshObstacle place_mesh(const GeometryConfig& c, const MaterialConfig& material,
           "robust to holes, and the grains collide with its sampled surface either way",
           c.name, found, q.boundary_edges));
   }
+  // Everything after (edge lengths, the boundary particles and their grid, the domain) needs the
+  // placed mesh finite and near enough to the origin for a double to resolve its particles.
+  const Aabb placed = mesh_bounds(o.mesh);
+  const Real far = kMaxMeshSpacingsFromOrigin * 0.5 * o.particle_radius;
+  for (int a = 0; a < 3; ++a)
+    if (!(std::abs(placed.lo[a]) <= far && std::abs(placed.hi[a]) <= far))
+      throw InputError(fmt::format(
+          "{}: {}: the placed mesh reaches from ({:.4g}, {:.4g}, {:.4g}) to ({:.4g}, {:.4g}, "
+          "{:.4g}) m, beyond {:.4g} m from the origin (2^40 particle spacings) on some axis; check "
+          "its scale, size and position",
+          scene_path, c.name, placed.lo.x, placed.lo.y, placed.lo.z, placed.hi.x, placed.hi.y,
+          placed.hi.z, far));
   o.winding = std::make_unique<WindingNumber>(o.mesh);
   return o;
 }

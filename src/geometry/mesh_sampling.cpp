@@ -7,16 +7,19 @@
 #include <string>
 #include <unordered_map>
 
+#include <fmt/format.h>
+
 #include "core/error.hpp"
 
 namespace sandflow {
 
 namespace {
 
-// Subdivisions of a triangle's edges so that the copies' edges are at most `spacing`.
-std::uint64_t subdivisions(const Vec3& a, const Vec3& b, const Vec3& c, Real spacing) {
+// Subdivisions of a triangle's edges so that the copies' edges are at most `spacing`: in floating
+// point, since a huge mesh needs more than any integer holds (check_sample_count refuses it).
+Real subdivisions(const Vec3& a, const Vec3& b, const Vec3& c, Real spacing) {
   const Real longest = std::sqrt(std::max({norm2(b - a), norm2(c - b), norm2(a - c)}));
-  return std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::ceil(longest / spacing)));
+  return std::max(1.0, std::ceil(longest / spacing));
 }
 
 // Points kept so far, hashed by cells of the merge tolerance, to drop near copies.
@@ -65,15 +68,16 @@ class MergeGrid {
 void check_sample_count(const TriangleMesh& mesh, Real spacing) {
   Real total = 0;
   for (const auto& t : mesh.triangles) {
-    const auto n = static_cast<Real>(
-        subdivisions(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]], spacing));
+    const Real n = subdivisions(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]], spacing);
     total += (n + 1) * (n + 2) / 2;
   }
-  if (total > static_cast<Real>(kMaxSurfaceSamples))
-    throw InputError("sampling the mesh at spacing " + std::to_string(spacing) + " m needs about " +
-                     std::to_string(static_cast<std::uint64_t>(total)) +
-                     " boundary particles, more than the limit of " +
-                     std::to_string(kMaxSurfaceSamples) + " (use larger grains or a coarser mesh)");
+  // (a total past any integer, or not finite, is refused as well)
+  if (!(total <= static_cast<Real>(kMaxSurfaceSamples)))
+    throw InputError(fmt::format(
+        "sampling the mesh at spacing {:.4g} m needs about {:.3g} boundary particles, more than "
+        "the limit of {} (a smaller scale or size, larger grains or particle_radius, or a coarser "
+        "mesh)",
+        spacing, total, kMaxSurfaceSamples));
 }
 
 }  // namespace
@@ -86,7 +90,8 @@ std::vector<Vec3> sample_surface(const TriangleMesh& mesh, Real spacing, Real me
   MergeGrid grid(merge > 0 ? merge : spacing / 8);
   for (const auto& t : mesh.triangles) {
     const Vec3 &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]], &c = mesh.vertices[t[2]];
-    const std::uint64_t n = subdivisions(a, b, c, spacing);
+    // (at most kMaxSurfaceSamples, checked above: the cast is exact)
+    const auto n = static_cast<std::uint64_t>(subdivisions(a, b, c, spacing));
     // the corners of the n^2 copies: a + (b - a) i / n + (c - a) j / n, i + j <= n
     for (std::uint64_t i = 0; i <= n; ++i)
       for (std::uint64_t j = 0; i + j <= n; ++j) {

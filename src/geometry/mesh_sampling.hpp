@@ -35,6 +35,10 @@ namespace sandflow {
 
 /// Largest number of samples sample_surface produces (about 1.2 GB of points).
 inline constexpr std::size_t kMaxSurfaceSamples = 50'000'000;
+/// How far from the origin a sampled surface may reach, in spacings: 2^40, where a double still
+/// tells neighbouring samples apart to a part in 4,000 of the spacing (and the merge grid's cell
+/// indices stay far inside 64 bits).
+inline constexpr Real kMaxMeshSpacingsFromOrigin = 1'099'511'627'776.0;
 
 /// The distance within which every surface point has a sample (see above).
 constexpr Real covering_radius(Real spacing) {

@@ -14,6 +14,7 @@
 #include <string_view>
 
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 
 namespace sandflow {
 namespace {
@@ -211,6 +212,7 @@ GrayImage parse_gray_png(std::string_view bytes, const std::string& name, int ma
 }
 
 GrayImage read_gray_png(const std::string& path, int max_side) {
+  refuse_special_file(path, "image");
   errno = 0;
   std::FILE* fp = std::fopen(path.c_str(), "rb");
   if (!fp) throw InputError(path + ": cannot open the image: " + reason(errno));

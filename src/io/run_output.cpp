@@ -31,8 +31,14 @@ void prepare_output_dir(const std::string& dir, bool force) {
                              "run.json"})
       fs::remove_all(fs::path(dir) / name, ec);
   }
+  const bool existed = fs::is_directory(dir, ec);
   fs::create_directories(fs::path(dir) / "frames", ec);
-  if (ec) throw OutputError(fmt::format("{}: cannot create the output folder: {}", dir, ec.message()));
+  if (ec)
+    throw OutputError(existed ? fmt::format("{}: cannot write into the output folder (creating "
+                                            "{}/frames: {})",
+                                            dir, dir, ec.message())
+                              : fmt::format("{}: cannot create the output folder: {}", dir,
+                                            ec.message()));
 }
 
 void prepare_resumed_dir(const std::string& dir, int frame) {

@@ -22,6 +22,7 @@
 #include <cmath>
 #include <concepts>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -31,6 +32,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 #include "geometry/heightmap.hpp"
 #include "io/export_formats.hpp"
 #include "io/png_gray.hpp"
@@ -202,6 +204,23 @@ class Places {
 
 // ---- Reading one table --------------------------------------------------------------------------
 
+// A key as a message may show it: a quoted key may hold any character, and a NUL or a control
+// character would cut the message short or garble the terminal, so they are written \uXXXX.
+std::string printable(std::string_view key) {
+  std::string out;
+  for (const char ch : key) {
+    const auto u = static_cast<unsigned char>(ch);
+    if (u < 0x20 || u == 0x7f) {
+      char code[8];
+      std::snprintf(code, sizeof code, "\\u%04x", u);
+      out += code;
+    } else {
+      out += ch;
+    }
+  }
+  return out;
+}
+
 class TableReader {
  public:
   // `prefix` names the table in messages: "material", "geometry[2]", "" for the document root.
@@ -209,7 +228,7 @@ class TableReader {
       : places_(places), table_(table), prefix_(std::move(prefix)) {}
 
   std::string name(std::string_view key) const {
-    return prefix_.empty() ? std::string(key) : prefix_ + "." + std::string(key);
+    return prefix_.empty() ? printable(key) : prefix_ + "." + printable(key);
   }
 
   void read(std::string_view key, Real& out, Range range = kAny) {
@@ -1244,10 +1263,11 @@ SceneConfig load_scene_from_string(const std::string& text, const std::string& n
   return read_scene(root, name, read_image);
 }
 
-SceneConfig load_scene(const std::string& path, const std::vector<Override>& overrides) {
+std::string read_scene_file(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw InputError(path + ": cannot open scene file (it is a directory)");
+  refuse_special_file(path, "scene file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open scene file");
   // read in pieces up to the limit: a pipe or a device has no size to check first
@@ -1260,7 +1280,11 @@ SceneConfig load_scene(const std::string& path, const std::vector<Override>& ove
     text.append(buf, static_cast<std::size_t>(in.gcount()));
   }
   if (in.bad()) throw InputError(path + ": cannot read scene file");
-  return load_scene_from_string(text, path, overrides);
+  return text;
+}
+
+SceneConfig load_scene(const std::string& path, const std::vector<Override>& overrides) {
+  return load_scene_from_string(read_scene_file(path), path, overrides);
 }
 
 }  // namespace sandflow

@@ -28,6 +28,9 @@ inline constexpr std::size_t kMaxSceneBytes = std::size_t{32} << 20;
 using ImageReader = std::function<GrayImage(const std::string& path, int max_side)>;
 
 /// Parses and validates a scene file, applying the overrides first (with the same validation).
+/// The text of a scene file, read in pieces up to kMaxSceneBytes (a pipe has no size to check
+/// first); a folder, FIFO or device is refused by its type. Throws InputError.
+std::string read_scene_file(const std::string& path);
 SceneConfig load_scene(const std::string& path, const std::vector<Override>& overrides = {});
 
 /// Parses and validates a scene given as text (for tests); `name` stands in for the file name.

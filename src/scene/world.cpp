@@ -89,15 +89,22 @@ DemParams dem_params(const SceneConfig& scene, const TimeStep& ts) {
 // (spacing r_b / 2, merged within 0.7 r_b: geometry/mesh_sampling.hpp), so that no grain can touch
 // a mesh without overlapping one of them; the merge keeps a fine scan from giving a particle per
 // vertex.
-BoundaryParticles boundary_particles(const Geometry& geometry) {
+BoundaryParticles boundary_particles(const Geometry& geometry, const std::string& scene_path) {
   BoundaryParticles b;
   for (std::uint32_t k = 0; k < geometry.meshes().size(); ++k) {
     const MeshObstacle& m = geometry.meshes()[k];
     if (b.radius > 0 && m.particle_radius != b.radius)
-      throw InputError(m.name + ": particle_radius must be the same for every mesh of a scene");
+      throw InputError(fmt::format("{}: {}: particle_radius must be the same for every mesh of a scene",
+                                   scene_path, m.name));
     b.radius = m.particle_radius;
     const Real rb = m.particle_radius;
-    for (const Vec3& p : sample_surface(m.mesh, 0.5 * rb, 0.7 * rb)) {
+    std::vector<Vec3> samples;
+    try {
+      samples = sample_surface(m.mesh, 0.5 * rb, 0.7 * rb);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}: {}", scene_path, m.name, e.what()));
+    }
+    for (const Vec3& p : samples) {
       b.x.push_back(p);
       b.group.push_back(k);
     }
@@ -160,7 +167,7 @@ World::World(const SceneConfig& scene)
       ts_(choose_time_step(scene_)),
       dem_(dem_params(scene_, ts_)),
       rng_(scene.simulation.seed) {
-  if (!geometry_.meshes().empty()) dem_.set_boundary(boundary_particles(geometry_));
+  if (!geometry_.meshes().empty()) dem_.set_boundary(boundary_particles(geometry_, scene_.path));
   if (scene_.simulation.mode == Mode::Surface)
     surface_ = std::make_unique<SurfaceFlow>(surface_params(scene_, geometry_, ts_.dt), geometry_);
   for (std::size_t k = 0; k < scene.emitters.size(); ++k)
@@ -172,13 +179,22 @@ World::World(const SceneConfig& scene)
 int World::planned_frames() const {
   if (scene_.output.frames) return *scene_.output.frames;
   Real duration = 0;
+  const char* from = "output.duration";
   if (scene_.output.duration) {
     duration = *scene_.output.duration;
   } else {
     for (const Emitter& e : emitters_) duration = std::max(duration, e.end_time());
     duration += scene_.output.settle_time;
+    from = "the emission (each emitter's start, count and rate) and output.settle_time";
   }
-  return std::max(1, static_cast<int>(std::ceil(duration * scene_.output.fps - 1e-9)));
+  // (counted in floating point and checked before the cast: an int would overflow)
+  const Real frames = std::ceil(duration * scene_.output.fps - 1e-9);
+  if (!(frames <= kMaxFrames))
+    throw InputError(fmt::format(
+        "{}: {} make a run of {:.4g} s, {:.4g} frames at output.fps = {:.4g}, more than the limit "
+        "of {:.0f}; set output.duration, or --frames",
+        scene_.path, from, duration, frames, scene_.output.fps, kMaxFrames));
+  return std::max(1, static_cast<int>(frames));
 }
 
 void World::emit() {
@@ -230,7 +246,7 @@ void World::step() {
     transitions_ += surface_->wake_within_reach(grains_, static_, dem_, ts_.dt);
   }
   dem_.step(grains_, geometry_, ts_.dt, profile_);
-  check_overlap();
+  check_overlap(step_ + 1);
   ++step_;
   time_ = static_cast<Real>(step_) * ts_.dt;
 }
@@ -293,7 +309,7 @@ void World::remove_leaving() {
   leaving_.clear();
 }
 
-void World::check_overlap() {
+void World::check_overlap(std::int64_t after_step) {
   const Real limit = scene_.simulation.max_overlap_stop;
   const Real reached = dem_.counters().max_overlap_rel;
   if (!(reached > limit)) return;
@@ -327,7 +343,7 @@ void World::check_overlap() {
   throw SimulationError(fmt::format(
       "{}: {}, above simulation.max_overlap_stop = {:.0f} %; the contacts are too soft for the "
       "impacts (raise k_n) or the time step is too long",
-      where(step_ + 1), what, 100 * limit));
+      where(after_step), what, 100 * limit));
 }
 
 FrameStats World::advance_frame() {
@@ -337,6 +353,12 @@ FrameStats World::advance_frame() {
   surface_updates_ = 0;
   left_frame_ = 0;
   for (int s = 0; s < ts_.substeps; ++s) step();
+  // Each step's overlap is measured on the state it starts from: the state the frame's last step
+  // leaves, which is written and restarted from, is measured here (a step too long for the
+  // contacts can carry grains deep into the geometry in one go).
+  dem_.counters().max_overlap_rel =
+      std::max(dem_.counters().max_overlap_rel, dem_.deepest_overlap(grains_, geometry_).rel);
+  check_overlap(step_);
   ++frame_;
 
   FrameStats st;

@@ -25,6 +25,9 @@ namespace sandflow {
 /// The time step of a scene and the bound it must respect.
 /// The most steps a frame may take: 10^8 (10 s a frame for a single grain, at best).
 inline constexpr Real kMaxSubsteps = 100'000'000;
+/// The most frames a run may plan: 10^7 (over 90 hours at 30 fps). With kMaxSubsteps a frame,
+/// the step count stays far inside 64 bits and the frame count inside an int.
+inline constexpr Real kMaxFrames = 10'000'000;
 
 struct TimeStep {
   Real t_c;           ///< contact duration of the two smallest grains [s]
@@ -94,7 +97,8 @@ class World {
   /// Advances one frame (TimeStep::substeps steps) and returns its statistics.
   FrameStats advance_frame();
 
-  /// Number of frames the scene asks for (output.frames, output.duration, or emission + settle).
+  /// Number of frames the scene asks for (output.frames, output.duration, or emission + settle);
+  /// throws InputError, naming the keys, when that is more than kMaxFrames.
   int planned_frames() const;
 
   const SceneConfig& scene() const { return scene_; }
@@ -146,7 +150,7 @@ class World {
   /// need the lists of the last rebuild, whose slots a removal would shift).
   void remove_leaving();
   /// Guard: an overlap above simulation.max_overlap_stop stops the run.
-  void check_overlap();
+  void check_overlap(std::int64_t after_step);
   /// "step S (frame F, t = T s)" for the messages of the guards.
   std::string where(std::int64_t step) const;
 

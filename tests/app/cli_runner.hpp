@@ -40,13 +40,15 @@ struct Sandbox {
   }
 };
 
-/// Runs the command; returns its exit status, with stdout+stderr in `output`.
-inline int sandflow(const std::string& args, std::string* output = nullptr) {
+/// Runs the command (behind `wrapper`, e.g. "timeout 30"); returns its exit status, with
+/// stdout+stderr in `output`.
+inline int sandflow(const std::string& args, std::string* output = nullptr,
+                    const std::string& wrapper = "") {
   // one log per test: ctest runs tests in parallel processes
   const std::string log =
       (fs::temp_directory_path() / ("sandflow_cli_" + test_id() + ".log")).string();
   const int rc =
-      std::system((std::string(SANDFLOW_BINARY) + " " + args + " > " + log + " 2>&1").c_str());
+      std::system((wrapper + " " + SANDFLOW_BINARY + " " + args + " > " + log + " 2>&1").c_str());
   if (output) {
     std::stringstream ss;
     ss << std::ifstream(log).rdbuf();

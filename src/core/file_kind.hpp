@@ -1,0 +1,34 @@
+// What kind of thing a path names, so that a reader refuses a FIFO or a device by its type
+// before it opens it: opening a FIFO blocks until a writer comes, and a device such as /dev/zero
+// never ends.
+#pragma once
+
+#include <sys/stat.h>
+
+#include <string>
+
+#include "core/error.hpp"
+
+namespace sandflow {
+
+/// "" for a regular file (or a path that is not there: the reader's own open then says so), else
+/// what it is: "a folder", "a FIFO", "a character device", ...
+inline std::string special_file_kind(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0 || S_ISREG(st.st_mode)) return "";
+  if (S_ISDIR(st.st_mode)) return "a folder";
+  if (S_ISFIFO(st.st_mode)) return "a FIFO";
+  if (S_ISCHR(st.st_mode)) return "a character device";
+  if (S_ISBLK(st.st_mode)) return "a block device";
+  if (S_ISSOCK(st.st_mode)) return "a socket";
+  return "not a regular file";
+}
+
+/// Throws InputError "PATH: the WHAT is a FIFO, not a file" unless `path` is a regular file (or
+/// is not there).
+inline void refuse_special_file(const std::string& path, const std::string& what) {
+  const std::string kind = special_file_kind(path);
+  if (!kind.empty()) throw InputError(path + ": the " + what + " is " + kind + ", not a file");
+}
+
+}  // namespace sandflow

@@ -1,0 +1,158 @@
+// Hostile inputs past the parser: each gives its documented exit status and a message that names
+// the file and the key, within `timeout 30`, never a crash, a hang or a silently wrong run.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+
+#include "cli_runner.hpp"
+#include "io/folder_lock.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using sandflow_test::Sandbox;
+using sandflow_test::sandflow;
+
+// A scene with the tiny block and one mesh entry (its keys after `file`).
+std::string mesh_scene(const std::string& file, const std::string& keys = "") {
+  return sandflow_test::tiny_block_scene(20) + "[[geometry]]\ntype = \"mesh\"\nfile = \"" + file +
+         "\"\n" + keys + "\n";
+}
+
+// `sandflow ARGS`, bounded by `timeout 30` (124 when it ran out).
+int bounded(const std::string& args, std::string* log) {
+  return sandflow_test::sandflow(args, log, "timeout 30");
+}
+
+bool has(const std::string& log, const std::string& part) {
+  return log.find(part) != std::string::npos;
+}
+
+TEST(HostileInputs, AMeshOfHugeCoordinatesIsRefusedBeforeTheWorldIsBuilt) {
+  Sandbox box;
+  box.write("huge.obj", "v 1e308 1e308 1e308\nv -1e308 -1e308 -1e308\nv 1e308 -1e308 0\nf 1 2 3\n");
+  box.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  std::string log;
+  // coordinates whose extent overflows: the file and the entry are named
+  const auto huge = box.write("huge.toml", mesh_scene("huge.obj"));
+  EXPECT_EQ(bounded("run " + huge.string() + " --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "huge.obj") && has(log, "geometry 1") && has(log, "too large")) << log;
+  // a sane mesh scaled or sized out of reach: the keys are named, no particle count is made
+  for (const std::string keys : {"scale = 1e307", "size = 1e300", "scale = 1e30"}) {
+    const auto scene = box.write("far.toml", mesh_scene("tri.obj", keys));
+    EXPECT_EQ(bounded("run " + scene.string() + " --check", &log), 2) << keys << "\n" << log;
+    EXPECT_TRUE(has(log, "far.toml: geometry 1") && has(log, "scale, size and position")) << log;
+  }
+  // large but within reach: refused for its particle count, which is given as a number
+  const auto large = box.write("large.toml", mesh_scene("tri.obj", "size = 1e6"));
+  EXPECT_EQ(bounded("run " + large.string() + " --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "large.toml: geometry 1: sampling the mesh") &&
+              has(log, "e+") && !has(log, "about 0 boundary"))
+      << log;
+}
+
+TEST(HostileInputs, ARunTooLongForItsFrameCountIsRefusedNamingTheKeys) {
+  Sandbox box;
+  std::string log;
+  const std::string tiny = sandflow_test::tiny_block_scene(20);
+  ASSERT_TRUE(has(tiny, "[output]"));
+  auto with_output_key = [&](const std::string& key) {
+    std::string text = tiny;
+    return text.replace(text.find("[output]"), 8, "[output]\n" + key);
+  };
+  const auto duration = box.write("duration.toml", with_output_key("duration = 7.2e7"));
+  EXPECT_EQ(bounded("run " + duration.string() + " --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "output.duration") && has(log, "more than the limit")) << log;
+  const auto s = box.write("settle.toml", with_output_key("settle_time = 1e300"));
+  EXPECT_EQ(bounded("run " + s.string() + " --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "output.settle_time") && has(log, "more than the limit")) << log;
+}
+
+TEST(HostileInputs, AKeyWithAControlCharacterIsShownWhole) {
+  Sandbox box;
+  std::string log;
+  std::string text = sandflow_test::tiny_block_scene(20);
+  text.replace(text.find("[material]"), 10, "[material]\n\"a\\u0000b\\u001bc\" = 1");
+  const auto scene = box.write("nul.toml", text);
+  EXPECT_EQ(bounded("run " + scene.string() + " --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "material.a\\u0000b\\u001bc is not a key of")) << log;
+}
+
+TEST(HostileInputs, SpecialFilesAreRefusedByTheirType) {
+  Sandbox box;
+  std::string log;
+  EXPECT_EQ(bounded("run /dev/zero --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "/dev/zero: the scene file is a character device, not a file")) << log;
+  const fs::path fifo = box.dir / "scene.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_EQ(bounded("run " + fifo.string() + " --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "is a FIFO, not a file")) << log;
+  const auto mesh = box.write("zero.toml", mesh_scene("/dev/zero"));
+  EXPECT_EQ(bounded("run " + mesh.string() + " --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "the mesh file '/dev/zero' is a character device, not a file")) << log;
+}
+
+TEST(HostileInputs, AFolderHeldByAnotherRunIsRefusedNamingTheHolder) {
+  Sandbox box;
+  std::string log;
+  const auto scene = box.write("tiny.toml", sandflow_test::tiny_block_scene(20));
+  const fs::path out = box.dir / "out";
+  {
+    const sandflow::FolderLock held(out.string());
+    EXPECT_EQ(bounded("run " + scene.string() + " --mode dem --frames 2 --force --out " + out.string(), &log), 2)
+        << log;
+    EXPECT_TRUE(has(log, "in use by another sandflow run (pid " + std::to_string(::getpid())))
+        << log;
+    EXPECT_FALSE(fs::exists(out / "run.json"));  // nothing touched
+    EXPECT_EQ(bounded("run --resume " + out.string(), &log), 2) << log;
+    EXPECT_EQ(bounded("compare " + scene.string() + " --frames 2 --seeds 1 --out " + out.string(), &log), 2)
+        << log;
+    EXPECT_TRUE(has(log, "in use")) << log;
+  }
+  // released with its holder: the run goes
+  EXPECT_EQ(bounded("run " + scene.string() + " --mode dem --frames 2 --force --out " + out.string(), &log), 0)
+      << log;
+}
+
+// Two real runs into one folder: the second (with --force) is refused while the first goes on,
+// and the first ends with every row and frame it owes.
+TEST(HostileInputs, ASecondRunIntoARunningOnesFolderIsRefused) {
+  Sandbox box;
+  std::string log;
+  const auto scene = box.write("tiny.toml", sandflow_test::tiny_block_scene(400));
+  const fs::path out = box.dir / "out";
+  const fs::path first_log = box.dir / "first.log";
+  const int frames = 60;
+  const std::string first = std::string(SANDFLOW_BINARY) + " run " + scene.string() +
+                            " --mode dem --frames " + std::to_string(frames) + " --out " +
+                            out.string() + " > " + first_log.string() + " 2>&1";
+  std::thread runner([&] { std::system(first.c_str()); });
+  // wait until the first run is under way (its run.json written), at most 20 s
+  for (int k = 0; k < 200 && !fs::exists(out / "run.json"); ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  const bool started = fs::exists(out / "run.json");
+  const int second = bounded(
+      "run " + scene.string() + " --mode dem --frames 2 --force --out " + out.string(), &log);
+  const bool still_running = !fs::exists(out / "summary.json");
+  runner.join();
+  ASSERT_TRUE(started) << sandflow_test::read_text(first_log);
+  if (!still_running) GTEST_SKIP() << "the first run ended before the second started";
+  EXPECT_EQ(second, 2) << log;
+  EXPECT_TRUE(has(log, "in use by another sandflow run")) << log;
+  std::ifstream csv(out / "stats.csv");
+  std::string line;
+  int rows = -1;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, frames) << sandflow_test::read_text(first_log);
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+}
+
+}  // namespace
