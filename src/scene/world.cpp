@@ -19,6 +19,12 @@ TimeStep choose_time_step(const SceneConfig& scene) {
   const Real m_min = mat.density * (4.0 / 3.0) * kPi * r_min * r_min * r_min;
   TimeStep ts;
   ts.t_c = contact_time(m_min / 2, mat.k_n);
+  // (each number is in its range, but a product of them can overflow: 1e300 m grains)
+  if (!(std::isfinite(m_min) && m_min > 0 && std::isfinite(ts.t_c) && ts.t_c > 0))
+    throw InputError(fmt::format(
+        "{}: material.density = {:.4g} kg/m^3, diameter = {:.4g} m and k_n = {:.4g} N/m give a "
+        "grain mass of {:.4g} kg and a contact time of {:.4g} s: not finite positive numbers",
+        scene.path, mat.density, mat.diameter, mat.k_n, m_min, ts.t_c));
   // Symplectic Euler on one spring is stable below 2/omega = 0.64 t_c; a grain held by many
   // contacts vibrates up to ~3x faster, so the bound keeps that factor: t_c / 5.
   ts.stable_bound = ts.t_c / 5;

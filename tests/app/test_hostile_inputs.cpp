@@ -10,9 +10,12 @@
 #include <fstream>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "cli_runner.hpp"
+#include "core/error.hpp"
 #include "io/folder_lock.hpp"
+#include "scene/world.hpp"
 
 namespace fs = std::filesystem;
 
@@ -84,6 +87,25 @@ TEST(HostileInputs, AKeyWithAControlCharacterIsShownWhole) {
   const auto scene = box.write("nul.toml", text);
   EXPECT_EQ(bounded("run " + scene.string() + " --check", &log), 2) << log;
   EXPECT_TRUE(has(log, "material.a\\u0000b\\u001bc is not a key of")) << log;
+}
+
+// Each number in its range, their product not: the loader's own checks (a block too small for
+// its grains) catch most such scenes; what passes them meets the time step's check.
+TEST(HostileInputs, MaterialNumbersWhoseProductsOverflowAreRefused) {
+  for (const auto& [density, diameter] : {std::pair{1e300, 1e10}, std::pair{2600.0, 1e300}}) {
+    sandflow::SceneConfig s;
+    s.path = "overflow.toml";
+    s.material.density = density;
+    s.material.diameter = diameter;
+    try {
+      sandflow::choose_time_step(s);
+      ADD_FAILURE() << "no error for density " << density << ", diameter " << diameter;
+    } catch (const sandflow::InputError& e) {
+      EXPECT_TRUE(has(e.what(), "overflow.toml: material.density") &&
+                  has(e.what(), "not finite positive numbers"))
+          << e.what();
+    }
+  }
 }
 
 TEST(HostileInputs, SpecialFilesAreRefusedByTheirType) {
