@@ -74,8 +74,6 @@ struct ReportOptions {
 std::string mode_name(Mode m);
 /// `a` as a shell word: quoted when it has anything but letters, digits and _-+./=:,@%.
 std::string shell_quote(const std::string& a);
-/// The text of the scene file `path` (InputError when it cannot be read).
-std::string read_scene_text(const std::string& path);
 /// The options a run folder's run.json records (its scene file made absolute from the folder the
 /// run was started in), the record itself and the scene text the run was started with.
 RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::string& text);

@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "io/folder_lock.hpp"
 #include "io/run_output.hpp"
+#include "scene/scene_loader.hpp"
 #include "surface/surface_params.hpp"
 
 namespace fs = std::filesystem;
@@ -67,10 +68,8 @@ std::vector<double> angles(const std::vector<RunResult>& runs) {
 /// runs): OUT is refused when not empty unless `force`, in which case the earlier comparison is
 /// removed, or `resume`, which keeps it.
 std::unique_ptr<FolderLock> prepare_compare_dir(const std::string& out, bool force, bool resume) {
+  auto lock = std::make_unique<FolderLock>(out);  // (refuses a path that is not a folder)
   std::error_code ec;
-  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
-    throw InputError(fmt::format("{}: the output path exists and is not a folder", out));
-  auto lock = std::make_unique<FolderLock>(out);
   if (fs::exists(out, ec) && !fs::is_empty(out, ec) && !resume) {
     if (!force)
       throw InputError(fmt::format(
@@ -144,7 +143,7 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
     throw InputError(fmt::format("--seeds {}: expected 1 to {}", co.seeds, kMaxSeeds));
   const auto lock = prepare_compare_dir(out, force, resume);
   write_plan(out, co);
-  const std::string text = scene_text ? *scene_text : read_scene_text(o.scene);
+  const std::string text = scene_text ? *scene_text : read_scene_file(o.scene);
   const std::int64_t seed0 = load_for_run(o).simulation.seed;
 
   // each seed in both modes, surface flow first
@@ -363,7 +362,7 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
       return stopped;
   } else {
     if (o.scene.empty()) throw InputError("compare: give a scene file, or --resume DIR");
-    text = read_scene_text(o.scene);
+    text = read_scene_file(o.scene);
     const SceneConfig named = load_for_run(o);  // the scene's name, for the default folder
     out = o.out.empty() ? fmt::format("out/{}-compare", named.name) : o.out;
     if (const int stopped = compare_scene(o, co, out, o.force, false, &text,

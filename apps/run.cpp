@@ -273,8 +273,6 @@ std::string shell_quote(const std::string& a) {
   return q + "'";
 }
 
-std::string read_scene_text(const std::string& path) { return read_scene_file(path); }
-
 /// The options a run folder's run.json records (its scene file made absolute from the folder the
 /// run was started in), the record itself and the scene text it was started with.
 RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::string& text) {
@@ -514,9 +512,6 @@ Started start_new(const RunOptions& o, const std::string& text) {
   started.out =
       o.out.empty() ? fmt::format("out/{}-{}", scene.name, mode_name(scene.simulation.mode))
                     : o.out;
-  std::error_code ec;
-  if (fs::exists(started.out, ec) && !fs::is_directory(started.out, ec))
-    throw InputError(fmt::format("{}: the output path exists and is not a folder", started.out));
   run.lock = std::make_shared<FolderLock>(started.out);
   prepare_output_dir(started.out, o.force);
   run.out = started.out;
@@ -546,7 +541,7 @@ void check_resumable(const RunOptions& o, const std::string& text) {
 int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
              const std::string& resume_with, const std::string& label, RunResult& res,
              SceneConfig& scene) {
-  const std::string text = scene_text ? *scene_text : read_scene_text(o.scene);
+  const std::string text = scene_text ? *scene_text : read_scene_file(o.scene);
   std::error_code ec;
   Started run;
   if (resume && fs::exists(fs::path(o.out) / "run.json", ec)) {
@@ -570,7 +565,7 @@ int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
 int run_command(const RunOptions& o) {
   if (o.resume.empty() && o.scene.empty())
     throw InputError("run: give a scene file (sandflow run SCENE), or --resume DIR to continue a run");
-  Started run = o.resume.empty() ? start_new(o, read_scene_text(o.scene)) : start_resumed(o);
+  Started run = o.resume.empty() ? start_new(o, read_scene_file(o.scene)) : start_resumed(o);
   if (run.done) return 0;
   const SceneConfig& scene = run.scene;
   const std::string& out = run.out;

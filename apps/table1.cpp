@@ -80,7 +80,7 @@ void check_table1_resumable(const Table1Options& o, const std::vector<const Pape
     const fs::path file = fs::path(scene_dir) / (std::string(p->name) + ".toml");
     if (!fs::exists(file, ec)) continue;
     RunOptions ro = table1_run(o, *p, file);
-    const std::string text = read_scene_text(ro.scene);
+    const std::string text = read_scene_file(ro.scene);
     const std::int64_t seed0 = load_for_run(ro).simulation.seed;
     for (int k = 0; k < o.seeds; ++k) {
       RunOptions part = ro;
@@ -139,13 +139,11 @@ int table1_command(const Table1Options& o, const std::string& command) {
       throw InputError(fmt::format("--scale {}: gives no grains for {} (round({} x {}) = 0)",
                                    o.scale, p->name, o.scale, p->total));
   const std::string scene_dir = table1_scene_dir(o.scene_dir);
-  std::error_code ec;
-  if (fs::exists(o.out, ec) && !fs::is_directory(o.out, ec))
-    throw InputError(fmt::format("{}: the output path exists and is not a folder", o.out));
   if (o.force && o.resume)
     throw InputError("table1: --force replaces what the output folder holds, --resume goes on with "
                      "it: give one of them");
-  const FolderLock lock(o.out);  // held until the table is done
+  const FolderLock lock(o.out);  // held until the table is done; refuses a path that is no folder
+  std::error_code ec;
   if (fs::exists(o.out, ec) && !fs::is_empty(o.out, ec) && !o.resume) {
     if (!o.force)
       throw InputError(fmt::format(

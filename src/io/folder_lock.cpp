@@ -51,6 +51,8 @@ std::string lock_holder(ino_t ino) {
 
 FolderLock::FolderLock(const std::string& dir) {
   std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw InputError(fmt::format("{}: the output path exists and is not a folder", dir));
   fs::create_directories(dir, ec);
   if (ec) throw OutputError(fmt::format("{}: cannot create the output folder: {}", dir, ec.message()));
   fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);

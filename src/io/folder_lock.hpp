@@ -14,9 +14,9 @@ namespace sandflow {
 /// same process.
 class FolderLock {
  public:
-  /// Creates `dir` (and its parents) if needed and locks it. Throws InputError naming the
-  /// process that holds it (its pid and command line, where /proc tells them), OutputError when
-  /// the folder cannot be created or opened.
+  /// Creates `dir` (and its parents) if needed and locks it. Throws InputError when `dir` is
+  /// something other than a folder, or naming the process that holds it (its pid and command
+  /// line, where /proc tells them); OutputError when the folder cannot be created or opened.
   explicit FolderLock(const std::string& dir);
   ~FolderLock();
   FolderLock(const FolderLock&) = delete;

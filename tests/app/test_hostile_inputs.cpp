@@ -144,6 +144,22 @@ TEST(HostileInputs, AFolderHeldByAnotherRunIsRefusedNamingTheHolder) {
       << log;
 }
 
+// The lock refuses an output path that is a file, for every command that writes a folder, and
+// leaves the file as it was.
+TEST(HostileInputs, AnOutputPathThatIsAFileIsRefused) {
+  Sandbox box;
+  std::string log;
+  const auto scene = box.write("tiny.toml", sandflow_test::tiny_block_scene(20));
+  const auto file = box.write("taken", "not a folder\n");
+  for (const std::string& cmd : {"run " + scene.string() + " --mode dem --frames 2 --force --out ",
+                                "compare " + scene.string() + " --frames 2 --seeds 1 --out ",
+                                std::string("table1 --scale 0.0001 --frames 1 --scenes floor --out ")}) {
+    EXPECT_EQ(bounded(cmd + file.string(), &log), 2) << cmd << "\n" << log;
+    EXPECT_TRUE(has(log, "taken: the output path exists and is not a folder")) << cmd << "\n" << log;
+  }
+  EXPECT_EQ(sandflow_test::read_text(file), "not a folder\n");
+}
+
 // Two real runs into one folder: the second (with --force) is refused while the first goes on,
 // and the first ends with every row and frame it owes.
 TEST(HostileInputs, ASecondRunIntoARunningOnesFolderIsRefused) {
