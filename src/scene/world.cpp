@@ -25,6 +25,20 @@ TimeStep choose_time_step(const SceneConfig& scene) {
         "{}: material.density = {:.4g} kg/m^3, diameter = {:.4g} m and k_n = {:.4g} N/m give a "
         "grain mass of {:.4g} kg and a contact time of {:.4g} s: not finite positive numbers",
         scene.path, mat.density, mat.diameter, mat.k_n, m_min, ts.t_c));
+  // A grain resting on the floor sinks m g / k_n into it; past the guard's overlap the run would
+  // stop as soon as the heaviest grain lands (k_n = 1e-300 N/m, or a density of 1e300 kg/m^3).
+  const Real r_max = 0.5 * mat.diameter * (1 + mat.diameter_spread);
+  const Real m_max = mat.density * (4.0 / 3.0) * kPi * r_max * r_max * r_max;
+  const Real sink = m_max * norm(scene.simulation.gravity) / mat.k_n;
+  const Real guard = scene.simulation.max_overlap_stop * 2 * r_max;
+  if (!(sink <= guard))
+    throw InputError(fmt::format(
+        "{}: material.density = {:.4g} kg/m^3, diameter = {:.4g} m and k_n = {:.4g} N/m: the "
+        "heaviest grain, resting on the floor under gravity {:.4g} m/s^2, would sink {:.4g} m "
+        "into it, more than simulation.max_overlap_stop = {:.0f} % of its diameter ({:.4g} m); "
+        "raise k_n or lower the density",
+        scene.path, mat.density, mat.diameter, mat.k_n, norm(scene.simulation.gravity), sink,
+        100 * scene.simulation.max_overlap_stop, guard));
   // Symplectic Euler on one spring is stable below 2/omega = 0.64 t_c; a grain held by many
   // contacts vibrates up to ~3x faster, so the bound keeps that factor: t_c / 5.
   ts.stable_bound = ts.t_c / 5;

@@ -108,6 +108,24 @@ TEST(HostileInputs, MaterialNumbersWhoseProductsOverflowAreRefused) {
   }
 }
 
+// Numbers each finite and in range, but contacts too soft for the grains' weight: the heaviest
+// grain would sink past the overlap guard as soon as it lands, so --check refuses the scene.
+TEST(HostileInputs, ContactsTooSoftForTheGrainsWeightAreRefusedByCheck) {
+  Sandbox box;
+  const fs::path scene = box.dir / "soft.toml";
+  std::ofstream(scene) << sandflow_test::tiny_block_scene(20);
+  for (const std::string set : {"material.k_n=1e-300", "material.density=1e300"}) {
+    std::string log;
+    EXPECT_EQ(bounded("run " + scene.string() + " --check --set " + set, &log), 2) << set;
+    EXPECT_TRUE(has(log, "soft.toml: material.density") && has(log, "would sink") &&
+                has(log, "max_overlap_stop"))
+        << log;
+  }
+  // k_n of 1e4 N/m holds a 1 cm grain of sand (it sinks 1.3e-6 m, 0.013 % of its diameter)
+  std::string log;
+  EXPECT_EQ(bounded("run " + scene.string() + " --check", &log), 0) << log;
+}
+
 TEST(HostileInputs, SpecialFilesAreRefusedByTheirType) {
   Sandbox box;
   std::string log;
