@@ -47,6 +47,9 @@ namespace sandflow {
 /// The most samples a heightmap may have along either side; larger grids are refused before
 /// anything is allocated.
 constexpr int kMaxHeightmapSide = 4096;
+/// The most samples all the heightmaps of a scene may have together: one of the largest (about
+/// 0.6 GB while a scene with it is checked).
+constexpr std::size_t kMaxHeightmapSamples = std::size_t{kMaxHeightmapSide} * kMaxHeightmapSide;
 /// Noise terrains are sampled every wavelength / 16, with at most this many samples a side.
 constexpr int kMaxNoiseSide = 1024;
 

@@ -49,7 +49,8 @@ TriangleMesh box_mesh(const Vec3& size) {
 }  // namespace
 
 MeshObstacle place_mesh(const GeometryConfig& c, const MaterialConfig& material,
-                        const std::string& scene_path, std::vector<std::string>& warnings) {
+                        const std::string& scene_path, std::vector<std::string>& warnings,
+                        Real sample_budget) {
   MeshObstacle o;
   o.name = c.name;
   o.friction = c.friction.value_or(material.wall_friction);
@@ -117,6 +118,12 @@ MeshObstacle place_mesh(const GeometryConfig& c, const MaterialConfig& material,
           "its scale, size and position",
           scene_path, c.name, placed.lo.x, placed.lo.y, placed.lo.z, placed.hi.x, placed.hi.y,
           placed.hi.z, far));
+  // (counted before the inside test's tree, which takes more than the mesh itself)
+  try {
+    o.sample_count = check_surface_sample_count(o.mesh, o.sample_spacing(), sample_budget);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {}: {}", scene_path, c.name, e.what()));
+  }
   o.winding = std::make_unique<WindingNumber>(o.mesh);
   return o;
 }

@@ -64,28 +64,31 @@ class MergeGrid {
   std::vector<std::uint32_t> next_;                        ///< kept point -> previous in its cell
 };
 
-// Refuses a spacing that would make more than kMaxSurfaceSamples points, before allocating.
-void check_sample_count(const TriangleMesh& mesh, Real spacing) {
+}  // namespace
+
+Real check_surface_sample_count(const TriangleMesh& mesh, Real spacing, Real budget) {
   Real total = 0;
   for (const auto& t : mesh.triangles) {
     const Real n = subdivisions(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]], spacing);
     total += (n + 1) * (n + 2) / 2;
   }
   // (a total past any integer, or not finite, is refused as well)
-  if (!(total <= static_cast<Real>(kMaxSurfaceSamples)))
+  if (!(total <= budget))
     throw InputError(fmt::format(
         "sampling the mesh at spacing {:.4g} m needs about {:.3g} boundary particles, more than "
-        "the limit of {} (a smaller scale or size, larger grains or particle_radius, or a coarser "
-        "mesh)",
-        spacing, total, kMaxSurfaceSamples));
+        "{} (a smaller scale or size, larger grains or particle_radius, or a coarser mesh)",
+        spacing, total,
+        budget >= static_cast<Real>(kMaxSurfaceSamples)
+            ? fmt::format("the limit of {}", kMaxSurfaceSamples)
+            : fmt::format("the {:.0f} left of the limit of {} for all of the scene's meshes",
+                          std::max<Real>(budget, 0), kMaxSurfaceSamples)));
+  return total;
 }
-
-}  // namespace
 
 std::vector<Vec3> sample_surface(const TriangleMesh& mesh, Real spacing, Real merge) {
   if (!(spacing > 0) || !std::isfinite(spacing))
     throw std::invalid_argument("sample_surface: spacing must be positive and finite");
-  check_sample_count(mesh, spacing);
+  check_surface_sample_count(mesh, spacing);
   std::vector<Vec3> samples;
   MergeGrid grid(merge > 0 ? merge : spacing / 8);
   for (const auto& t : mesh.triangles) {

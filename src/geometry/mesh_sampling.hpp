@@ -33,8 +33,12 @@
 
 namespace sandflow {
 
-/// Largest number of samples sample_surface produces (about 1.2 GB of points).
-inline constexpr std::size_t kMaxSurfaceSamples = 50'000'000;
+/// Largest number of samples sample_surface makes before merging (for all of a scene's meshes
+/// together: Geometry::from_config): 20 million, which World's merge thins to about 5 million
+/// boundary particles (a flat square of 7.89 m at 1 cm grains: 4,986,289 kept, 0.45 GB and 12 s
+/// in `run --check`). A mesh finer than the spacing gives 3 samples a triangle, so this refuses
+/// more than about 6.7 million triangles at the grains' spacing: decimate it.
+inline constexpr std::size_t kMaxSurfaceSamples = 20'000'000;
 /// How far from the origin a sampled surface may reach, in spacings: 2^40, where a double still
 /// tells neighbouring samples apart to a part in 4,000 of the spacing (and the merge grid's cell
 /// indices stay far inside 64 bits).
@@ -52,5 +56,11 @@ constexpr Real covering_radius(Real spacing) {
 /// within spacing / sqrt(3) + merge of a sample, and no two samples are closer than merge. A
 /// large merge with a small spacing thins a mesh finer than the spacing (a scan's vertices).
 std::vector<Vec3> sample_surface(const TriangleMesh& mesh, Real spacing, Real merge = 0);
+
+/// The check sample_surface makes first, for callers that build costlier things from the mesh
+/// before sampling it: the samples sampling at `spacing` makes before merging, or InputError when
+/// that is more than `budget` (what the scene's other meshes left of kMaxSurfaceSamples).
+Real check_surface_sample_count(const TriangleMesh& mesh, Real spacing,
+                                Real budget = static_cast<Real>(kMaxSurfaceSamples));
 
 }  // namespace sandflow

@@ -1,10 +1,14 @@
 #include "geometry/shapes.hpp"
 
-#include "geometry/heightmap.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
+
+#include <fmt/format.h>
+
+#include "core/error.hpp"
+#include "geometry/heightmap.hpp"
+#include "geometry/mesh_io.hpp"
 
 namespace sandflow {
 
@@ -203,9 +207,25 @@ Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
         add(std::make_unique<SolidHeightmap>(c.heights, c.extent, c.base_thickness));
         break;
       case GeometryType::Mesh:
-        g.meshes_.push_back(place_mesh(c, material, scene_path, g.warnings_));
+      {
+        Real samples = 0;
+        std::size_t triangles = 0;
+        for (const MeshObstacle& m : g.meshes_) {
+          samples += m.sample_count;
+          triangles += m.mesh.triangles.size();
+        }
+        g.meshes_.push_back(place_mesh(c, material, scene_path, g.warnings_,
+                                       static_cast<Real>(kMaxSurfaceSamples) - samples));
         g.meshes_.back().source = k;
+        // each file is bounded by its reader; all of them together by one of the largest
+        triangles += g.meshes_.back().mesh.triangles.size();
+        if (triangles > kMaxMeshTriangles)
+          throw InputError(fmt::format(
+              "{}: {}: brings the scene's meshes to {} triangles together, more than the limit "
+              "of {}",
+              scene_path, c.name, triangles, kMaxMeshTriangles));
         break;
+      }
       case GeometryType::Box:
         if (!c.container) {
           add(std::make_unique<SolidBox>(c.center, c.size * 0.5, rot));

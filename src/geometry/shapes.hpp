@@ -9,6 +9,7 @@
 
 #include "core/vec3.hpp"
 #include "geometry/mesh.hpp"
+#include "geometry/mesh_sampling.hpp"
 #include "geometry/winding_number.hpp"
 #include "scene/scene_config.hpp"
 
@@ -113,12 +114,22 @@ struct MeshObstacle {
   Real particle_radius = 0;  ///< [m]
   Real friction = 0.6, rolling_friction = 0.1;
   int source = 0;
+  Real sample_count = 0;  ///< samples its sampling makes before merging
+
+  /// Its boundary particles' sampling: every surface point within 0.99 r_b of a particle's
+  /// centre (spacing r_b / 2, merged within 0.7 r_b: geometry/mesh_sampling.hpp), so that no
+  /// grain can touch the mesh without overlapping one; the merge keeps a fine scan from giving a
+  /// particle per vertex.
+  Real sample_spacing() const { return 0.5 * particle_radius; }
+  Real sample_merge() const { return 0.7 * particle_radius; }
 };
 
 /// Loads, places and checks the mesh of a `type = "mesh"` entry (see Geometry::from_config for
 /// where its file is looked for); a missing file gives the entry's fallback box, with a warning.
+/// `sample_budget`: the boundary particles (counted before merging) the mesh may take.
 MeshObstacle place_mesh(const GeometryConfig& c, const MaterialConfig& material,
-                        const std::string& scene_path, std::vector<std::string>& warnings);
+                        const std::string& scene_path, std::vector<std::string>& warnings,
+                        Real sample_budget = static_cast<Real>(kMaxSurfaceSamples));
 
 /// Every solid of a scene. Containers expand into several wall slabs.
 class Geometry {

@@ -23,6 +23,18 @@ Vec3 half_extent(const EmitterConfig& e) {
 
 }  // namespace
 
+Real pour_slots(const EmitterConfig& e, const MaterialConfig& m) {
+  if (e.type != EmitterType::Pour) return 0;
+  // the pattern's rows and columns over the area's bounding rectangle
+  const Real d = largest_diameter(m);
+  const Real s = e.spacing * d;
+  const Vec3 half = half_extent(e);
+  const Real row = s * std::sqrt(3.0) / 2;
+  const Real rows = std::floor(std::max(0.0, 2 * half.y - d) / row) + 1;
+  const Real cols = std::floor(std::max(0.0, 2 * half.x - d) / s) + 1;
+  return rows * cols * (e.shape == PourShape::Disk ? std::numbers::pi / 4 : 1.0);
+}
+
 std::optional<EmitterProblem> emitter_problem(const EmitterConfig& e, const MaterialConfig& m) {
   const Real d = largest_diameter(m);
   const Real s = e.spacing * d;
@@ -40,11 +52,7 @@ std::optional<EmitterProblem> emitter_problem(const EmitterConfig& e, const Mate
                     far_centre + far_half, s, reach)};
 
   if (e.type == EmitterType::Pour) {
-    // the pattern's rows and columns over the area's bounding rectangle, counted, not made
-    const Real row = s * std::sqrt(3.0) / 2;
-    const Real rows = std::floor(std::max(0.0, 2 * half.y - d) / row) + 1;
-    const Real cols = std::floor(std::max(0.0, 2 * half.x - d) / s) + 1;
-    const Real slots = rows * cols * (e.shape == PourShape::Disk ? std::numbers::pi / 4 : 1.0);
+    const Real slots = pour_slots(e, m);
     if (slots > kMaxPourSlots)
       return EmitterProblem{
           size_key, fmt::format("makes a pour of about {:.3g} slots {:.3g} m apart, more than the "

@@ -24,13 +24,17 @@ inline constexpr Real kMaxPourSlots = 16'777'216;
 /// tells neighbouring slots apart to a part in 4,000 of the spacing; farther, it soon does not.
 inline constexpr Real kMaxSpacingsFromOrigin = 1'099'511'627'776.0;
 
-/// What makes an emitter impossible whatever its count: a pour of more than kMaxPourSlots slots,
+/// What makes an emitter impossible whatever its count: a pour of more than kMaxPourSlots slots
+/// (the scene's pours together: the loader),
 /// a box too thin for one grain, or coordinates too far out for its spacing.
 struct EmitterProblem {
   const char* key;   ///< the scene key at fault ("radius", "size", "center")
   std::string what;  ///< the rest of the message, after the key's name
 };
 std::optional<EmitterProblem> emitter_problem(const EmitterConfig& e, const MaterialConfig& m);
+
+/// About how many slots a pour's one layer has (0 for a block or a lattice): counted, not made.
+Real pour_slots(const EmitterConfig& e, const MaterialConfig& m);
 
 struct NewGrain {
   Vec3 x, v;

@@ -904,17 +904,31 @@ SceneConfig read_scene(const toml::table& root, const std::string& path,
   if (const auto* t = doc.table("output")) read_output({places, *t, "output"}, c.output);
   if (const auto* t = doc.table("camera")) read_camera({places, *t, "camera"}, c.camera);
 
+  std::size_t heightmap_samples = 0;
   if (const auto* a = doc.array_of_tables("geometry")) {
     for (std::size_t i = 0; i < a->size(); ++i) {
       const std::string prefix = "geometry[" + std::to_string(i) + "]";
-      c.geometry.push_back(
-          read_geometry({places, *a->get(i)->as_table(), prefix}, i, path, read_image));
+      const TableReader r(places, *a->get(i)->as_table(), prefix);
+      c.geometry.push_back(read_geometry(r, i, path, read_image));
+      // each heightmap is bounded by its sides; all of them together by one of the largest
+      const HeightGrid& h = c.geometry.back().heights;
+      heightmap_samples += static_cast<std::size_t>(h.nx) * static_cast<std::size_t>(h.ny);
+      if (heightmap_samples > kMaxHeightmapSamples) {
+        const char* key = c.geometry.back().height_source == HeightSource::File    ? "file"
+                          : c.geometry.back().height_source == HeightSource::Noise ? "noise"
+                                                                                   : "heights";
+        r.fail_at(key, r.name(key) + " brings the scene's heightmaps to " +
+                           std::to_string(heightmap_samples) +
+                           " samples together, more than the limit of " +
+                           std::to_string(kMaxHeightmapSamples) + " (one of 4096 x 4096)");
+      }
     }
   }
   const auto* emitters = doc.array_of_tables("emitter");
   if (!emitters || emitters->empty())
     doc.fail_at("emitter", "emitter: a scene needs at least one [[emitter]] table, found none");
   std::int64_t total = 0;
+  Real slots = 0;
   for (std::size_t i = 0; i < emitters->size(); ++i) {
     const std::string prefix = "emitter[" + std::to_string(i) + "]";
     const TableReader r(places, *emitters->get(i)->as_table(), prefix);
@@ -925,6 +939,13 @@ SceneConfig read_scene(const toml::table& root, const std::string& path,
                              " brings the scene to " + std::to_string(total) +
                              " grains, more than the limit of " + std::to_string(kMaxGrains) +
                              " in all");
+    slots += pour_slots(c.emitters.back(), c.material);  // each at most kMaxPourSlots
+    if (slots > kMaxPourSlots) {
+      const char* key = c.emitters.back().shape == PourShape::Disk ? "radius" : "size";
+      r.fail_at(key, r.name(key) + " brings the scene's pours to about " +
+                         format_real(std::round(slots)) + " slots together, more than the limit of " +
+                         format_real(kMaxPourSlots));
+    }
   }
 
   doc.finish("a scene file");

@@ -105,10 +105,7 @@ DemParams dem_params(const SceneConfig& scene, const TimeStep& ts) {
   return p;
 }
 
-// The meshes' particle surfaces: every surface point within 0.99 r_b of a particle's centre
-// (spacing r_b / 2, merged within 0.7 r_b: geometry/mesh_sampling.hpp), so that no grain can touch
-// a mesh without overlapping one of them; the merge keeps a fine scan from giving a particle per
-// vertex.
+// The meshes' particle surfaces (MeshObstacle::sample_spacing says how they are sampled).
 BoundaryParticles boundary_particles(const Geometry& geometry, const std::string& scene_path) {
   BoundaryParticles b;
   for (std::uint32_t k = 0; k < geometry.meshes().size(); ++k) {
@@ -117,10 +114,9 @@ BoundaryParticles boundary_particles(const Geometry& geometry, const std::string
       throw InputError(fmt::format("{}: {}: particle_radius must be the same for every mesh of a scene",
                                    scene_path, m.name));
     b.radius = m.particle_radius;
-    const Real rb = m.particle_radius;
     std::vector<Vec3> samples;
     try {
-      samples = sample_surface(m.mesh, 0.5 * rb, 0.7 * rb);
+      samples = sample_surface(m.mesh, m.sample_spacing(), m.sample_merge());
     } catch (const InputError& e) {
       throw InputError(fmt::format("{}: {}: {}", scene_path, m.name, e.what()));
     }

@@ -62,6 +62,42 @@ TEST(HostileInputs, AMeshOfHugeCoordinatesIsRefusedBeforeTheWorldIsBuilt) {
       << log;
 }
 
+// Each heightmap, pour and mesh within its own limit, but so many that the scene would hold many
+// times the largest one: the limits hold for the scene's entries together (docs/fuzzing.md).
+TEST(HostileInputs, ManyEntriesEachWithinItsLimitAreRefusedTogether) {
+  Sandbox box;
+  std::string log;
+  // 17 noise terrains of 1024 x 1024 samples: one more than the samples of a 4096 x 4096 one
+  std::string terrains = sandflow_test::tiny_block_scene(20);
+  for (int k = 0; k < 17; ++k)
+    terrains += fmt::format(
+        "[[geometry]]\ntype = \"heightmap\"\nextent = [{}, 0, {}, 2]\nnoise = {{ wavelength = "
+        "0.001 }}\n",
+        10 * k, 10 * k + 2);
+  const auto maps = box.write("maps.toml", terrains);
+  EXPECT_EQ(bounded("run " + maps.string() + " --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "maps.toml:") && has(log, "geometry[17].noise brings the scene's heightmaps") &&
+              has(log, "16777216"))
+      << log;
+  // two pours of 10 million slots each
+  const std::string pour =
+      "[[emitter]]\ntype = \"pour\"\nshape = \"rect\"\ncount = 10\ncenter = [0, 0, 1]\n"
+      "size = [30.0, 30.0, 0.1]\n";
+  const auto pours = box.write("pours.toml", sandflow_test::tiny_block_scene(20) + pour + pour);
+  EXPECT_EQ(bounded("run " + pours.string() + " --check --mode dem", &log), 2) << log;
+  EXPECT_TRUE(has(log, "pours.toml:") && has(log, "emitter[2].size brings the scene's pours") &&
+              has(log, "16777216"))
+      << log;
+  // two flat squares of 6 m, each sampled at 0.0025 m into about 11.8 million points before merging
+  box.write("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+  const std::string quad = "[[geometry]]\ntype = \"mesh\"\nfile = \"quad.obj\"\nsize = 6.0\n";
+  const auto quads = box.write("quads.toml", sandflow_test::tiny_block_scene(20) + quad + quad);
+  EXPECT_EQ(bounded("run " + quads.string() + " --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "quads.toml: geometry 2: sampling the mesh") &&
+              has(log, "left of the limit of 20000000 for all of the scene's meshes"))
+      << log;
+}
+
 TEST(HostileInputs, ARunTooLongForItsFrameCountIsRefusedNamingTheKeys) {
   Sandbox box;
   std::string log;
