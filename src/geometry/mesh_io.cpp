@@ -53,8 +53,8 @@ std::string gunzip(const std::string& in, const std::string& path) {
   std::size_t first = std::max<std::size_t>(4 * in.size(), 1024);
   if (in.size() >= 18) {
     const auto* tail = reinterpret_cast<const unsigned char*>(in.data() + in.size() - 4);
-    const std::size_t isize = tail[0] | (tail[1] << 8) | (tail[2] << 16) |
-                              (static_cast<std::size_t>(tail[3]) << 24);
+    const std::size_t isize =
+        tail[0] | (tail[1] << 8) | (tail[2] << 16) | (static_cast<std::size_t>(tail[3]) << 24);
     // (+1: a full buffer then means more is coming; deflate expands at most 1032 times, so a
     // trailer that lies cannot make a small file take much)
     first = std::max(first, std::min(isize + 1, 1032 * in.size()));

@@ -206,8 +206,7 @@ Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
       case GeometryType::Heightmap:
         add(std::make_unique<SolidHeightmap>(c.heights, c.extent, c.base_thickness));
         break;
-      case GeometryType::Mesh:
-      {
+      case GeometryType::Mesh: {
         Real samples = 0;
         std::size_t triangles = 0;
         for (const MeshObstacle& m : g.meshes_) {

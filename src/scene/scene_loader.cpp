@@ -909,6 +909,12 @@ SceneConfig read_scene(const toml::table& root, const std::string& path,
     for (std::size_t i = 0; i < a->size(); ++i) {
       const std::string prefix = "geometry[" + std::to_string(i) + "]";
       const TableReader r(places, *a->get(i)->as_table(), prefix);
+      if (i == kMaxGeometryEntries)
+        r.fail_at("type", prefix + ": the scene has " + std::to_string(a->size()) +
+                              " [[geometry]] entries, more than the limit of " +
+                              std::to_string(kMaxGeometryEntries) +
+                              " (every grain and height-field column asks each of them): put "
+                              "many solids into one mesh");
       c.geometry.push_back(read_geometry(r, i, path, read_image));
       // each heightmap is bounded by its sides; all of them together by one of the largest
       const HeightGrid& h = c.geometry.back().heights;
@@ -943,8 +949,8 @@ SceneConfig read_scene(const toml::table& root, const std::string& path,
     if (slots > kMaxPourSlots) {
       const char* key = c.emitters.back().shape == PourShape::Disk ? "radius" : "size";
       r.fail_at(key, r.name(key) + " brings the scene's pours to about " +
-                         format_real(std::round(slots)) + " slots together, more than the limit of " +
-                         format_real(kMaxPourSlots));
+                         format_real(std::round(slots)) +
+                         " slots together, more than the limit of " + format_real(kMaxPourSlots));
     }
   }
 

@@ -24,6 +24,11 @@ struct Override {
 /// array of "0,"), so this bounds the parse to about 1 GB; a large terrain belongs in a PNG.
 inline constexpr std::size_t kMaxSceneBytes = std::size_t{32} << 20;
 
+/// Most [[geometry]] entries a scene may have. Every entry is asked for its distance by every
+/// grain near it each step and by every height-field column when the field is built (256 planes
+/// over the largest field took 226 s to check); a scene of many solids is one mesh.
+inline constexpr std::size_t kMaxGeometryEntries = 64;
+
 /// How the loader reads a heightmap's image file (path, largest side); read_gray_png by default.
 using ImageReader = std::function<GrayImage(const std::string& path, int max_side)>;
 

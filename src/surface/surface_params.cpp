@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -115,13 +117,20 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
 TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry) {
   const HeightFieldParams& grid = p.grid;
   TerrainColumns t;
-  for (int j = 0; j < grid.ny; ++j)
+  // rows traced in parallel (each column asks every solid, so this is the slow part of building
+  // a large field), added in order
+  std::vector<std::vector<std::pair<Real, Real>>> row(static_cast<std::size_t>(grid.nx));
+#pragma omp parallel for ordered schedule(static, 1) firstprivate(row)
+  for (int j = 0; j < grid.ny; ++j) {
     for (int i = 0; i < grid.nx; ++i) {
-      auto solids = geometry.solid_intervals(grid.x0 + (i + 0.5) * grid.cell,
-                                             grid.y0 + (j + 0.5) * grid.cell, p.z_top, p.z_floor);
+      auto& solids = row[static_cast<std::size_t>(i)];
+      solids = geometry.solid_intervals(grid.x0 + (i + 0.5) * grid.cell,
+                                        grid.y0 + (j + 0.5) * grid.cell, p.z_top, p.z_floor);
       if (solids.empty()) solids.push_back({-std::numeric_limits<Real>::infinity(), p.z_floor});
-      t.add_column(solids);
     }
+#pragma omp ordered
+    for (const auto& solids : row) t.add_column(solids);
+  }
   return t;
 }
 

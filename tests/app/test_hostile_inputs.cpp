@@ -76,8 +76,17 @@ TEST(HostileInputs, ManyEntriesEachWithinItsLimitAreRefusedTogether) {
         10 * k, 10 * k + 2);
   const auto maps = box.write("maps.toml", terrains);
   EXPECT_EQ(bounded("run " + maps.string() + " --check", &log), 2) << log;
-  EXPECT_TRUE(has(log, "maps.toml:") && has(log, "geometry[17].noise brings the scene's heightmaps") &&
-              has(log, "16777216"))
+  EXPECT_TRUE(has(log, "maps.toml:") &&
+              has(log, "geometry[17].noise brings the scene's heightmaps") && has(log, "16777216"))
+      << log;
+  // 65 planes: the 65th is refused (every grain and every height-field column asks each one)
+  std::string planes = sandflow_test::tiny_block_scene(20);
+  for (int k = 0; k < 64; ++k)
+    planes += fmt::format("[[geometry]]\ntype = \"plane\"\npoint = [0, 0, {}]\n", -k);
+  const auto many = box.write("planes.toml", planes);
+  EXPECT_EQ(bounded("run " + many.string() + " --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "planes.toml:") &&
+              has(log, "geometry[64]: the scene has 65 [[geometry]] entries"))
       << log;
   // two pours of 10 million slots each
   const std::string pour =
