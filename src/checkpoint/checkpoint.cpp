@@ -1,5 +1,6 @@
 #include "checkpoint/checkpoint.hpp"
 
+#include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -7,9 +8,9 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
-#include <sstream>
 
 #include <fmt/format.h>
 
@@ -724,12 +725,24 @@ void restore_checkpoint(World& world, Checkpoint c, std::uint64_t expected_hash,
 
 Checkpoint read_checkpoint(const std::string& path) {
   refuse_special_file(path, "checkpoint");
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) throw InputError(path + ": cannot read the checkpoint (" + ec.message() + ")");
+  // The World restored from it takes at least as much again: a checkpoint larger than half the
+  // machine's memory cannot be resumed here (a sparse file of 1 TB would be read whole).
+  const auto memory = static_cast<std::uintmax_t>(sysconf(_SC_PHYS_PAGES)) *
+                      static_cast<std::uintmax_t>(sysconf(_SC_PAGE_SIZE));
+  if (size > memory / 2)
+    throw InputError(fmt::format(
+        "{}: the checkpoint is {} bytes, more than half of this machine's memory ({} bytes): it "
+        "cannot be resumed here",
+        path, size, memory));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open the checkpoint");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw InputError(path + ": cannot read the checkpoint");
-  const std::string bytes = ss.str();
+  std::string bytes(static_cast<std::size_t>(size), '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  if (in.gcount() != static_cast<std::streamsize>(bytes.size()))
+    throw InputError(path + ": cannot read the checkpoint (it ended early)");
   return parse_checkpoint(bytes, path);
 }
 

@@ -171,6 +171,25 @@ TEST(HostileInputs, ContactsTooSoftForTheGrainsWeightAreRefusedByCheck) {
   EXPECT_EQ(bounded("run " + scene.string() + " --check", &log), 0) << log;
 }
 
+// A checkpoint of a terabyte (a sparse file: it takes no disk) is refused by its size, before
+// anything is read or allocated for it.
+TEST(HostileInputs, ACheckpointLargerThanHalfTheMemoryIsRefusedUnread) {
+  Sandbox box;
+  const fs::path scene = box.write("tiny.toml", sandflow_test::tiny_block_scene(20));
+  const fs::path out = box.dir / "out";
+  std::string log;
+  ASSERT_EQ(
+      bounded("run " + scene.string() + " --frames 1 --export none --out " + out.string(), &log), 0)
+      << log;
+  fs::remove(out / "summary.json");  // (a finished run is not resumed)
+  fs::resize_file(out / "checkpoint.bin", std::uintmax_t{1} << 40);
+  EXPECT_EQ(bounded("run --resume " + out.string(), &log), 2) << log;
+  EXPECT_TRUE(has(log,
+                  "checkpoint.bin: the checkpoint is 1099511627776 bytes, more than half of "
+                  "this machine's memory"))
+      << log;
+}
+
 TEST(HostileInputs, SpecialFilesAreRefusedByTheirType) {
   Sandbox box;
   std::string log;
