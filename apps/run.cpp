@@ -630,6 +630,16 @@ int run_command(const RunOptions& o) {
       fmt::print(" {} {:.2f}", k, v.get<double>());
     fmt::print("\n");
   }
+  // (the overlap guard sees a grain crossing a surface, not one that went right through a mesh's
+  // particles: counted here on the final state, which is written either way)
+  if (const auto inside = s["grains_inside_geometry"].get<std::int64_t>(); inside > 0) {
+    fmt::print(stderr,
+               "error: {}: {} grains ended inside the geometry: they went through its surface "
+               "(the contacts are too soft for the impacts, or the time step too long); the run "
+               "is written, but its result is not to be trusted\n",
+               scene.path, inside);
+    return 3;
+  }
   return 0;
 }
 

@@ -190,6 +190,29 @@ TEST(HostileInputs, ACheckpointLargerThanHalfTheMemoryIsRefusedUnread) {
       << log;
 }
 
+// Grains that end inside a mesh (here put there by a block inside a closed cube: they touch none
+// of its particles, so the overlap guard has nothing to see) make the run exit 3, its results
+// written.
+TEST(HostileInputs, GrainsEndingInsideTheGeometryMakeTheRunFail) {
+  Sandbox box;
+  box.write("cube.obj",
+            "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv -1 -1 2\nv 1 -1 2\nv 1 1 2\nv -1 1 2\n"
+            "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\n"
+            "f 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n");
+  const fs::path scene = box.write(
+      "inside.toml", sandflow_test::tiny_block_scene(20, 30, 0.5) +
+                         "[[geometry]]\ntype = \"mesh\"\nfile = \"cube.obj\"\nscale = 0.5\n");
+  const fs::path out = box.dir / "out";
+  std::string log;
+  EXPECT_EQ(bounded("run " + scene.string() + " --mode dem --frames 1 --export none --out " +
+                        out.string(),
+                    &log),
+            3)
+      << log;
+  EXPECT_TRUE(has(log, "inside.toml: 20 grains ended inside the geometry")) << log;
+  EXPECT_TRUE(fs::exists(out / "summary.json") && fs::exists(out / "final_grains.ply"));
+}
+
 TEST(HostileInputs, SpecialFilesAreRefusedByTheirType) {
   Sandbox box;
   std::string log;
