@@ -299,7 +299,8 @@ Real Geometry::top_below(Real x, Real y, Real z_from, Real z_floor) const {
 }
 
 std::vector<std::pair<Real, Real>> Geometry::solid_intervals(Real x, Real y, Real z_from,
-                                                               Real z_floor) const {
+                                                             Real z_floor,
+                                                             std::uint64_t* queries) const {
   // sphere tracing down the line, as top_below does, on through each solid: inside the union, the
   // most negative distance is still no more than the way out (every solid it is in must be left).
   // Where two solids meet it is near 0 though the union goes on: only a point found outside ends
@@ -307,7 +308,9 @@ std::vector<std::pair<Real, Real>> Geometry::solid_intervals(Real x, Real y, Rea
   constexpr Real kHit = 1e-6, kMinStep = 1e-4;
   std::vector<std::pair<Real, Real>> down;  // found top first
   Vec3 p{x, y, z_from};
+  std::uint64_t asked = meshes_.size();
   auto distance = [&] {
+    asked += obstacles_.size();
     Real d = std::numeric_limits<Real>::infinity();
     for (const Obstacle& o : obstacles_) d = std::min(d, o.solid->closest(p).distance);
     return d;
@@ -328,6 +331,7 @@ std::vector<std::pair<Real, Real>> Geometry::solid_intervals(Real x, Real y, Rea
     p.z -= last_step;
   }
   if (inside) down.back().first = -std::numeric_limits<Real>::infinity();
+  if (queries) *queries += asked;
   std::vector<std::pair<Real, Real>> up(down.rbegin(), down.rend());
   if (meshes_.empty()) return up;
   // meshes: the stretches between crossings whose midpoint is inside, grown by the boundary

@@ -150,9 +150,10 @@ class Geometry {
   Real top_below(Real x, Real y, Real z_from, Real z_floor) const;
   /// The solid intervals [bottom, top] along the vertical line at (x, y) between z_floor and
   /// z_from, ascending (a bottom at or below z_floor is -infinity: the solid goes on down).
-  /// Tops and bottoms are found to 0.1 mm.
-  std::vector<std::pair<Real, Real>> solid_intervals(Real x, Real y, Real z_from,
-                                                     Real z_floor) const;
+  /// Tops and bottoms are found to 0.1 mm. `queries`, when given, is increased by the distance
+  /// queries it made (one per solid per step, one per mesh): what the tracing cost.
+  std::vector<std::pair<Real, Real>> solid_intervals(Real x, Real y, Real z_from, Real z_floor,
+                                                     std::uint64_t* queries = nullptr) const;
   /// Union of the bounds of the finite solids; false when every solid is infinite (or none).
   bool finite_bounds(Vec3& lo, Vec3& hi) const;
 

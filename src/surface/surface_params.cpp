@@ -1,6 +1,7 @@
 #include "surface/surface_params.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -114,23 +115,44 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   return p;
 }
 
-TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry) {
+TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry,
+                               std::uint64_t budget) {
   const HeightFieldParams& grid = p.grid;
   TerrainColumns t;
   // rows traced in parallel (each column asks every solid, so this is the slow part of building
   // a large field), added in order
+  // rows traced in parallel (each column asks every solid, so this is the slow part of building
+  // a large field), added in order; the queries are counted row by row, in order, so the refusal
+  // does not depend on the threads
   std::vector<std::vector<std::pair<Real, Real>>> row(static_cast<std::size_t>(grid.nx));
+  std::uint64_t queries = 0;
+  std::atomic<bool> over{false};
 #pragma omp parallel for ordered schedule(static, 1) firstprivate(row)
   for (int j = 0; j < grid.ny; ++j) {
-    for (int i = 0; i < grid.nx; ++i) {
+    std::uint64_t asked = 0;
+    for (int i = 0; i < grid.nx && !over.load(std::memory_order_relaxed); ++i) {
       auto& solids = row[static_cast<std::size_t>(i)];
-      solids = geometry.solid_intervals(grid.x0 + (i + 0.5) * grid.cell,
-                                        grid.y0 + (j + 0.5) * grid.cell, p.z_top, p.z_floor);
+      solids =
+          geometry.solid_intervals(grid.x0 + (i + 0.5) * grid.cell, grid.y0 + (j + 0.5) * grid.cell,
+                                   p.z_top, p.z_floor, &asked);
       if (solids.empty()) solids.push_back({-std::numeric_limits<Real>::infinity(), p.z_floor});
     }
 #pragma omp ordered
-    for (const auto& solids : row) t.add_column(solids);
+    if (!over) {
+      queries += asked;
+      if (queries > budget)
+        over = true;
+      else
+        for (const auto& solids : row) t.add_column(solids);
+    }
   }
+  if (over)
+    throw InputError(fmt::format(
+        "tracing the height field's {} x {} columns of {:.4g} m down through the scene's {} "
+        "solids took more than {} distance queries: set a larger "
+        "surface.cell_size or a smaller surface.extent, or use fewer or fewer layered solids",
+        grid.nx, grid.ny, grid.cell, geometry.obstacles().size() + geometry.meshes().size(),
+        budget));
   return t;
 }
 

@@ -2,6 +2,7 @@
 // derived from the grain size and the material where the scene leaves them unset.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "geometry/shapes.hpp"
@@ -43,7 +44,15 @@ HeapSize largest_heap(const SceneConfig& scene);
 /// Every parameter, resolved for a run with time step dt.
 SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry, Real dt);
 
-/// The solids under each column centre (a solid at z_floor where there is none).
-TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry);
+/// Most distance queries tracing a height field's columns through the solids may make: 2^33,
+/// reached in 15 s by 64 planes over the largest field (16.8 million columns, each crossing all of
+/// them) and in 55 s by 31 stacked container boxes (186 slabs); that field over one floor makes
+/// 2.8e8 in 3.2 s. More means many layered solids under a fine, wide field.
+constexpr std::uint64_t kMaxTerrainQueries = std::uint64_t{1} << 33;
+
+/// The solids under each column centre (a solid at z_floor where there is none). InputError when
+/// tracing them takes more than `budget` distance queries.
+TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry,
+                               std::uint64_t budget = kMaxTerrainQueries);
 
 }  // namespace sandflow

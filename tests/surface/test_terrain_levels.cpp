@@ -2,14 +2,20 @@
 // sand rests on, and a pour onto a shelf that overhangs a floor.
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
+#include "core/error.hpp"
 #include "geometry/shapes.hpp"
 #include "scene/world.hpp"
 #include "support/test_scenes.hpp"
 #include "surface/height_field.hpp"
+#include "surface/surface_params.hpp"
 
 namespace sandflow {
 namespace {
@@ -67,6 +73,45 @@ HeightField shelf_column() {
 }
 
 const std::vector<Real> kNoStatic{-kInf};
+
+// Tracing the columns is bounded by a budget of distance queries, counted row by row in order:
+// the least budget that passes is the same at 1 and 2 threads, and one query less is refused
+// naming the keys that make the field.
+TEST(TerrainIntervals, TracingStopsAtItsBudgetWhateverTheThreads) {
+  const Geometry geo = Geometry::from_config(
+      {floor_plane(0), box_entry({0, 0, 0.3}, {0.2, 0.2, 0.1})}, MaterialConfig{});
+  SurfaceParams p;
+  p.grid.nx = 40;
+  p.grid.ny = 30;
+  p.grid.cell = 0.02;
+  p.grid.x0 = -0.4;
+  p.grid.y0 = -0.3;
+  const auto passes = [&](std::uint64_t budget) {
+    try {
+      terrain_columns(p, geo, budget);
+      return true;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("40 x 30 columns of 0.02 m"), std::string::npos);
+      EXPECT_NE(std::string(e.what()).find("surface.cell_size"), std::string::npos);
+      return false;
+    }
+  };
+  std::uint64_t least[2] = {};
+  for (const int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    std::uint64_t lo = 0, hi = 1;  // passes(hi), not passes(lo)
+    while (!passes(hi)) lo = hi, hi *= 2;
+    while (hi - lo > 1) {
+      const std::uint64_t mid = lo + (hi - lo) / 2;
+      (passes(mid) ? hi : lo) = mid;
+    }
+    least[threads - 1] = hi;
+  }
+  omp_set_num_threads(omp_get_num_procs());
+  EXPECT_EQ(least[0], least[1]);
+  // every column asks both solids at least twice (its top, and below the floor's top)
+  EXPECT_GE(least[0], 2u * 2u * 40u * 30u);
+}
 
 TEST(TerrainLevels, EmptyColumnRestsOnTheHighestSolid) {
   HeightField hf = shelf_column();
