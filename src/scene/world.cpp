@@ -184,14 +184,14 @@ World::World(const SceneConfig& scene)
       dem_(dem_params(scene_, ts_)),
       rng_(scene.simulation.seed) {
   if (!geometry_.meshes().empty()) dem_.set_boundary(boundary_particles(geometry_, scene_.path));
-  if (scene_.simulation.mode == Mode::Surface) try {
-      surface_ =
-          std::make_unique<SurfaceFlow>(surface_params(scene_, geometry_, ts_.dt), geometry_);
-    } catch (const InputError& e) {
-      const std::string what = e.what();
-      if (what.rfind(scene_.path, 0) == 0) throw;  // (surface_params names the scene itself)
-      throw InputError(fmt::format("{}: {}", scene_.path, what));
+  if (scene_.simulation.mode == Mode::Surface) {
+    const SurfaceParams params = surface_params(scene_, geometry_, ts_.dt);
+    try {
+      surface_ = std::make_unique<SurfaceFlow>(params, geometry_);
+    } catch (const InputError& e) {  // (the terrain's tracing budget: its keys are the scene's)
+      throw InputError(fmt::format("{}: {}", scene_.path, e.what()));
     }
+  }
   for (std::size_t k = 0; k < scene.emitters.size(); ++k)
     emitters_.emplace_back(scene.emitters[k], scene.material, scene.simulation.gravity,
                            fmt::format("{}: emitter[{}]", scene.path, k));
