@@ -1,18 +1,69 @@
-// libFuzzer target: the mesh readers (OBJ, PLY, OFF) behind decode_mesh, gzip included. The first
-// byte picks the format ('o' OBJ, 'p' PLY, 'f' OFF, any other byte by its value modulo 3), the
-// rest is the file; scripts/fuzz.sh prefixes the seed meshes accordingly.
+// libFuzzer target: the mesh readers (OBJ, PLY, OFF) behind decode_mesh, gzip included, then a
+// World built on what they read. The first byte says how, the rest is the file: 'o', 'p', 'f'
+// pick OBJ, PLY, OFF, placed at the file's own scale (as `scale = 1`, so that huge or tiny
+// coordinates reach the placement and the sampling) in surface mode; any other byte picks the
+// format by its value modulo 3, fits the mesh to 0.2 m when its bit 7 is set and runs plain DEM
+// when its bit 6 is. scripts/fuzz.sh prefixes each seed mesh with its letter and with its
+// fitted-surface byte (0x81 OBJ, 0x82 PLY, 0x80 OFF).
+//
+// A mesh that reads is written to a file of this process's own and named by a small scene, which
+// is built into a World as `run --check` does: placement, the inside test, the boundary particles
+// and, in surface mode, the height field over them. Its grains are 5 cm, so that a seed mesh a
+// metre across gives thousands of particles, not hundreds of thousands: the fuzzer then tries
+// many more inputs (the inputs' own scale still reaches the limits).
+#include <fstream>
 #include <string>
+
+#include <fmt/format.h>
 
 #include "fuzz_common.hpp"
 #include "geometry/mesh_io.hpp"
+#include "scene/scene_loader.hpp"
+#include "scene/world.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
   static const char* const kNames[3] = {"fuzz.obj", "fuzz.ply", "fuzz.off"};
-  const int format = data[0] == 'o' ? 0 : data[0] == 'p' ? 1 : data[0] == 'f' ? 2 : data[0] % 3;
+  const std::uint8_t how = data[0];
+  const bool letter = how == 'o' || how == 'p' || how == 'f';
+  const int format = how == 'o' ? 0 : how == 'p' ? 1 : how == 'f' ? 2 : how % 3;
+  const bool fitted = !letter && (how & 0x80), dem = !letter && (how & 0x40);
   const std::string name = kNames[format];
+  const std::string bytes(sandflow_fuzz::as_text(data + 1, size - 1));
+  bool read = false;
   sandflow_fuzz::expect_clean(
-      [&] { sandflow::decode_mesh(std::string(sandflow_fuzz::as_text(data + 1, size - 1)), name); },
+      [&] {
+        sandflow::decode_mesh(bytes, name);
+        read = true;
+      },
       name);
+  if (!read) return 0;
+
+  const std::string file = (sandflow_fuzz::own_folder() / name).string();
+  std::ofstream(file, std::ios::binary) << bytes;
+  const std::string scene_text =
+      fmt::format(R"(
+[material]
+diameter = 0.05
+[simulation]
+mode = "{}"
+[[geometry]]
+type = "plane"
+[[geometry]]
+type = "mesh"
+file = "{}"
+{}
+[[emitter]]
+type = "pour"
+center = [0.0, 0.0, 0.5]
+radius = 0.15
+count = 100
+)",
+                  dem ? "dem" : "surface", file, fitted ? "size = 0.2" : "");
+  sandflow_fuzz::expect_clean(
+      [&] {
+        const sandflow::World world(sandflow::load_scene_from_string(scene_text, "fuzz_mesh.toml"));
+      },
+      "fuzz_mesh.toml", file);
   return 0;
 }
