@@ -44,7 +44,8 @@ void expect_clean(Read&& read, std::string_view name, std::string_view other_nam
 }
 
 /// A folder of this process's own for files a target writes (in /dev/shm when there is one, so
-/// that writing a file each input costs no disk), removed when the process exits.
+/// that writing a file each input costs no disk), removed when the process exits normally
+/// (libFuzzer's timed runs end otherwise: scripts/fuzz.sh removes it).
 inline const std::filesystem::path& own_folder() {
   namespace fs = std::filesystem;
   static const fs::path dir = [] {

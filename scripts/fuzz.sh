@@ -107,6 +107,8 @@ for t in "${targets[@]}"; do
     "${limits[@]}" -print_final_stats=1 -artifact_prefix="$findings/" > "$log" 2>&1
   rc=$?
   set -e
+  # the scene and mesh targets' own files (libFuzzer ends a timed run without running atexit)
+  rm -rf /dev/shm/sandflow_fuzz_* "${TMPDIR:-/tmp}"/sandflow_fuzz_*
   tried[$t]=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' | tail -1)
   found=$(find "$findings" -type f | sort)
   if [ -n "$found" ] || [ "$rc" -ne 0 ]; then
