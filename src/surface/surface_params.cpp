@@ -120,8 +120,6 @@ TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry,
   const HeightFieldParams& grid = p.grid;
   TerrainColumns t;
   // rows traced in parallel (each column asks every solid, so this is the slow part of building
-  // a large field), added in order
-  // rows traced in parallel (each column asks every solid, so this is the slow part of building
   // a large field), added in order; the queries are counted row by row, in order, so the refusal
   // does not depend on the threads
   std::vector<std::vector<std::pair<Real, Real>>> row(static_cast<std::size_t>(grid.nx));
