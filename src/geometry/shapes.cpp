@@ -186,6 +186,10 @@ void Geometry::add(std::unique_ptr<Solid> solid, Real friction, Real rolling_fri
 Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
                                const MaterialConfig& material, const std::string& scene_path) {
   Geometry g;
+  // what the meshes so far take: each file is bounded by its reader, all of them together by one
+  // of the largest
+  Real mesh_samples = 0;
+  std::size_t mesh_triangles = 0;
   for (int k = 0; k < static_cast<int>(configs.size()); ++k) {
     const GeometryConfig& c = configs[k];
     const Real mu = c.friction.value_or(material.wall_friction);
@@ -207,22 +211,17 @@ Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
         add(std::make_unique<SolidHeightmap>(c.heights, c.extent, c.base_thickness));
         break;
       case GeometryType::Mesh: {
-        Real samples = 0;
-        std::size_t triangles = 0;
-        for (const MeshObstacle& m : g.meshes_) {
-          samples += m.sample_count;
-          triangles += m.mesh.triangles.size();
-        }
         g.meshes_.push_back(place_mesh(c, material, scene_path, g.warnings_,
-                                       static_cast<Real>(kMaxSurfaceSamples) - samples));
-        g.meshes_.back().source = k;
-        // each file is bounded by its reader; all of them together by one of the largest
-        triangles += g.meshes_.back().mesh.triangles.size();
-        if (triangles > kMaxMeshTriangles)
+                                       static_cast<Real>(kMaxSurfaceSamples) - mesh_samples));
+        MeshObstacle& placed = g.meshes_.back();
+        placed.source = k;
+        mesh_samples += placed.sample_count;
+        mesh_triangles += placed.mesh.triangles.size();
+        if (mesh_triangles > kMaxMeshTriangles)
           throw InputError(fmt::format(
               "{}: {}: brings the scene's meshes to {} triangles together, more than the limit "
               "of {}",
-              scene_path, c.name, triangles, kMaxMeshTriangles));
+              scene_path, c.name, mesh_triangles, kMaxMeshTriangles));
         break;
       }
       case GeometryType::Box:

@@ -114,12 +114,8 @@ BoundaryParticles boundary_particles(const Geometry& geometry, const std::string
       throw InputError(fmt::format("{}: {}: particle_radius must be the same for every mesh of a scene",
                                    scene_path, m.name));
     b.radius = m.particle_radius;
-    std::vector<Vec3> samples;
-    try {
-      samples = sample_surface(m.mesh, m.sample_spacing(), m.sample_merge());
-    } catch (const InputError& e) {
-      throw InputError(fmt::format("{}: {}: {}", scene_path, m.name, e.what()));
-    }
+    // (place_mesh has counted them against the scene's limit: sampling cannot refuse them now)
+    const std::vector<Vec3> samples = sample_surface(m.mesh, m.sample_spacing(), m.sample_merge());
     for (const Vec3& p : samples) {
       b.x.push_back(p);
       b.group.push_back(k);
