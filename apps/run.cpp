@@ -70,6 +70,7 @@ nlohmann::json heap_json(const HeapFit& fit) {
           {"apex", {fit.apex.x, fit.apex.y, fit.apex.z}},
           {"points_used", fit.points_used},
           {"fit_rms", fit.fit_rms},
+          {"repose_angle_se_deg", fit.ok ? nlohmann::json(fit.repose_angle_se_deg) : nlohmann::json()},
           {"reason", fit.reason}};
 }
 
@@ -584,8 +585,9 @@ int run_command(const RunOptions& o) {
   fmt::print("time per frame   {:.3f} s  (total {:.1f} s, {} threads)\n", res.wall_seconds / frames,
              res.wall_seconds, s["threads"].get<int>());
   if (fit.ok)
-    fmt::print("repose angle     {:.1f} deg (heap height {:.3f} m, base radius {:.3f} m)\n",
-               fit.repose_angle_deg, fit.height, fit.base_radius);
+    fmt::print("repose angle     {:.1f} +- {:.1f} deg (the fit's standard error; heap height {:.3f} "
+               "m, base radius {:.3f} m)\n",
+               fit.repose_angle_deg, fit.repose_angle_se_deg, fit.height, fit.base_radius);
   else
     fmt::print("repose angle     n/a ({})\n", fit.reason);
   if (s.contains("transitions")) {
@@ -666,7 +668,8 @@ int measure_command(const std::string& dir) {
     fmt::print("repose angle     n/a ({})\n", fit.reason);
     return 0;
   }
-  fmt::print("repose_angle_deg {:.2f}\n", fit.repose_angle_deg);
+  fmt::print("repose_angle_deg {:.2f} (standard error {:.2f})\n", fit.repose_angle_deg,
+             fit.repose_angle_se_deg);
   fmt::print("heap height      {:.4f} m\n", fit.height);
   fmt::print("base radius      {:.4f} m\n", fit.base_radius);
   fmt::print("flank points     {} (rms {:.2e} m)\n", fit.points_used, fit.fit_rms);

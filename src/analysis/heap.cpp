@@ -8,10 +8,14 @@
 #include <unordered_set>
 #include <vector>
 
+#include <fmt/format.h>
+
 namespace sandflow {
 namespace {
 
-constexpr double kMinHeightDiameters = 3.0;  // lower heaps have no flank worth fitting
+// The flank band must span two grain layers: across one, the profile is the staircase of single
+// grains (a spread-out layer, a pancake), whatever line fits it.
+constexpr double kMinBandDiameters = 2.0;
 constexpr int kMinFlankPoints = 4;
 constexpr double kMaxCellIndex = 1 << 30;  // keeps cell keys exact; far beyond any scene
 
@@ -177,9 +181,12 @@ HeapFit measure_heap(const std::vector<Vec3>& pos, const std::vector<Real>& radi
     if (profile[k].h > profile[i_max].h) i_max = k;
   }
   fit.height = profile[i_max].h;
-  if (fit.height < kMinHeightDiameters * d) {
-    fit.reason = "heap is lower than " + std::to_string(static_cast<int>(kMinHeightDiameters)) +
-                 " grain diameters";
+  if ((band_high - band_low) * fit.height < kMinBandDiameters * d) {
+    fit.reason = fmt::format(
+        "no flank: the heap is {:.1f} grain diameters high, and its flank ({:.0f}-{:.0f} % of the "
+        "height) spans less than {:.0f} grain layers (a spread-out layer, not a heap: too few "
+        "grains, or they landed too fast)",
+        fit.height / d, 100 * band_low, 100 * band_high, kMinBandDiameters);
     return fit;
   }
 
@@ -222,6 +229,10 @@ HeapFit measure_heap(const std::vector<Vec3>& pos, const std::vector<Real>& radi
     return fit;
   }
   fit.repose_angle_deg = rad_to_deg(std::atan(-slope));
+  // the slope's standard error, carried through atan
+  const double n = static_cast<double>(flank.size());
+  const double slope_se = std::sqrt(sse / (n - 2) / srr);
+  fit.repose_angle_se_deg = rad_to_deg(slope_se / (1 + slope * slope));
   fit.base_radius = -intercept / slope;
   fit.ok = true;
   return fit;

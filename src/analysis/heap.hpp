@@ -22,9 +22,10 @@
 //  6. Fit. A least-squares line height = a + b * distance through the flank points gives the
 //     angle of repose atan(-b) in degrees, the RMS of the residuals, and the base radius, where
 //     the line meets the floor (-a / b).
-// The fit is refused (ok = false, with a reason) when there are no usable grains, when the heap
-// is lower than 3 diameters, when fewer than 4 flank points remain, or when the flank does not
-// descend. Then repose_angle_deg is NaN and base_radius is the outermost profile distance.
+// The fit is refused (ok = false, with a reason) when there are no usable grains, when the flank
+// band spans less than 2 diameters of height (4 diameters of heap with the default band: below
+// that the profile is the staircase of single grains), when fewer than 4 flank points remain, or
+// when the flank does not descend. The angle's standard error comes from the fit's scatter. Then repose_angle_deg is NaN and base_radius is the outermost profile distance.
 #pragma once
 
 #include <limits>
@@ -42,6 +43,7 @@ struct HeapFit {
   Vec3 apex;               ///< summit: refined x, y and the floor plus the smoothed maximum [m]
   int points_used = 0;     ///< profile points in the flank fit
   double fit_rms = 0;      ///< RMS residual of the flank fit [m]
+  double repose_angle_se_deg = 0;  ///< standard error of the angle from the fit's scatter [deg]
   bool ok = false;         ///< false: the numbers above are not an angle of repose; see reason
   std::string reason;      ///< why ok is false (empty when ok)
 };

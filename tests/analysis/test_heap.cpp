@@ -110,11 +110,39 @@ TEST(Heap, FlatLayerHasNoAngle) {
     }
   }
   const HeapFit fit = measure_heap(g.pos, g.radius);
-  if (fit.ok) {
-    EXPECT_LT(fit.repose_angle_deg, 5.0);
-  } else {
-    EXPECT_FALSE(fit.reason.empty());
-  }
+  EXPECT_FALSE(fit.ok);
+  EXPECT_NE(fit.reason.find("no flank"), std::string::npos) << fit.reason;
+}
+
+TEST(Heap, ASpreadOutLayerIsNotAHeap) {
+  // What 3,000 grains poured too fast made: a layer 3.5 diameters high at its centre, thinning
+  // over 40 diameters. A line fits it well (3 degrees), but its flank band spans under two grain
+  // layers: reported as no flank, not as an angle.
+  const double r = 0.005, h = 3.5 * 2 * r;
+  const Grains g = lattice_cone(3.0, 0.0, 0.0, r, h);
+  const HeapFit fit = measure_heap(g.pos, g.radius, 0.0);
+  EXPECT_FALSE(fit.ok);
+  EXPECT_TRUE(std::isnan(fit.repose_angle_deg));
+  EXPECT_NE(fit.reason.find("no flank"), std::string::npos) << fit.reason;
+  // four diameters high, the same cone is a heap (its band spans two layers)
+  const HeapFit taller = measure_heap(lattice_cone(3.0, 0.0, 0.0, r, 4.5 * 2 * r).pos,
+                                      lattice_cone(3.0, 0.0, 0.0, r, 4.5 * 2 * r).radius, 0.0);
+  EXPECT_TRUE(taller.ok) << taller.reason;
+}
+
+TEST(Heap, StandardErrorFallsAsTheFlankGrows) {
+  // The same staircase of single grains along a longer flank: more rings, a surer slope. The
+  // standard error is the slope's, sqrt(SSE / (n - 2) / Srr), carried through atan.
+  const double r = 0.005;
+  const Grains small = lattice_cone(32.0, 0.0, 0.0, r, 8 * 2 * r);
+  const Grains large = lattice_cone(32.0, 0.0, 0.0, r, 32 * 2 * r);
+  const HeapFit a = measure_heap(small.pos, small.radius, 0.0);
+  const HeapFit b = measure_heap(large.pos, large.radius, 0.0);
+  ASSERT_TRUE(a.ok && b.ok);
+  EXPECT_GT(b.repose_angle_se_deg, 0.0);
+  EXPECT_LT(b.repose_angle_se_deg, 0.5 * a.repose_angle_se_deg);
+  // the true angle lies within a few standard errors plus the staircase's bias
+  EXPECT_LT(std::abs(b.repose_angle_deg - 32.0), 2.0);
 }
 
 TEST(Heap, EmptyAndBadInput) {
@@ -133,10 +161,20 @@ TEST(Heap, EmptyAndBadInput) {
 }
 
 TEST(Heap, NarrowBandCanRefuse) {
-  // A band too narrow for four rings on a small cone: refused with a reason, not a wrong angle.
+  // A band that spans under two grain layers: refused with a reason, not a wrong angle.
   const double r = 0.005, h = 8 * 2 * r;
   const Grains g = lattice_cone(30.0, 0.0, 0.0, r, h);
   const HeapFit fit = measure_heap(g.pos, g.radius, 0.0, 0.45, 0.55);
+  EXPECT_FALSE(fit.ok);
+  EXPECT_NE(fit.reason.find("no flank"), std::string::npos) << fit.reason;
+}
+
+TEST(Heap, ASteepShortFlankHasTooFewPoints) {
+  // 60 degrees over 8 diameters: the band's four diameters of rise lie within 2.3 diameters
+  // of radius, fewer than four rings.
+  const double r = 0.005, h = 8 * 2 * r;
+  const Grains g = lattice_cone(60.0, 0.0, 0.0, r, h);
+  const HeapFit fit = measure_heap(g.pos, g.radius, 0.0);
   EXPECT_FALSE(fit.ok);
   EXPECT_NE(fit.reason.find("profile points"), std::string::npos) << fit.reason;
 }
