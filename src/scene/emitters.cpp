@@ -35,6 +35,47 @@ Real pour_slots(const EmitterConfig& e, const MaterialConfig& m) {
   return rows * cols * (e.shape == PourShape::Disk ? std::numbers::pi / 4 : 1.0);
 }
 
+namespace {
+
+// The lattice of a block (cubic) or a lattice emitter (face-centred cubic): points
+// lo + (i + offset) a along each axis, i = 0, 1, ..., from the box's low corner a grain's radius
+// in, up to a grain's radius from its high side; FCC adds three points offset by half an edge.
+struct BoxLattice {
+  Real a;       // edge [m]
+  Vec3 lo;      // first point [m]
+  int basis;    // points per cell: 1 or 4
+  std::int64_t rows[4][3];  // per basis point, rows along x, y, z
+  static constexpr Real kOffset[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
+};
+
+BoxLattice box_lattice(const EmitterConfig& e, Real d_max) {
+  BoxLattice L{};
+  const bool fcc = e.type == EmitterType::Lattice;
+  L.a = e.spacing * d_max * (fcc ? std::sqrt(2.0) : 1.0);  // FCC edge: neighbours at spacing
+  L.basis = fcc ? 4 : 1;
+  L.lo = e.center - e.size * 0.5 + Vec3{d_max, d_max, d_max} * 0.5;
+  const Real side[3] = {e.size.x, e.size.y, e.size.z};
+  for (int b = 0; b < L.basis; ++b)
+    for (int k = 0; k < 3; ++k) {
+      // the box takes a grain 1e-12 m too wide (emitter_problem): a row that fits exactly counts
+      const Real span = (side[k] - d_max + 1e-12) / L.a - BoxLattice::kOffset[b][k];
+      L.rows[b][k] = span < 0 ? 0 : static_cast<std::int64_t>(std::floor(span)) + 1;
+    }
+  return L;
+}
+
+}  // namespace
+
+Real box_slots(const EmitterConfig& e, const MaterialConfig& m) {
+  if (e.type == EmitterType::Pour) return 0;
+  const BoxLattice L = box_lattice(e, largest_diameter(m));
+  Real n = 0;
+  for (int b = 0; b < L.basis; ++b)
+    n += static_cast<Real>(L.rows[b][0]) * static_cast<Real>(L.rows[b][1]) *
+         static_cast<Real>(L.rows[b][2]);
+  return n;
+}
+
 std::optional<EmitterProblem> emitter_problem(const EmitterConfig& e, const MaterialConfig& m) {
   const Real d = largest_diameter(m);
   const Real s = e.spacing * d;
@@ -73,26 +114,21 @@ std::optional<EmitterProblem> emitter_problem(const EmitterConfig& e, const Mate
 
 template <class F>
 std::int64_t Emitter::for_each_box_slot(F&& f) const {
-  // a cubic lattice for a block, face-centred cubic for a prefilled pile; every row holds at
-  // least its first point (emitter_problem: the box is a grain wide), so this ends by `count`
-  const Vec3 half = config_.size * 0.5;
-  const Vec3 lo = config_.center - half + Vec3{d_max_, d_max_, d_max_} * 0.5;
-  const Vec3 hi = config_.center + half - Vec3{d_max_, d_max_, d_max_} * 0.5;
-  const bool fcc = config_.type == EmitterType::Lattice;
-  const Real a = fcc ? spacing_ * std::sqrt(2.0) : spacing_;  // FCC edge: neighbours at spacing
-  const Vec3 basis_fcc[4] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
-  const int nb = fcc ? 4 : 1;
+  // layer by layer from the bottom; every row holds at least its first point (emitter_problem:
+  // the box is a grain wide), so this ends by `count`
+  const BoxLattice L = box_lattice(config_, d_max_);
   std::int64_t n = 0;
   if (config_.count <= 0) return n;
-  for (Real z = lo.z; z <= hi.z + 1e-12; z += a)
-    for (Real y = lo.y; y <= hi.y + 1e-12; y += a)
-      for (Real x = lo.x; x <= hi.x + 1e-12; x += a)
-        for (int b = 0; b < nb; ++b) {
-          const Vec3 p = Vec3{x, y, z} + basis_fcc[b] * a;
-          if (p.x <= hi.x + 1e-12 && p.y <= hi.y + 1e-12 && p.z <= hi.z + 1e-12) {
-            f(p);
-            if (++n == config_.count) return n;
-          }
+  const std::int64_t* base = L.rows[0];  // the corner points have the most rows
+  for (std::int64_t k = 0; k < base[2]; ++k)
+    for (std::int64_t j = 0; j < base[1]; ++j)
+      for (std::int64_t i = 0; i < base[0]; ++i)
+        for (int b = 0; b < L.basis; ++b) {
+          const Real* o = BoxLattice::kOffset[b];
+          if (i >= L.rows[b][0] || j >= L.rows[b][1] || k >= L.rows[b][2]) continue;
+          f(L.lo + Vec3{(static_cast<Real>(i) + o[0]) * L.a, (static_cast<Real>(j) + o[1]) * L.a,
+                        (static_cast<Real>(k) + o[2]) * L.a});
+          if (++n == config_.count) return n;
         }
   return n;
 }
@@ -139,9 +175,15 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
     const Real max_rate = static_cast<Real>(slots_.size()) / batch_interval_;
     if (per_batch_ > static_cast<Real>(slots_.size()))
       throw InputError(fmt::format(
-          "{}: rate {} grains/s is more than this pour can emit without overlaps ({:.0f} "
-          "grains/s); enlarge the pour area or its downward speed",
-          where, config.rate, max_rate));
+          "{}: rate {:.6g} grains/s{} is more than this pour can emit without overlaps ({:.0f} "
+          "grains/s); enlarge the pour area or its downward speed{}",
+          where, config.rate,
+          config.rate_scale != 1
+              ? fmt::format(" (the scene's {:.6g} scaled with the count by --grains, which keeps "
+                            "a pour's duration)",
+                            config.rate / config.rate_scale)
+              : "",
+          max_rate, config.rate_scale != 1 ? ", or ask for fewer grains" : ""));
     // a batch is born at the first step past its wait: bound the fall over a whole interval
     const Real wait = batch_interval_;
     drop_ = norm(config.velocity) * wait + g * wait * wait / 2;

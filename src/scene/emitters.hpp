@@ -36,6 +36,10 @@ std::optional<EmitterProblem> emitter_problem(const EmitterConfig& e, const Mate
 /// About how many slots a pour's one layer has (0 for a block or a lattice): counted, not made.
 Real pour_slots(const EmitterConfig& e, const MaterialConfig& m);
 
+/// How many grains a block's or lattice's box holds (0 for a pour): counted, not made, from the
+/// same rows the emitter places.
+Real box_slots(const EmitterConfig& e, const MaterialConfig& m);
+
 struct NewGrain {
   Vec3 x, v;
   Real r;

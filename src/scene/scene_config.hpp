@@ -172,6 +172,7 @@ struct EmitterConfig {
   Real radius = 0.05;               ///< pour disk radius [m]
   Vec3 size{0.1, 0.1, 0.1};         ///< pour rect: x, y extents (z ignored); block/lattice: box
   Real rate = 1000.0;               ///< pour rate [grains/s]
+  Real rate_scale = 1.0;            ///< what scale_grain_count multiplied the scene's rate by
   Real spacing = 1.05;              ///< lattice/slot spacing as a multiple of the largest diameter
 };
 

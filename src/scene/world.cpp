@@ -76,6 +76,8 @@ ContactParams contact_params(const MaterialConfig& m) {
 void scale_grain_count(SceneConfig& scene, std::int64_t total) {
   const std::int64_t old_total = scene.total_grains();
   if (old_total <= 0 || scene.emitters.empty()) return;
+  std::vector<std::int64_t> old_counts;
+  for (const EmitterConfig& e : scene.emitters) old_counts.push_back(e.count);
   // largest-remainder rounding, so the counts add up to exactly `total`
   std::vector<std::pair<double, std::size_t>> rem;
   std::int64_t sum = 0;
@@ -89,6 +91,30 @@ void scale_grain_count(SceneConfig& scene, std::int64_t total) {
   std::sort(rem.begin(), rem.end());
   for (std::size_t q = 0; sum < total; ++q, ++sum)
     ++scene.emitters[rem[q % rem.size()].second].count;
+
+  for (std::size_t k = 0; k < scene.emitters.size(); ++k) {
+    EmitterConfig& e = scene.emitters[k];
+    if (old_counts[k] <= 0 || e.count <= 0) continue;
+    const double ratio = static_cast<double>(e.count) / static_cast<double>(old_counts[k]);
+    if (e.type == EmitterType::Pour) {
+      e.rate *= ratio;
+      e.rate_scale *= ratio;
+      continue;
+    }
+    // the same box shape, from the same bottom; a box at least one spacing on every side holds a
+    // grain, and growing it by 1 % a time reaches the count in a few dozen tries
+    const Real bottom = e.center.z - e.size.z / 2;
+    const Real spacing = e.spacing * scene.material.diameter * (1 + scene.material.diameter_spread);
+    const Vec3 shape = e.size;
+    Real scale = std::cbrt(ratio);
+    for (int tries = 0;; ++tries) {
+      e.size = {std::max(shape.x * scale, spacing), std::max(shape.y * scale, spacing),
+                std::max(shape.z * scale, spacing)};
+      if (box_slots(e, scene.material) >= static_cast<Real>(e.count) || tries == 10000) break;
+      scale *= 1.01;
+    }
+    e.center.z = bottom + e.size.z / 2;
+  }
 }
 
 namespace {

@@ -44,7 +44,11 @@ TimeStep choose_time_step(const SceneConfig& scene);
 /// Contact parameters of the grain-grain law from the material.
 ContactParams contact_params(const MaterialConfig& m);
 
-/// Scales every emitter's count so the scene makes `total` grains in all (largest remainder).
+/// Scales every emitter's count so the scene makes `total` grains in all (largest remainder),
+/// keeping the scene's character: a pour keeps its start and duration (its rate scales with its
+/// count), so that a smaller run is a preview of the same shot; a block or lattice keeps its
+/// proportions, the centre of its bottom face and its spacing (its box scales with the cube root
+/// of its count, grown until the count fits).
 void scale_grain_count(SceneConfig& scene, std::int64_t total);
 
 struct FrameStats {

@@ -2,11 +2,13 @@
 // once instead of making (or looping over) a pattern no machine holds.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
 #include "core/error.hpp"
 #include "scene/emitters.hpp"
+#include "scene/world.hpp"
 
 namespace sandflow {
 namespace {
@@ -124,6 +126,109 @@ TEST(Emitters, ImpossibleSizesAreNamedByTheirKeyBeforeAnythingIsMade) {
   EXPECT_THROW(Emitter(block({0, 0, 50}, {0.0005, 100, 100}, 10), millimetre_grains(), kGravity,
                        "test"),
                InputError);
+}
+
+TEST(Emitters, BoxSlotsCountsWhatTheBoxPlaces) {
+  // box_slots counts without placing: the same number as placing them all, for cubic and
+  // close-packed boxes of awkward sizes (rows that just fit, just miss, odd half offsets)
+  const MaterialConfig m = millimetre_grains();
+  for (EmitterType type : {EmitterType::Block, EmitterType::Lattice})
+    for (Vec3 size : {Vec3{0.0105, 0.0105, 0.0105}, Vec3{0.0031, 0.0177, 0.0093},
+                      Vec3{0.001, 0.0021, 0.0052}, Vec3{0.02, 0.0149, 0.0121}}) {
+      EmitterConfig e = block({0, 0, 0}, size, 1);
+      e.type = type;
+      e.count = static_cast<std::int64_t>(box_slots(e, m));
+      ASSERT_GT(e.count, 0);
+      EXPECT_NO_THROW(Emitter(e, m, kGravity, "test"));  // it holds its count
+      e.count += 1;  // and no more
+      EXPECT_THROW(Emitter(e, m, kGravity, "test"), InputError)
+          << (type == EmitterType::Block ? "block " : "lattice ") << size.x << " " << size.y
+          << " " << size.z;
+    }
+}
+
+SceneConfig scene_of(std::vector<EmitterConfig> emitters) {
+  SceneConfig s;
+  s.material = millimetre_grains();
+  s.emitters = std::move(emitters);
+  return s;
+}
+
+TEST(Scaling, APourKeepsItsStartAndDuration) {
+  // --grains previews the same shot: a pour of a tenth of the grains pours for as long, thinner
+  EmitterConfig pour;
+  pour.center = {0, 0, 0.2};
+  pour.radius = 0.01;
+  pour.rate = 2000;
+  pour.count = 4000;
+  pour.start = 0.5;
+  SceneConfig s = scene_of({pour});
+  const Emitter before(s.emitters[0], s.material, kGravity, "test");
+  scale_grain_count(s, 400);
+  const Emitter after(s.emitters[0], s.material, kGravity, "test");
+  EXPECT_EQ(s.emitters[0].count, 400);
+  EXPECT_DOUBLE_EQ(s.emitters[0].rate, 200);
+  EXPECT_DOUBLE_EQ(s.emitters[0].start, 0.5);
+  // the same end within a batch (the batches are the same, fewer grains in each): a batch waits
+  // for the last to fall one spacing, sqrt(2 * 1.05 mm / g) = 15 ms
+  const Real batch = std::sqrt(2 * 1.05e-3 / 9.81);
+  EXPECT_NEAR(after.end_time(), before.end_time(), batch);
+  EXPECT_NEAR(before.end_time(), 0.5 + 2.0, batch);
+}
+
+TEST(Scaling, APourScaledPastWhatItCanEmitSaysSo) {
+  EmitterConfig pour;
+  pour.center = {0, 0, 0.2};
+  pour.radius = 0.003;
+  pour.rate = 1000;
+  pour.count = 1000;
+  SceneConfig s = scene_of({pour});
+  scale_grain_count(s, 1'000'000);
+  try {
+    Emitter(s.emitters[0], s.material, kGravity, "emitter.0");
+    FAIL() << "a million grains in a second from a 6 mm disk";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("scaled with the count by --grains"), std::string::npos) << what;
+    EXPECT_NE(what.find("the scene's 1000"), std::string::npos) << what;
+  }
+}
+
+TEST(Scaling, ABlockKeepsItsShapeAndItsBottom) {
+  // a full 20 x 10 x 40 block at 1.05 d, scaled down eightfold and up eightfold
+  const MaterialConfig m = millimetre_grains();
+  const Real a = 1.05 * m.diameter;
+  const Vec3 size{20 * a, 10 * a, 40 * a};
+  const EmitterConfig full = block({0.1, -0.2, 0.3}, size, 8000);
+  ASSERT_EQ(box_slots(full, m), 8000);
+  for (std::int64_t n : {1000, 64000}) {
+    SceneConfig s = scene_of({full});
+    scale_grain_count(s, n);
+    const EmitterConfig& e = s.emitters[0];
+    const Real k = std::cbrt(static_cast<Real>(n) / 8000);
+    // the proportions, within a row of the lattice on each side
+    EXPECT_NEAR(e.size.x, size.x * k, 1.5 * a) << n;
+    EXPECT_NEAR(e.size.y, size.y * k, 1.5 * a) << n;
+    EXPECT_NEAR(e.size.z, size.z * k, 1.5 * a) << n;
+    EXPECT_NEAR(e.size.z / e.size.x, 2.0, 0.25) << n;
+    // the same bottom and the same centre across
+    EXPECT_NEAR(e.center.z - e.size.z / 2, 0.3 - size.z / 2, 1e-12) << n;
+    EXPECT_DOUBLE_EQ(e.center.x, 0.1);
+    EXPECT_DOUBLE_EQ(e.center.y, -0.2);
+    // it holds its count, and it is full: at most a layer of the box empty
+    EXPECT_GE(box_slots(e, m), static_cast<Real>(n)) << n;
+    EXPECT_NO_THROW(Emitter(e, m, kGravity, "test"));
+    EXPECT_LT(box_slots(e, m), n * (1 + 2.5 * a / e.size.z)) << n;
+  }
+}
+
+TEST(Scaling, ATinyCountStillGetsABoxThatHoldsIt) {
+  const MaterialConfig m = millimetre_grains();
+  SceneConfig s = scene_of({block({0, 0, 0.5}, {0.5, 0.02, 0.3}, 100000)});
+  scale_grain_count(s, 3);
+  EXPECT_EQ(s.emitters[0].count, 3);
+  EXPECT_GE(box_slots(s.emitters[0], m), 3);
+  EXPECT_NO_THROW(Emitter(s.emitters[0], m, kGravity, "test"));
 }
 
 }  // namespace
