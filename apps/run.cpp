@@ -63,15 +63,16 @@ SceneConfig load_for_run(const RunOptions& o) {
 namespace {
 
 nlohmann::json heap_json(const HeapFit& fit) {
-  return {{"ok", fit.ok},
-          {"repose_angle_deg", fit.ok ? nlohmann::json(fit.repose_angle_deg) : nlohmann::json()},
-          {"height", fit.height},
-          {"base_radius", fit.base_radius},
-          {"apex", {fit.apex.x, fit.apex.y, fit.apex.z}},
-          {"points_used", fit.points_used},
-          {"fit_rms", fit.fit_rms},
-          {"repose_angle_se_deg", fit.ok ? nlohmann::json(fit.repose_angle_se_deg) : nlohmann::json()},
-          {"reason", fit.reason}};
+  return {
+      {"ok", fit.ok},
+      {"repose_angle_deg", fit.ok ? nlohmann::json(fit.repose_angle_deg) : nlohmann::json()},
+      {"height", fit.height},
+      {"base_radius", fit.base_radius},
+      {"apex", {fit.apex.x, fit.apex.y, fit.apex.z}},
+      {"points_used", fit.points_used},
+      {"fit_rms", fit.fit_rms},
+      {"repose_angle_se_deg", fit.ok ? nlohmann::json(fit.repose_angle_se_deg) : nlohmann::json()},
+      {"reason", fit.reason}};
 }
 
 nlohmann::json stiffness_json(const Stiffness& s) {
@@ -585,9 +586,10 @@ int run_command(const RunOptions& o) {
   fmt::print("time per frame   {:.3f} s  (total {:.1f} s, {} threads)\n", res.wall_seconds / frames,
              res.wall_seconds, s["threads"].get<int>());
   if (fit.ok)
-    fmt::print("repose angle     {:.1f} +- {:.1f} deg (the fit's standard error; heap height {:.3f} "
-               "m, base radius {:.3f} m)\n",
-               fit.repose_angle_deg, fit.repose_angle_se_deg, fit.height, fit.base_radius);
+    fmt::print(
+        "repose angle     {:.1f} +- {:.1f} deg (the fit's standard error; heap height {:.3f} "
+        "m, base radius {:.3f} m)\n",
+        fit.repose_angle_deg, fit.repose_angle_se_deg, fit.height, fit.base_radius);
   else
     fmt::print("repose angle     n/a ({})\n", fit.reason);
   if (s.contains("transitions")) {

@@ -25,7 +25,8 @@
 // The fit is refused (ok = false, with a reason) when there are no usable grains, when the flank
 // band spans less than 2 diameters of height (4 diameters of heap with the default band: below
 // that the profile is the staircase of single grains), when fewer than 4 flank points remain, or
-// when the flank does not descend. The angle's standard error comes from the fit's scatter. Then repose_angle_deg is NaN and base_radius is the outermost profile distance.
+// when the flank does not descend. The angle's standard error comes from the fit's scatter. Then
+// repose_angle_deg is NaN and base_radius is the outermost profile distance.
 #pragma once
 
 #include <limits>

@@ -41,9 +41,9 @@ namespace {
 // lo + (i + offset) a along each axis, i = 0, 1, ..., from the box's low corner a grain's radius
 // in, up to a grain's radius from its high side; FCC adds three points offset by half an edge.
 struct BoxLattice {
-  Real a;       // edge [m]
-  Vec3 lo;      // first point [m]
-  int basis;    // points per cell: 1 or 4
+  Real a;                   // edge [m]
+  Vec3 lo;                  // first point [m]
+  int basis;                // points per cell: 1 or 4
   std::int64_t rows[4][3];  // per basis point, rows along x, y, z
   static constexpr Real kOffset[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
 };

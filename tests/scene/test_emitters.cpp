@@ -140,10 +140,10 @@ TEST(Emitters, BoxSlotsCountsWhatTheBoxPlaces) {
       e.count = static_cast<std::int64_t>(box_slots(e, m));
       ASSERT_GT(e.count, 0);
       EXPECT_NO_THROW(Emitter(e, m, kGravity, "test"));  // it holds its count
-      e.count += 1;  // and no more
+      e.count += 1;                                      // and no more
       EXPECT_THROW(Emitter(e, m, kGravity, "test"), InputError)
-          << (type == EmitterType::Block ? "block " : "lattice ") << size.x << " " << size.y
-          << " " << size.z;
+          << (type == EmitterType::Block ? "block " : "lattice ") << size.x << " " << size.y << " "
+          << size.z;
     }
 }
 
