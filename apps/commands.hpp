@@ -13,6 +13,7 @@
 
 #include "analysis/heap.hpp"
 #include "analysis/surface_diff.hpp"
+#include "calibration/calibration.hpp"
 #include "checkpoint/checkpoint.hpp"
 #include "scene/world.hpp"
 
@@ -81,6 +82,30 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
 /// --export, --up-axis.
 SceneConfig load_for_run(const RunOptions& o);
 int thread_count(const SceneConfig& scene);
+
+/// `sandflow calibrate` (calibrate.cpp): measures (or, unless `again`, reads from the cache) the
+/// angles of the scene's material with `trials` seeds, prints and caches them.
+int calibrate_command(const RunOptions& o, int trials, bool again, const RigSettings& rig);
+/// Where measured calibrations are kept: $SANDFLOW_CACHE_DIR/calibration, else
+/// $XDG_CACHE_HOME/sandflow/calibration, else ~/.cache/sandflow/calibration.
+std::string calibration_cache_dir();
+/// The cached calibration of `key` (calibration_key), if a valid one is there.
+std::optional<nlohmann::json> cached_calibration(const std::string& key);
+/// Measures the scene's material with `trials` seeds, printing progress, and caches the result.
+nlohmann::json measure_calibration(const SceneConfig& scene, int trials,
+                                   const RigSettings& rig = {});
+/// Trials of a calibration measured for a run (and by `sandflow calibrate` by default).
+constexpr int kDefaultCalibrationTrials = 3;
+/// True when SANDFLOW_NO_CALIBRATION is set (and not "0"): a surface run whose scene leaves the
+/// angles unset then takes the built-in defaults (32 degrees, + 6) instead of measuring them.
+bool calibration_disabled();
+/// True for a surface-mode scene that leaves surface.repose_angle or max_angle unset.
+bool needs_calibration(const SceneConfig& scene);
+/// Fills the angles a surface-mode scene leaves unset from its material's calibration (cached,
+/// or measured now) and returns what the run uses: repose_angle_deg, max_angle_deg, source.
+nlohmann::json resolve_surface_angles(SceneConfig& scene);
+/// Sets the angles `resolve_surface_angles` returned (a resumed run's, from its run.json).
+void apply_surface_angles(SceneConfig& scene, const nlohmann::json& angles);
 
 /// What a finished run leaves for the caller: its summary and its final grains.
 struct RunResult {

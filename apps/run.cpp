@@ -18,6 +18,7 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include "calibration/calibration.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "io/export_formats.hpp"
@@ -234,6 +235,8 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
         {"update_interval", sf->params().update_interval},
         {"repose_angle_deg", rad_to_deg(hf.params().theta0)},
         {"max_angle_deg", rad_to_deg(hf.params().theta_max)},
+        {"angles_source", scene.surface.angles_source.empty() ? "scene, or the built-in defaults"
+                                                              : scene.surface.angles_source},
         {"exchange_rate", hf.params().gamma},
         {"rolling_min", hf.params().rolling_min},
         {"interface_thickness", sf->params().interface.thickness},
@@ -455,6 +458,7 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
   if (o.threads > 0) r.threads = o.threads;
   if (o.checkpoint_every >= 0) record["checkpoint_every"] = o.checkpoint_every;
   run.scene = apply_run_options(load_scene_from_string(text, r.scene, run_overrides(r)), r);
+  if (record.contains("surface_angles")) apply_surface_angles(run.scene, record["surface_angles"]);
   run.out = dir;
   run.record = record;
   run.resumed = true;
@@ -508,6 +512,19 @@ Started start_new(const RunOptions& o, const std::string& text) {
     fmt::print("{}: exports {} each frame (up axis {})\n", scene.path,
                exports.empty() ? "nothing" : fmt::format("{}", fmt::join(exports, ", ")),
                up_axis_name(scene.output.up_axis));
+    if (needs_calibration(scene)) {
+      const std::string key = calibration_key(scene);
+      const auto cal = cached_calibration(key);
+      fmt::print("{}: angles of repose {}\n", scene.path,
+                 calibration_disabled() ? "unset: the built-in defaults (SANDFLOW_NO_CALIBRATION)"
+                 : cal ? fmt::format("from the material's calibration {} (cached): theta0 {:.2f}, "
+                                     "theta_max {:.2f} deg",
+                                     key, (*cal)["theta0_deg"].get<double>(),
+                                     (*cal)["theta_max_deg"].get<double>())
+                       : fmt::format("unset: the run first measures them (sandflow calibrate, "
+                                     "about a minute; cached as {})",
+                                     key));
+    }
     return run;
   }
   RunOptions started = o;
@@ -519,6 +536,9 @@ Started start_new(const RunOptions& o, const std::string& text) {
   run.out = started.out;
   run.record = run_record(started, text,
                           o.checkpoint_every < 0 ? kDefaultCheckpointEvery : o.checkpoint_every);
+  // the angles the run uses, kept so that a resumed run uses the same whatever the cache holds
+  if (scene.simulation.mode == Mode::Surface)
+    run.record["surface_angles"] = resolve_surface_angles(run.scene);
   write_file_atomic((fs::path(run.out) / "run.json").string(), run.record.dump(2) + "\n");
   return run;
 }

@@ -93,6 +93,36 @@ int main(int argc, char** argv) {
       "the grain and the command that reproduces it), 4 an output could not be written,\n"
       "130 interrupted by SIGINT, 143 by SIGTERM.");
 
+  RunOptions cao;
+  int calibration_trials = 3;
+  bool calibrate_again = false;
+  auto* calibrate = app.add_subcommand(
+      "calibrate",
+      "measure the angles of repose (theta0, theta_max) of a scene's material in plain DEM");
+  calibrate->add_option("scene", cao.scene, "scene file (TOML)")->required();
+  calibrate->add_option("--set", cao.sets, "override a scene key: --set material.friction=0.4");
+  calibrate->add_option("--threads", cao.threads, "OpenMP threads (default: all cores)")
+      ->check(CLI::Range(1, 1024));
+  calibrate->add_option("--trials", calibration_trials, "seeds measured (default 3)")
+      ->check(CLI::Range(1, 100));
+  calibrate->add_flag("--again", calibrate_again, "measure even when the cache holds the result");
+  RigSettings rig;
+  calibrate
+      ->add_option("--base", rig.base_diameters,
+                   "radius of the rig's base in grain diameters (default 10; what surface "
+                   "runs use. A smaller base measures less well, a larger one costs more)")
+      ->check(CLI::Range(4.0, 40.0));
+  calibrate
+      ->add_option("--tilt-rate", rig.tilt_rate,
+                   "how fast gravity tilts, deg/s (default 2: what surface runs use)")
+      ->check(CLI::Range(0.1, 30.0));
+  calibrate->footer(
+      "A heap is poured onto a rough disk 10 grain diameters in radius until it overflows; its\n"
+      "flank gives theta0 (where a flow stops). Gravity is then tilted slowly until the heap\n"
+      "fails: theta_max = theta0 + the tilt. The result is cached by a hash of the material\n"
+      "(calibration_cache_dir: $SANDFLOW_CACHE_DIR, $XDG_CACHE_HOME/sandflow or\n"
+      "~/.cache/sandflow), and surface mode uses it where the scene sets no angle.");
+
   std::string dir;
   auto* measure = app.add_subcommand("measure", "print the angle of repose of a run's last frame");
   measure->add_option("dir", dir, "run folder")->required();
@@ -249,6 +279,7 @@ int main(int argc, char** argv) {
     if (*compare) return compare_command(co, cmp);
     if (*table1) return table1_command(to, command_line(argc, argv));
     if (*measure) return measure_command(dir);
+    if (*calibrate) return calibrate_command(cao, calibration_trials, calibrate_again, rig);
     if (*render) return render_command(rdo);
     if (*report) {
       rpo.render = !no_render;

@@ -128,6 +128,7 @@ class DemSolver {
   void restore_state(DemState s, const Geometry& geometry);
 
   const DemParams& params() const { return params_; }
+  void set_gravity(const Vec3& g) { params_.gravity = g; }
   const PairList& pairs() const { return pairs_; }
   DemCounters& counters() { return counters_; }
 

@@ -64,6 +64,10 @@ class Emitter {
   /// the time between batches, so that batches never merge. Its grains are placed where their
   /// free fall since the batch's time has brought them. 0 for a block or a lattice.
   Real max_wait() const { return config_.type == EmitterType::Pour ? batch_interval_ / 2 : 0; }
+  /// Pour: the most grains per second its slots let through without overlaps (0 otherwise).
+  Real max_rate() const {
+    return batch_interval_ > 0 ? static_cast<Real>(slots_.size()) / batch_interval_ : 0;
+  }
   /// Time of the next batch [s].
   Real next_time() const { return next_time_; }
   /// True when a grain centred at x with radius r may overlap a new grain of this pour.

@@ -49,6 +49,10 @@ struct SurfaceConfig {
   std::optional<Real> exchange_rate;        ///< gamma [1/s]; default 5 sqrt(g / d)
   Real repose_angle = deg_to_rad(32.0);     ///< theta_0 [rad]
   std::optional<Real> max_angle;            ///< theta_max [rad]; default theta_0 + 6 deg
+  bool repose_angle_given = false;          ///< set by the scene (else calibrated, or the default)
+  /// Where the angles came from, for summary.json: "scene", "calibration KEY (cached|measured)",
+  /// or "" (the scene's, or the built-in defaults where it sets none)
+  std::string angles_source;
   std::optional<Real> rolling_min;          ///< R_min [m]; default one mean diameter
   std::optional<Real> interface_thickness;  ///< T [m]; default one mean diameter
   std::optional<Real> update_interval;      ///< time between height-field updates [s]

@@ -581,7 +581,10 @@ void read_surface(TableReader r, SurfaceConfig& s, Real diameter) {
   r.read("extent", s.extent);
   r.finish("[surface]");
 
-  if (repose_deg) s.repose_angle = deg_to_rad(*repose_deg);
+  if (repose_deg) {
+    s.repose_angle = deg_to_rad(*repose_deg);
+    s.repose_angle_given = true;
+  }
   if (max_deg) {
     s.max_angle = deg_to_rad(*max_deg);
     if (*s.max_angle < s.repose_angle) {

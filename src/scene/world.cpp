@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -444,6 +445,12 @@ FrameStats World::advance_frame() {
           step_, frame_, time_, grains_.id[i], ts_.dt));
   st.wall_seconds = wall.seconds();
   return st;
+}
+
+void World::set_gravity(const Vec3& g) {
+  if (surface_) throw std::logic_error("World::set_gravity: plain DEM only");
+  scene_.simulation.gravity = g;
+  dem_.set_gravity(g);
 }
 
 Real World::kinetic_energy() const {

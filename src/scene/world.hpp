@@ -101,6 +101,11 @@ class World {
   /// Advances one frame (TimeStep::substeps steps) and returns its statistics.
   FrameStats advance_frame();
 
+  /// Gravity from the next step on, for a plain-DEM test that tilts it instead of the geometry
+  /// (calibration). Not kept by checkpoints; std::logic_error in surface mode, whose height field
+  /// stands along z.
+  void set_gravity(const Vec3& g);
+
   /// Number of frames the scene asks for (output.frames, output.duration, or emission + settle);
   /// throws InputError, naming the keys, when that is more than kMaxFrames.
   int planned_frames() const;

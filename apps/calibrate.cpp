@@ -1,0 +1,216 @@
+// `sandflow calibrate SCENE`: the angles of repose of a scene's material, measured by plain DEM
+// (src/calibration), and the cache that lets surface mode use them without measuring again.
+#include <omp.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "calibration/calibration.hpp"
+#include "commands.hpp"
+#include "core/error.hpp"
+#include "io/run_output.hpp"
+#include "scene/scene_loader.hpp"
+
+namespace sandflow {
+
+namespace fs = std::filesystem;
+
+std::string calibration_cache_dir() {
+  if (const char* d = std::getenv("SANDFLOW_CACHE_DIR"); d && *d)
+    return fs::path(d) / "calibration";
+  if (const char* d = std::getenv("XDG_CACHE_HOME"); d && *d)
+    return fs::path(d) / "sandflow" / "calibration";
+  if (const char* d = std::getenv("HOME"); d && *d)
+    return fs::path(d) / ".cache" / "sandflow" / "calibration";
+  return fs::path(".sandflow-cache") / "calibration";
+}
+
+std::optional<nlohmann::json> cached_calibration(const std::string& key) {
+  const fs::path path = fs::path(calibration_cache_dir()) / (key + ".json");
+  std::ifstream in(path);
+  if (!in) return std::nullopt;
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const nlohmann::json j = nlohmann::json::parse(ss.str(), nullptr, false);
+  // a damaged or foreign file is measured again, not trusted
+  if (j.is_discarded() || !j.is_object() || j.value("key", "") != key ||
+      !j.contains("theta0_deg") || !j["theta0_deg"].is_number() || !j.contains("theta_max_deg") ||
+      !j["theta_max_deg"].is_number())
+    return std::nullopt;
+  return j;
+}
+
+nlohmann::json calibration_json(const Calibration& c) {
+  nlohmann::json trials = nlohmann::json::array();
+  for (const CalibrationTrial& t : c.trials)
+    trials.push_back(
+        {{"seed", t.seed},
+         {"heap_ok", t.poured.ok},
+         {"reason", t.poured.ok ? "" : "too few cells on the flank"},
+         {"theta0_deg", t.poured.ok ? nlohmann::json(t.theta0_deg) : nlohmann::json()},
+         {"theta0_se_deg", t.poured.ok ? nlohmann::json(t.poured.se_deg) : nlohmann::json()},
+         {"failed", t.failed},
+         {"tilt_deg", t.tilt_deg},
+         {"theta_max_deg", t.failed ? nlohmann::json(t.theta_max_deg) : nlohmann::json()},
+         {"theta_stop_deg",
+          t.failed && t.stop.ok ? nlohmann::json(t.theta_stop_deg) : nlohmann::json()},
+         {"theta_stop_se_deg",
+          t.failed && t.stop.ok ? nlohmann::json(t.stop.se_deg) : nlohmann::json()},
+         {"measure_heap_deg",
+          t.heap.ok ? nlohmann::json(t.heap.repose_angle_deg) : nlohmann::json()},
+         {"grains_on_base", t.grains_on_base},
+         {"heap_height", t.heap.height},
+         {"seconds", t.seconds}});
+  return {{"key", c.key},
+          {"sandflow_version", SANDFLOW_VERSION},
+          {"theta0_deg", c.theta0_deg},
+          {"theta0_sd_deg", c.theta0_sd_deg},
+          {"theta_max_deg", c.theta_max_deg},
+          {"theta_max_sd_deg", c.theta_max_sd_deg},
+          {"theta_stop_deg", c.theta_stop_deg},
+          {"theta_stop_sd_deg", c.theta_stop_sd_deg},
+          {"seconds", c.seconds},
+          {"method",
+           fmt::format("fixed-base heap (radius {:.3g} d) poured in plain DEM, then gravity tilted "
+                       "at {:.3g} deg/s until {:.0f} % of the heap has slid off",
+                       c.rig.base_diameters, c.rig.tilt_rate, 100 * kFailureLoss)},
+          {"trials", trials}};
+}
+
+void store_calibration(const nlohmann::json& j) {
+  const fs::path dir = calibration_cache_dir();
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec)
+    throw OutputError(fmt::format("{}: cannot make the calibration cache folder: {}", dir.string(),
+                                  ec.message()));
+  write_file_atomic((dir / (j["key"].get<std::string>() + ".json")).string(), j.dump(2) + "\n");
+}
+
+nlohmann::json measure_calibration(const SceneConfig& scene, int trials, const RigSettings& rig) {
+  // on a terminal one line redrawn; in a log, a line per phase of each trial
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  std::string last;
+  const Calibration c = calibrate(
+      scene, trials,
+      [&](int trial, const char* phase, double t) {
+        const std::string now =
+            fmt::format("calibrating: trial {} of {}, {}", trial + 1, trials, phase);
+        if (tty)
+          fmt::print(stderr, "\r{} (t = {:.2f} s)\033[K", now, t);
+        else if (now != last)
+          fmt::print(stderr, "{}\n", now);
+        last = now;
+      },
+      rig);
+  if (tty) fmt::print(stderr, "\n");
+  nlohmann::json j = calibration_json(c);
+  store_calibration(j);
+  return j;
+}
+
+bool calibration_disabled() {
+  const char* v = std::getenv("SANDFLOW_NO_CALIBRATION");
+  return v && *v && std::string(v) != "0";
+}
+
+bool needs_calibration(const SceneConfig& scene) {
+  const SurfaceConfig& s = scene.surface;
+  return scene.simulation.mode == Mode::Surface && (!s.repose_angle_given || !s.max_angle);
+}
+
+nlohmann::json resolve_surface_angles(SceneConfig& scene) {
+  SurfaceConfig& s = scene.surface;
+  if (!needs_calibration(scene)) {
+    s.angles_source = "scene";
+  } else if (calibration_disabled()) {
+    s.angles_source = fmt::format(
+        "{} (SANDFLOW_NO_CALIBRATION is set)",
+        s.repose_angle_given ? "scene, and the built-in max_angle" : "built-in defaults");
+  } else {
+    const std::string key = calibration_key(scene);
+    std::optional<nlohmann::json> j = cached_calibration(key);
+    const bool cached = j.has_value();
+    if (!cached) {
+      fmt::print(stderr,
+                 "{}: surface.repose_angle or max_angle unset: measuring the material's angles "
+                 "(sandflow calibrate, once for this material: about a minute)\n",
+                 scene.path);
+      j = measure_calibration(scene, kDefaultCalibrationTrials);
+    }
+    const Real theta0 = deg_to_rad((*j)["theta0_deg"].get<double>());
+    const Real theta_max = deg_to_rad((*j)["theta_max_deg"].get<double>());
+    if (!s.repose_angle_given) s.repose_angle = theta0;
+    if (!s.max_angle) s.max_angle = std::max(theta_max, s.repose_angle);
+    if (*s.max_angle < s.repose_angle)
+      throw InputError(fmt::format(
+          "{}: surface.max_angle = {:.4g} is less than the material's calibrated repose angle "
+          "{:.4g} (degrees): set both, or neither",
+          scene.path, rad_to_deg(*s.max_angle), rad_to_deg(s.repose_angle)));
+    s.angles_source = fmt::format("{}calibration {} ({})", s.repose_angle_given ? "scene and " : "",
+                                  key, cached ? "cached" : "measured for this run");
+  }
+  // radians as the run holds them: a resumed run must get the same bits, not a round trip
+  const Real max_angle = s.max_angle.value_or(s.repose_angle + deg_to_rad(6.0));
+  return {{"repose_angle_deg", rad_to_deg(s.repose_angle)},
+          {"max_angle_deg", rad_to_deg(max_angle)},
+          {"repose_angle_rad", s.repose_angle},
+          {"max_angle_rad", max_angle},
+          {"source", s.angles_source}};
+}
+
+void apply_surface_angles(SceneConfig& scene, const nlohmann::json& angles) {
+  SurfaceConfig& s = scene.surface;
+  s.repose_angle = angles.at("repose_angle_rad").get<double>();
+  s.max_angle = angles.at("max_angle_rad").get<double>();
+  s.angles_source = angles.at("source").get<std::string>();
+}
+
+int calibrate_command(const RunOptions& o, int trials, bool again, const RigSettings& rig) {
+  const SceneConfig scene = load_for_run(o);
+  omp_set_num_threads(thread_count(scene));
+  const std::string key = calibration_key(scene, rig);
+  std::optional<nlohmann::json> j = again ? std::nullopt : cached_calibration(key);
+  const bool cached = j.has_value();
+  if (!j) j = measure_calibration(scene, trials, rig);
+  fmt::print("scene            {} ({})\n", scene.name, scene.path);
+  fmt::print("material key     {}\n", key);
+  for (const auto& t : (*j)["trials"]) {
+    if (!t["heap_ok"].get<bool>()) {
+      fmt::print("trial (seed {})   no heap: {}\n", t["seed"].get<std::uint64_t>(),
+                 t["reason"].get<std::string>());
+      continue;
+    }
+    const bool failed = t["failed"].get<bool>();
+    fmt::print("trial (seed {})   theta0 {:.2f} deg (fit +- {:.2f}), {}{}, {} grains, {:.0f} s\n",
+               t["seed"].get<std::uint64_t>(), t["theta0_deg"].get<double>(),
+               t["theta0_se_deg"].get<double>(),
+               failed ? fmt::format("failed at a tilt of {:.1f} deg: theta_max {:.2f} deg",
+                                    t["tilt_deg"].get<double>(), t["theta_max_deg"].get<double>())
+                      : fmt::format("still standing at a tilt of {:.0f} deg", kMaxTilt),
+               failed && t["theta_stop_deg"].is_number()
+                   ? fmt::format(", stopped at {:.2f} deg", t["theta_stop_deg"].get<double>())
+                   : "",
+               t["grains_on_base"].get<std::int64_t>(), t["seconds"].get<double>());
+  }
+  fmt::print(
+      "theta0           {:.2f} +- {:.2f} deg (the poured heap's flank; mean and standard "
+      "deviation of the trials)\n",
+      (*j)["theta0_deg"].get<double>(), (*j)["theta0_sd_deg"].get<double>());
+  fmt::print("theta_max        {:.2f} +- {:.2f} deg\n", (*j)["theta_max_deg"].get<double>(),
+             (*j)["theta_max_sd_deg"].get<double>());
+  fmt::print("theta_stop       {:.2f} +- {:.2f} deg (downhill after the avalanche; not used)\n",
+             (*j)["theta_stop_deg"].get<double>(), (*j)["theta_stop_sd_deg"].get<double>());
+  fmt::print("method           {}\n", (*j)["method"].get<std::string>());
+  fmt::print("{}        {}\n", cached ? "cached" : "stored",
+             (fs::path(calibration_cache_dir()) / (key + ".json")).string());
+  if (!cached) fmt::print("time             {:.0f} s\n", (*j)["seconds"].get<double>());
+  return 0;
+}
+
+}  // namespace sandflow

@@ -1,0 +1,142 @@
+// `sandflow calibrate` and the angles a surface run takes from it: measured once per material,
+// cached, recorded in run.json (so a resumed run uses the same) and in summary.json with their
+// source. The ctest environment sets SANDFLOW_NO_CALIBRATION; these tests unset it.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <regex>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_runner.hpp"
+
+namespace {
+
+using namespace sandflow_test;
+
+// 1 cm sand-like grains (the shipped scenes' friction) in a small block: a run of a few frames
+std::string sand_scene(const std::string& surface_keys = "") {
+  return tiny_block_scene(60) + R"(
+[simulation]
+mode = "surface"
+[stiffness]
+from_load = true
+impact_overlap = 0.25
+)" + (surface_keys.empty() ? "" : "[surface]\n" + surface_keys);
+}
+
+std::string calibrating(const Sandbox& box) {
+  return "env -u SANDFLOW_NO_CALIBRATION SANDFLOW_CACHE_DIR=" + (box.dir / "cache").string() +
+         " timeout 300";
+}
+
+TEST(Calibrate, MeasuresOnceThenReadsTheCache) {
+  Sandbox box;
+  const fs::path scene = box.write("t.toml", sand_scene());
+  std::string out;
+  // a small, fast rig: the default one takes a minute
+  const std::string cmd = "calibrate " + scene.string() + " --trials 1 --base 7 --tilt-rate 6";
+  ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(theta0 +([0-9.]+) \+- 0\.00 deg)"))) << out;
+  const std::string theta0 = m[1];
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(material key +([0-9a-f]{16}))"))) << out;
+  const fs::path cached = box.dir / "cache" / "calibration" / (std::string(m[1]) + ".json");
+  ASSERT_TRUE(fs::exists(cached)) << out;
+  EXPECT_NE(out.find("stored"), std::string::npos) << out;
+  const auto j = nlohmann::json::parse(read_text(cached));
+  EXPECT_NEAR(j["theta0_deg"].get<double>(), std::stod(theta0), 0.005);
+  EXPECT_GT(j["theta_max_deg"].get<double>(), j["theta0_deg"].get<double>());
+
+  // the second time costs nothing and says where the result came from
+  ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
+  EXPECT_NE(out.find("cached"), std::string::npos) << out;
+  EXPECT_NE(out.find("theta0           " + theta0), std::string::npos) << out;
+  // another material is another key
+  ASSERT_EQ(sandflow(cmd + " --set material.friction=0.3", &out, calibrating(box)), 0) << out;
+  EXPECT_NE(out.find("stored"), std::string::npos) << out;
+}
+
+TEST(Calibrate, ADamagedCacheFileIsMeasuredAgain) {
+  Sandbox box;
+  const fs::path scene = box.write("t.toml", sand_scene());
+  std::string out;
+  const std::string cmd = "calibrate " + scene.string() + " --trials 1 --base 7 --tilt-rate 6";
+  ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(material key +([0-9a-f]{16}))"))) << out;
+  std::ofstream(box.dir / "cache" / "calibration" / (std::string(m[1]) + ".json")) << "{\"key\":";
+  ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
+  EXPECT_NE(out.find("stored"), std::string::npos) << out;
+}
+
+// The key a surface run of `scene` looks up, as `run --check` prints it.
+std::string key_of(const Sandbox& box, const fs::path& scene) {
+  std::string out;
+  EXPECT_EQ(sandflow("run " + scene.string() + " --check", &out, calibrating(box)), 0) << out;
+  std::smatch m;
+  EXPECT_TRUE(std::regex_search(out, m, std::regex(R"(cached as ([0-9a-f]{16}))"))) << out;
+  return m.size() > 1 ? std::string(m[1]) : "";
+}
+
+TEST(Calibrate, ASurfaceRunTakesTheAnglesItsSceneLeavesUnsetFromTheCalibration) {
+  Sandbox box;
+  const fs::path scene = box.write("t.toml", sand_scene());
+  const std::string key = key_of(box, scene);
+  ASSERT_FALSE(key.empty());
+  // what a calibration of this material left in the cache (the values are the test's)
+  fs::create_directories(box.dir / "cache" / "calibration");
+  std::ofstream(box.dir / "cache" / "calibration" / (key + ".json"))
+      << nlohmann::json{{"key", key}, {"theta0_deg", 30.5}, {"theta_max_deg", 41.25}}.dump();
+  std::string out;
+  const fs::path run = box.dir / "run";
+  ASSERT_EQ(sandflow("run " + scene.string() + " --frames 3 --out " + run.string(), &out,
+                     calibrating(box)),
+            0)
+      << out;
+  const auto summary = nlohmann::json::parse(read_text(run / "summary.json"));
+  const auto& hf = summary["height_field"];
+  EXPECT_DOUBLE_EQ(hf["repose_angle_deg"].get<double>(), 30.5);
+  EXPECT_DOUBLE_EQ(hf["max_angle_deg"].get<double>(), 41.25);
+  EXPECT_EQ(hf["angles_source"].get<std::string>(), "calibration " + key + " (cached)");
+  // run.json keeps them: a resumed run uses these whatever the cache holds then
+  const auto record = nlohmann::json::parse(read_text(run / "run.json"));
+  EXPECT_DOUBLE_EQ(record["surface_angles"]["repose_angle_deg"].get<double>(), 30.5);
+
+  // an angle the scene sets wins over the calibration; the other one still comes from it
+  const fs::path set = box.write("set.toml", sand_scene("repose_angle = 28\n"));
+  ASSERT_EQ(sandflow("run " + set.string() + " --frames 2 --out " + (box.dir / "set").string(),
+                     &out, calibrating(box)),
+            0)
+      << out;
+  const auto s2 = nlohmann::json::parse(read_text(box.dir / "set" / "summary.json"));
+  EXPECT_DOUBLE_EQ(s2["height_field"]["repose_angle_deg"].get<double>(), 28.0);
+  EXPECT_DOUBLE_EQ(s2["height_field"]["max_angle_deg"].get<double>(), 41.25);
+  EXPECT_EQ(s2["height_field"]["angles_source"].get<std::string>(),
+            "scene and calibration " + key + " (cached)");
+}
+
+TEST(Calibrate, WithoutCalibrationTheBuiltInAnglesAreUsedAndSaidSo) {
+  Sandbox box;
+  const fs::path scene = box.write("t.toml", sand_scene());
+  std::string out;
+  ASSERT_EQ(sandflow("run " + scene.string() + " --frames 2 --out " + (box.dir / "r").string(),
+                     &out, "env SANDFLOW_NO_CALIBRATION=1"),
+            0)
+      << out;
+  const auto summary = nlohmann::json::parse(read_text(box.dir / "r" / "summary.json"));
+  EXPECT_DOUBLE_EQ(summary["height_field"]["repose_angle_deg"].get<double>(), 32.0);
+  EXPECT_NE(summary["height_field"]["angles_source"].get<std::string>().find("built-in"),
+            std::string::npos);
+  // both set: nothing to calibrate
+  const fs::path both = box.write("both.toml", sand_scene("repose_angle = 31\nmax_angle = 37\n"));
+  ASSERT_EQ(sandflow("run " + both.string() + " --frames 2 --out " + (box.dir / "b").string(), &out,
+                     calibrating(box)),
+            0)
+      << out;
+  const auto s2 = nlohmann::json::parse(read_text(box.dir / "b" / "summary.json"));
+  EXPECT_EQ(s2["height_field"]["angles_source"].get<std::string>(), "scene");
+  EXPECT_FALSE(fs::exists(box.dir / "cache"));
+}
+
+}  // namespace
