@@ -545,7 +545,7 @@ std::uint64_t scene_hash(const World& world, std::string_view start_record) {
     h.add(hf.nx());
     h.add(hf.ny());
     h.add(hf.cell());
-    for (Real t : hf.solids().top) h.add(t);
+    h.add(hf.initial_terrain_hash());  // (a solid removed since changes the tops, not the scene)
   }
   return h.value();
 }

@@ -183,6 +183,21 @@ void Geometry::add(std::unique_ptr<Solid> solid, Real friction, Real rolling_fri
   obstacles_.push_back({std::move(solid), friction, rolling_friction, source});
 }
 
+void RemovedSolid::bounds(Vec3& lo, Vec3& hi) const {
+  lo = {kInf, kInf, kInf};
+  hi = {-kInf, -kInf, -kInf};
+}
+
+int Geometry::remove_source(int source) {
+  int n = 0;
+  for (Obstacle& o : obstacles_)
+    if (o.source == source) {
+      o.solid = std::make_unique<RemovedSolid>();
+      ++n;
+    }
+  return n;
+}
+
 Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
                                const MaterialConfig& material, const std::string& scene_path) {
   Geometry g;

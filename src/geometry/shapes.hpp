@@ -3,6 +3,7 @@
 // A container (a box or a cylinder that holds grains) is made of solid wall slabs.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,6 +38,15 @@ class HalfSpace final : public Solid {
 
  private:
   Vec3 point_, normal_;
+};
+
+/// What a removed solid becomes (Geometry::remove_source): infinitely far from every point.
+class RemovedSolid final : public Solid {
+ public:
+  SurfacePoint closest(const Vec3&) const override {
+    return {std::numeric_limits<Real>::infinity(), {0, 0, 1}};
+  }
+  void bounds(Vec3& lo, Vec3& hi) const override;  ///< empty: lo = +inf, hi = -inf
 };
 
 /// An oriented solid box.
@@ -141,6 +151,10 @@ class Geometry {
                               const MaterialConfig& material, const std::string& scene_path = "");
 
   void add(std::unique_ptr<Solid> solid, Real friction, Real rolling_friction, int source);
+  /// Removes the solids of the [[geometry]] entry `source` (its remove_at has come): they stay in
+  /// the list, so obstacle indices keep their meaning, but reach nothing from then on. Returns
+  /// how many there were.
+  int remove_source(int source);
 
   const std::vector<Obstacle>& obstacles() const { return obstacles_; }
   std::size_t size() const { return obstacles_.size(); }

@@ -126,6 +126,7 @@ struct GeometryConfig {
   std::string name;                 ///< for messages and rendering
   RenderStyle render = RenderStyle::Solid;
   std::optional<Real> friction;     ///< overrides material.wall_friction
+  std::optional<Real> remove_at;    ///< the solid vanishes at this time [s] (a gate, a lifted tube)
   // plane
   Vec3 point{0, 0, 0};              ///< a point of the plane [m]
   Vec3 normal{0, 0, 1};             ///< unit normal, pointing to the free side

@@ -763,6 +763,11 @@ GeometryConfig read_geometry(TableReader r, std::size_t index, const std::string
   r.read("name", g.name);
   r.read("render", g.render, kRenderStyles);
   r.read("friction", g.friction, kNonNegative);
+  r.read("remove_at", g.remove_at, kNonNegative);
+  if (g.remove_at && g.type == GeometryType::Mesh)
+    r.fail_at(
+        "remove_at",
+        r.name("remove_at") + ": a mesh cannot be removed yet (its boundary particles would stay)");
 
   // Only the keys of this type are read; finish() refuses the others.
   const auto read_container = [&] {

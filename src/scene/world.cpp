@@ -219,6 +219,23 @@ World::World(const SceneConfig& scene)
     emitters_.emplace_back(scene.emitters[k], scene.material, scene.simulation.gravity,
                            fmt::format("{}: emitter[{}]", scene.path, k));
   scene_domain(scene_, geometry_, domain_lo_, domain_hi_);
+  // a solid removed at time t goes at the first step that starts at or after t
+  for (const GeometryConfig& g : scene_.geometry)
+    removal_step_.push_back(
+        g.remove_at ? static_cast<std::int64_t>(std::ceil(*g.remove_at / ts_.dt - 1e-9)) : -1);
+}
+
+void World::remove_due_geometry(std::int64_t before, bool announce) {
+  bool changed = false;
+  for (std::size_t k = 0; k < removal_step_.size(); ++k)
+    if (removal_step_[k] >= 0 && removal_step_[k] < before) {
+      geometry_.remove_source(static_cast<int>(k));
+      removal_step_[k] = -1;
+      changed = true;
+    }
+  if (!changed) return;
+  if (surface_) surface_->retrace_terrain(geometry_);
+  if (announce) dem_.invalidate();  // its wall lists name the removed solids
 }
 
 int World::planned_frames() const {
@@ -271,6 +288,7 @@ void World::emit() {
 }
 
 void World::step() {
+  remove_due_geometry(step_ + 1, true);
   check_grains();
   {
     ScopedStage s(profile_, Stage::Emit);
@@ -550,6 +568,9 @@ void World::restore_state(WorldState s) {
   static_.by_column.clear();
   // the column index is a counting sort of `column`: filed again exactly as the run had it
   if (surface_ && static_.size() > 0) static_.file_by_column(surface_->height_field().columns());
+  // the solids removed before the checkpoint (at its step, the next step() removes them, as the
+  // run did), before the DEM's lists and the height field are restored over them
+  remove_due_geometry(s.step, false);
   dem_.restore_state(std::move(s.dem), geometry_);
   if (surface_ && s.surface) surface_->restore_state(std::move(*s.surface));
   for (std::size_t k = 0; k < emitters_.size() && k < s.emitters.size(); ++k)

@@ -160,6 +160,10 @@ class World {
   void remove_leaving();
   /// Guard: an overlap above simulation.max_overlap_stop stops the run.
   void check_overlap(std::int64_t after_step);
+  /// Removes the geometry entries whose remove_at has come by step `before` (those due at a step
+  /// index < before): each at the first step that starts at or after its time. `announce`: the
+  /// pair lists are rebuilt at once (a restore finds them rebuilt by the checkpoint's state).
+  void remove_due_geometry(std::int64_t before, bool announce);
   /// "step S (frame F, t = T s)" for the messages of the guards.
   std::string where(std::int64_t step) const;
 
@@ -185,6 +189,8 @@ class World {
   Profile profile_;
   Vec3 domain_lo_, domain_hi_;
   std::vector<GrainId> leaving_;  ///< marked this step, removed before the DEM step
+  /// Per [[geometry]] entry, the step whose start removes it (-1: never, or done)
+  std::vector<std::int64_t> removal_step_;
   std::int64_t left_ = 0, left_frame_ = 0;
 };
 

@@ -8,6 +8,7 @@
 #include <omp.h>
 
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "dem/neighbor_list.hpp"  // kParallelMinGrains
 
 namespace sandflow {
@@ -35,6 +36,9 @@ HeightField::HeightField(const HeightFieldParams& p, TerrainColumns terrain)
     throw InputError("height field: the grid needs at least one column of positive width");
   if (solids_.columns() != columns())
     throw InputError("height field: the terrain must give one height per column");
+  Hasher tops;
+  for (Real t : solids_.top) tops.add(t);
+  initial_terrain_hash_ = tops.value();
   L_.resize(columns());
   for (std::size_t c = 0; c < columns(); ++c) {
     if (solids_.start[c + 1] == solids_.start[c])
@@ -46,6 +50,28 @@ HeightField::HeightField(const HeightFieldParams& p, TerrainColumns terrain)
   R_.assign(columns(), 0);
   theta_.assign(columns(), 0);
   Gamma_.assign(columns(), 0);
+}
+
+void HeightField::set_solids(TerrainColumns terrain) {
+  if (terrain.columns() != columns())
+    throw InputError("height field: the terrain must give one height per column");
+  for (std::size_t c = 0; c < columns(); ++c)
+    if (terrain.start[c + 1] == terrain.start[c])
+      throw InputError("height field: every column needs a solid below it");
+  solids_ = std::move(terrain);
+  for (std::size_t c = 0; c < columns(); ++c) {
+    const std::uint32_t k0 = solids_.start[c], k1 = solids_.start[c + 1];
+    bool kept = false;
+    Real below = -std::numeric_limits<Real>::infinity();
+    for (std::uint32_t k = k0; k < k1; ++k) {
+      kept = kept || solids_.top[k] == L_[c];
+      if (solids_.top[k] <= L_[c]) below = std::max(below, solids_.top[k]);
+    }
+    if (kept) continue;
+    L_[c] = std::isfinite(below) ? below : solids_.top[k1 - 1];
+    H_[c] = h_[c] = L_[c];
+    R_[c] = 0;
+  }
 }
 
 std::int64_t HeightField::column_of(Real x, Real y) const {

@@ -85,6 +85,11 @@ class HeightField {
     h_[c] = std::max(std::min(h_[c], z), L_[c]);
     R_[c] = H_[c] - h_[c];
   }
+  /// The geometry changed (a solid was removed): new solid intervals per column. A column whose
+  /// level is no longer a top drops to the highest top below it (or the highest there is), with
+  /// H = h = L there until the next measure: the static grains it held then wake, as where h
+  /// falls.
+  void set_solids(TerrainColumns terrain);
   /// For tests: set H directly (then call exchange).
   void set_surface(std::vector<Real> H);
   /// For tests and restarts: set h directly (clamped to [L, H]).
@@ -106,6 +111,9 @@ class HeightField {
   /// L: the top of each column's level (changes with the level; see above).
   const std::vector<Real>& terrain() const { return L_; }
   const TerrainColumns& solids() const { return solids_; }
+  /// Hash of the solids' tops as the field was made (set_solids does not change it): what a
+  /// restart checks the scene against.
+  std::uint64_t initial_terrain_hash() const { return initial_terrain_hash_; }
   const std::vector<Real>& surface() const { return H_; }       ///< H
   const std::vector<Real>& static_top() const { return h_; }    ///< h
   const std::vector<Real>& rolling() const { return R_; }       ///< R = H - h
@@ -122,6 +130,7 @@ class HeightField {
 
   HeightFieldParams p_;
   TerrainColumns solids_;
+  std::uint64_t initial_terrain_hash_ = 0;
   std::vector<Real> L_, H_, h_, R_, theta_, Gamma_;
   // scratch of measure(): ray hits filed by column
   std::vector<std::uint32_t> hit_start_;

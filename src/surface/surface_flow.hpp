@@ -27,6 +27,9 @@ class SurfaceFlow {
 
   /// One update over `dt` of simulated time, in the paper's order: measure H, evolve h through
   /// the exchange, then pass grains between the layers.
+  /// The geometry changed (a solid was removed): traces the columns' terrain again.
+  void retrace_terrain(const Geometry& geometry) { hf_.set_solids(terrain_columns(p_, geometry)); }
+
   TransitionCounts update(Grains& hot, StaticStore& st, DemSolver& dem, const Geometry& geometry,
                           Real dt);
 

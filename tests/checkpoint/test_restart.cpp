@@ -189,5 +189,20 @@ TEST(Restart, TwoThreadsBeforeAndOneAfterGiveTheSameStateInSurfaceMode) {
   EXPECT_GT(w.grains().size(), kParallelMinGrains);
 }
 
+TEST(Restart, ARunWhoseContainerIsRemovedResumesBitForBitBeforeAndAfterTheRemoval) {
+  // the container goes at frame 8 (of 60 a second); checkpoints at frame 6 (before: the resumed
+  // run removes it as the straight one did) and at frame 10 (after: it must be gone at once, and
+  // the height field's terrain traced again, before the saved state is put back)
+  for (Mode mode : {Mode::Surface, Mode::Dem}) {
+    SCOPED_TRACE(mode == Mode::Dem ? "dem" : "surface");
+    SceneConfig scene = restart_scene(mode);
+    scene.geometry.push_back(test::floor_plane());
+    scene.geometry[0].remove_at = 8.0 / 60;
+    check_restart(scene, 14, 6, 1, 1);
+    check_restart(scene, 14, 10, 1, 1);
+    check_restart(scene, 9, 8, 1, 1);  // at the removal's own frame boundary
+  }
+}
+
 }  // namespace
 }  // namespace sandflow

@@ -225,5 +225,22 @@ TEST(GeometryKeys, HeightmapFileErrors) {
   EXPECT_NE(msg.find("is 5 x 1 pixels: a heightmap needs at least 2 x 2"), std::string::npos) << msg;
 }
 
+TEST(GeometryKeys, RemoveAtIsReadForSolidsAndRefusedForMeshes) {
+  const SceneConfig c = load_scene_from_string(
+      std::string(kEmitter) +
+          "[[geometry]]\ntype = \"cylinder\"\ncontainer = true\nremove_at = 1.5\n",
+      "t.toml");
+  ASSERT_TRUE(c.geometry.at(0).remove_at.has_value());
+  EXPECT_EQ(*c.geometry[0].remove_at, 1.5);
+  const SceneConfig none =
+      load_scene_from_string(std::string(kEmitter) + "[[geometry]]\ntype = \"plane\"\n", "t.toml");
+  EXPECT_FALSE(none.geometry.at(0).remove_at.has_value());
+  expect_error(std::string(kEmitter) + "[[geometry]]\ntype = \"box\"\nremove_at = -1\n",
+               {"t.toml:5:1: geometry[0].remove_at = -1"});
+  expect_error(
+      std::string(kEmitter) + "[[geometry]]\ntype = \"mesh\"\nfile = \"m.obj\"\nremove_at = 1\n",
+      {"t.toml:", "geometry[0].remove_at", "a mesh cannot be removed"});
+}
+
 }  // namespace
 }  // namespace sandflow
