@@ -42,6 +42,8 @@ std::optional<nlohmann::json> cached_calibration(const std::string& key) {
       !j.contains("theta0_deg") || !j["theta0_deg"].is_number() || !j.contains("theta_max_deg") ||
       !j["theta_max_deg"].is_number())
     return std::nullopt;
+  const double theta0 = j["theta0_deg"].get<double>(), theta_max = j["theta_max_deg"].get<double>();
+  if (!(theta0 > 0 && theta0 < 90 && theta_max >= theta0 && theta_max < 90)) return std::nullopt;
   return j;
 }
 
@@ -171,45 +173,70 @@ void apply_surface_angles(SceneConfig& scene, const nlohmann::json& angles) {
   s.angles_source = angles.at("source").get<std::string>();
 }
 
+namespace {
+
+// What `calibrate` prints of a calibration record; nlohmann::json::exception when the record
+// lacks a field (a cache file written by hand, or by another version).
+std::string describe(const nlohmann::json& j) {
+  std::string out;
+  for (const auto& t : j.at("trials")) {
+    if (!t.at("heap_ok").get<bool>()) {
+      out += fmt::format("trial (seed {})   no heap: {}\n", t.at("seed").get<std::uint64_t>(),
+                         t.at("reason").get<std::string>());
+      continue;
+    }
+    const bool failed = t.at("failed").get<bool>();
+    out += fmt::format(
+        "trial (seed {})   theta0 {:.2f} deg (fit +- {:.2f}), {}{}, {} grains, {:.0f} s\n",
+        t.at("seed").get<std::uint64_t>(), t.at("theta0_deg").get<double>(),
+        t.at("theta0_se_deg").get<double>(),
+        failed ? fmt::format("failed at a tilt of {:.1f} deg: theta_max {:.2f} deg",
+                             t.at("tilt_deg").get<double>(), t.at("theta_max_deg").get<double>())
+               : fmt::format("still standing at a tilt of {:.0f} deg", kMaxTilt),
+        failed && t.at("theta_stop_deg").is_number()
+            ? fmt::format(", stopped at {:.2f} deg", t.at("theta_stop_deg").get<double>())
+            : "",
+        t.at("grains_on_base").get<std::int64_t>(), t.at("seconds").get<double>());
+  }
+  out += fmt::format(
+      "theta0           {:.2f} +- {:.2f} deg (the poured heap's flank; mean and standard "
+      "deviation of the trials)\n",
+      j.at("theta0_deg").get<double>(), j.at("theta0_sd_deg").get<double>());
+  out += fmt::format("theta_max        {:.2f} +- {:.2f} deg\n", j.at("theta_max_deg").get<double>(),
+                     j.at("theta_max_sd_deg").get<double>());
+  out += fmt::format(
+      "theta_stop       {:.2f} +- {:.2f} deg (downhill after the avalanche; not used)\n",
+      j.at("theta_stop_deg").get<double>(), j.at("theta_stop_sd_deg").get<double>());
+  out += fmt::format("method           {}\n", j.at("method").get<std::string>());
+  return out;
+}
+
+}  // namespace
+
 int calibrate_command(const RunOptions& o, int trials, bool again, const RigSettings& rig) {
   const SceneConfig scene = load_for_run(o);
   omp_set_num_threads(thread_count(scene));
   const std::string key = calibration_key(scene, rig);
   std::optional<nlohmann::json> j = again ? std::nullopt : cached_calibration(key);
+  std::string text;
+  if (j) {
+    try {
+      text = describe(*j);
+    } catch (const nlohmann::json::exception&) {
+      j.reset();  // an incomplete record: measured again
+    }
+  }
   const bool cached = j.has_value();
-  if (!j) j = measure_calibration(scene, trials, rig);
+  if (!j) {
+    j = measure_calibration(scene, trials, rig);
+    text = describe(*j);
+  }
   fmt::print("scene            {} ({})\n", scene.name, scene.path);
   fmt::print("material key     {}\n", key);
-  for (const auto& t : (*j)["trials"]) {
-    if (!t["heap_ok"].get<bool>()) {
-      fmt::print("trial (seed {})   no heap: {}\n", t["seed"].get<std::uint64_t>(),
-                 t["reason"].get<std::string>());
-      continue;
-    }
-    const bool failed = t["failed"].get<bool>();
-    fmt::print("trial (seed {})   theta0 {:.2f} deg (fit +- {:.2f}), {}{}, {} grains, {:.0f} s\n",
-               t["seed"].get<std::uint64_t>(), t["theta0_deg"].get<double>(),
-               t["theta0_se_deg"].get<double>(),
-               failed ? fmt::format("failed at a tilt of {:.1f} deg: theta_max {:.2f} deg",
-                                    t["tilt_deg"].get<double>(), t["theta_max_deg"].get<double>())
-                      : fmt::format("still standing at a tilt of {:.0f} deg", kMaxTilt),
-               failed && t["theta_stop_deg"].is_number()
-                   ? fmt::format(", stopped at {:.2f} deg", t["theta_stop_deg"].get<double>())
-                   : "",
-               t["grains_on_base"].get<std::int64_t>(), t["seconds"].get<double>());
-  }
-  fmt::print(
-      "theta0           {:.2f} +- {:.2f} deg (the poured heap's flank; mean and standard "
-      "deviation of the trials)\n",
-      (*j)["theta0_deg"].get<double>(), (*j)["theta0_sd_deg"].get<double>());
-  fmt::print("theta_max        {:.2f} +- {:.2f} deg\n", (*j)["theta_max_deg"].get<double>(),
-             (*j)["theta_max_sd_deg"].get<double>());
-  fmt::print("theta_stop       {:.2f} +- {:.2f} deg (downhill after the avalanche; not used)\n",
-             (*j)["theta_stop_deg"].get<double>(), (*j)["theta_stop_sd_deg"].get<double>());
-  fmt::print("method           {}\n", (*j)["method"].get<std::string>());
+  fmt::print("{}", text);
   fmt::print("{}        {}\n", cached ? "cached" : "stored",
              (fs::path(calibration_cache_dir()) / (key + ".json")).string());
-  if (!cached) fmt::print("time             {:.0f} s\n", (*j)["seconds"].get<double>());
+  if (!cached) fmt::print("time             {:.0f} s\n", j->at("seconds").get<double>());
   return 0;
 }
 

@@ -65,9 +65,19 @@ TEST(Calibrate, ADamagedCacheFileIsMeasuredAgain) {
   ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
   std::smatch m;
   ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(material key +([0-9a-f]{16}))"))) << out;
-  std::ofstream(box.dir / "cache" / "calibration" / (std::string(m[1]) + ".json")) << "{\"key\":";
-  ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
-  EXPECT_NE(out.find("stored"), std::string::npos) << out;
+  const std::string key = m[1];
+  const fs::path file = box.dir / "cache" / "calibration" / (key + ".json");
+  // cut short, then whole but without the trials, then with an angle no heap stands at: each is
+  // measured again, none is printed or used
+  for (const std::string& damaged :
+       {std::string("{\"key\":"),
+        nlohmann::json{{"key", key}, {"theta0_deg", 30.0}, {"theta_max_deg", 40.0}}.dump(),
+        nlohmann::json{{"key", key}, {"theta0_deg", 95.0}, {"theta_max_deg", 99.0}}.dump()}) {
+    std::ofstream(file) << damaged;
+    ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
+    EXPECT_NE(out.find("stored"), std::string::npos) << damaged << "\n" << out;
+    EXPECT_EQ(out.find("cached"), std::string::npos) << damaged << "\n" << out;
+  }
 }
 
 // The key a surface run of `scene` looks up, as `run --check` prints it.
