@@ -223,6 +223,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
         r_sum += hf.rolling()[c];
         r_max = std::max(r_max, hf.rolling()[c]);
       }
+    const SeatParams& seat = sf->params().interface.seat;
     summary["height_field"] = {
         {"cells", hf.columns()},
         {"nx", hf.nx()},
@@ -240,8 +241,12 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
         {"exchange_rate", hf.params().gamma},
         {"rolling_min", hf.params().rolling_min},
         {"interface_thickness", sf->params().interface.thickness},
-        {"trap_speed", sf->params().interface.trap_speed},
-        {"flow_speed", sf->params().flow_speed},
+        // as speeds of a grain of the mean size without rotation (seat.hpp)
+        {"trap_speed", std::sqrt(2 * seat.hold_energy(scene.material.diameter / 2))},
+        {"flow_speed", std::sqrt(2 * seat.move_energy(scene.material.diameter / 2))},
+        {"thresholds_source", seat.trap_speed >= 0 || seat.flow_speed >= 0
+                                  ? "scene (surface.trap_speed, flow_speed)"
+                                  : "the seat: a grain held in the hollow of three"},
     };
     summary["transitions"] = {{"trapped", transitions.trapped},
                               {"dislodged", transitions.dislodged},

@@ -653,7 +653,7 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
       const std::uint8_t t = d.pairs.touch[q];
       if (d.pairs.j[q] <= i || d.pairs.j[q] >= n ||
           (q > d.pairs.start[i] && d.pairs.j[q] <= d.pairs.j[q - 1]) ||
-          (t != 0 && t != kTouching && t != (kTouching | kPreloaded)))
+          (t != 0 && (!(t & kTouching) || (t & ~(kTouching | kPreloaded | kSlipping)))))
         fail(fmt::format("the pair list's row {} is malformed", i));
       // a rest overlap is a part of the grains' overlap, below both radii
       const Real d0 = d.pairs.delta0[q];

@@ -80,6 +80,7 @@ struct ContactForce {
   Vec3 q;          ///< n x F_t: the tangential torque on a body is -arm * q [N]
   Vec3 t_roll;     ///< rolling torque on i (on j: the opposite) [N m]
   Real f_n;        ///< normal force magnitude (>= 0) [N]
+  bool sliding;    ///< the tangential force is at the Coulomb limit mu F_n: the contact slips
 
   Vec3 torque_i(const ContactGeometry& g) const { return q * (-g.arm_i) + t_roll; }
   Vec3 torque_j(const ContactGeometry& g) const { return q * (-g.arm_j) - t_roll; }
@@ -98,13 +99,16 @@ inline Vec3 rotate_into_plane(const Vec3& a, const Vec3& n) {
   return p * (u < 1e-6 ? 1 + 0.5 * u : std::sqrt(1 + u));
 }
 
-/// Spring-dashpot on a history vector s with a Coulomb-type cap: returns the force and updates s.
-/// On slip the history is rescaled so that the spring alone would give the capped force.
-inline Vec3 capped_spring(Vec3& s, const Vec3& rate, Real k, Real c, Real cap, Real dt) {
+/// Spring-dashpot on a history vector s with a Coulomb-type cap: returns the force and updates s,
+/// and sets `capped` when the cap acted. On slip the history is rescaled so that the spring alone
+/// would give the capped force.
+inline Vec3 capped_spring(Vec3& s, const Vec3& rate, Real k, Real c, Real cap, Real dt,
+                          bool& capped) {
   s += rate * dt;
   Vec3 f = s * (-k) - rate * c;
   const Real f2 = norm2(f);
-  if (f2 > cap * cap) {
+  capped = f2 > cap * cap;
+  if (capped) {
     f *= (f2 > 0 ? cap / std::sqrt(f2) : 0.0);
     s = (f + rate * c) * (-1.0 / k);
   }
@@ -131,9 +135,8 @@ inline ContactForce contact_force(const ContactParams& p, const ContactGeometry&
   // tangential: history spring with Coulomb cap
   const Real c_t = p.c_t_ratio * g.c_n;
   h.xi = rotate_into_plane(h.xi, n);
-  const Vec3 f_t = capped_spring(h.xi, v_t, p.k_t, c_t, p.mu * f_n, dt);
-
   ContactForce out;
+  const Vec3 f_t = capped_spring(h.xi, v_t, p.k_t, c_t, p.mu * f_n, dt, out.sliding);
   out.f_n = f_n;
   out.force_i = n * f_n + f_t;
   out.q = cross(n, f_t);
@@ -142,7 +145,8 @@ inline ContactForce contact_force(const ContactParams& p, const ContactGeometry&
     const Vec3 v_r = cross(w_i - w_j, n) * g.r_eff;
     h.psi = rotate_into_plane(h.psi, n);
     const Real c_r = p.c_r_ratio * c_t;
-    const Vec3 f_r = capped_spring(h.psi, v_r, p.k_r, c_r, p.mu_r * f_n, dt);
+    bool rolls;  // (a rolling contact at its cap rolls; it does not slip)
+    const Vec3 f_r = capped_spring(h.psi, v_r, p.k_r, c_r, p.mu_r * f_n, dt, rolls);
     out.t_roll = cross(n, f_r) * g.r_eff;
   }
   return out;

@@ -122,11 +122,13 @@ void DemSolver::contacts_of(const Grains& grains, const Geometry& geometry,
                             std::vector<std::uint8_t>& out) const {
   out.assign(grains.size(), 0);
   const std::size_t n = std::min(grains.size(), pairs_.start.empty() ? 0 : pairs_.start.size() - 1);
-  // each thread flags into its own copy, then the copies are joined: an or, so the result does
-  // not depend on the thread count
+  std::vector<std::uint8_t> touching(out.size(), 0);  // grain contacts, up to kSeatContacts
+  // each thread flags and counts into its own copies, then the copies are joined: an or and a
+  // sum, so the result does not depend on the thread count
 #pragma omp parallel if (n >= kParallelMinGrains)
   {
-    std::vector<std::uint8_t> mine(out.size(), 0);
+    std::vector<std::uint8_t> mine(out.size(), 0), count(out.size(), 0);
+    auto add = [&](std::size_t k) { count[k] += count[k] < kSeatContacts; };
 #pragma omp for schedule(static) nowait
     for (std::size_t i = 0; i < n; ++i) {
       for (std::uint32_t s = pairs_.start[i]; s < pairs_.start[i + 1]; ++s) {
@@ -136,23 +138,37 @@ void DemSolver::contacts_of(const Grains& grains, const Geometry& geometry,
         if (grains.state[j] == GrainState::Active) mine[i] |= kNearActive;
         if (grains.state[i] == GrainState::Active) mine[j] |= kNearActive;
         if (!pairs_.touch[s]) continue;
-        mine[i] |= kTouches | (grains.state[j] == GrainState::Active ? kTouchesActive : 0);
-        mine[j] |= kTouches | (grains.state[i] == GrainState::Active ? kTouchesActive : 0);
+        const std::uint8_t slips = pairs_.touch[s] & kSlipping ? kSlips : 0;
+        mine[i] |= kTouches | slips | (grains.state[j] == GrainState::Active ? kTouchesActive : 0);
+        mine[j] |= kTouches | slips | (grains.state[i] == GrainState::Active ? kTouchesActive : 0);
+        add(i);
+        add(j);
       }
-      // (a grain touching another needs no look at the walls)
-      if (mine[i] & kTouches || walls_.start.size() <= i + 1) continue;
-      for (std::uint32_t s = walls_.start[i]; s < walls_.start[i + 1]; ++s)
-        if (geometry.obstacles()[walls_.obstacle[s]].solid->closest(grains.x[i]).distance <
-            grains.r[i])
-          mine[i] |= kTouches;
-      if (mine[i] & kTouches || bounds_.start.size() <= i + 1) continue;
-      const Real reach = grains.r[i] + boundary_.radius;
-      for (std::uint32_t s = bounds_.start[i]; s < bounds_.start[i + 1]; ++s)
-        if (norm2(grains.x[i] - boundary_.x[bounds_.obstacle[s]]) < reach * reach)
-          mine[i] |= kTouches;
     }
 #pragma omp critical
-    for (std::size_t i = 0; i < out.size(); ++i) out[i] |= mine[i];
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      out[i] |= mine[i];
+      touching[i] = static_cast<std::uint8_t>(std::min<int>(touching[i] + count[i], kSeatContacts));
+    }
+#pragma omp barrier
+    // the geometry: a grain touching it is seated (a plane, a wall's face, a mesh's particles)
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      if (touching[i] >= kSeatContacts) {
+        out[i] |= kSeated;
+        continue;
+      }
+      bool wall = false;
+      for (std::uint32_t s = walls_.start.size() > i + 1 ? walls_.start[i] : 0;
+           !wall && walls_.start.size() > i + 1 && s < walls_.start[i + 1]; ++s)
+        wall = geometry.obstacles()[walls_.obstacle[s]].solid->closest(grains.x[i]).distance <
+               grains.r[i];
+      const Real reach = grains.r[i] + boundary_.radius;
+      for (std::uint32_t s = bounds_.start.size() > i + 1 ? bounds_.start[i] : 0;
+           !wall && bounds_.start.size() > i + 1 && s < bounds_.start[i + 1]; ++s)
+        wall = norm2(grains.x[i] - boundary_.x[bounds_.obstacle[s]]) < reach * reach;
+      if (wall) out[i] |= kTouches | kSeated;
+    }
   }
 }
 
@@ -529,7 +545,7 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
         ev.push_back({s, 0.0, relax_preload(cp.k_n, decay, pl.delta0[s], g.delta)});
       ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
       cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, dt);
-      pl.touch[s] |= kTouching;
+      pl.touch[s] = (pl.touch[s] & kPreloaded) | kTouching | (cf.sliding ? kSlipping : 0);
       pl.xi[s] = h.xi;
       if constexpr (kRolling) pl.psi[s] = h.psi;
       ++contacts;

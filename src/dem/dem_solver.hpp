@@ -112,10 +112,14 @@ class DemSolver {
     need_rebuild_ = true;
   }
 
-  /// Per grain, what it touched at the last step: kTouches (a grain or the geometry) and
-  /// kTouchesActive (an ACTIVE grain), kNearActive (an ACTIVE grain within the Verlet skin).
+  /// Per grain, what it touched at the last step: kTouches (a grain or the geometry),
+  /// kTouchesActive (an ACTIVE grain), kNearActive (an ACTIVE grain within the Verlet skin),
+  /// kSeated (at least kSeatContacts grains, or the geometry: what holds a sphere at rest under
+  /// gravity), kSlips (one of its grain contacts slipped: its tangential force at mu F_n).
   /// Grains added since the last rebuild get 0.
-  static constexpr std::uint8_t kTouches = 1, kTouchesActive = 2, kNearActive = 4;
+  static constexpr std::uint8_t kTouches = 1, kTouchesActive = 2, kNearActive = 4, kSeated = 8,
+                                kSlips = 16;
+  static constexpr int kSeatContacts = 3;
   void contacts_of(const Grains& grains, const Geometry& geometry,
                    std::vector<std::uint8_t>& out) const;
 

@@ -20,14 +20,15 @@
 
 namespace sandflow {
 
-/// PairList::touch flags: the pair touches (at the last step); its normal spring rests at delta0.
-constexpr std::uint8_t kTouching = 1, kPreloaded = 2;
+/// PairList::touch flags: the pair touches (at the last step); its normal spring rests at delta0;
+/// it slipped at the last step (its tangential force at the Coulomb limit).
+constexpr std::uint8_t kTouching = 1, kPreloaded = 2, kSlipping = 4;
 
 /// Verlet half list in compressed rows, with per-pair history and per-step results.
 struct PairList {
   std::vector<std::uint32_t> start;      ///< n+1 offsets: slots of grain i are [start[i], start[i+1])
   std::vector<std::uint32_t> j;          ///< the other grain of each slot (j > i)
-  std::vector<std::uint8_t> touch;       ///< 0, kTouching, or kTouching | kPreloaded
+  std::vector<std::uint8_t> touch;       ///< 0, or kTouching with kPreloaded, kSlipping
   /// Overlap at which the normal spring rests, for a preloaded contact (one that a change of
   /// state opened between two grains already inside each other); it follows the grains apart [m]
   std::vector<Real> delta0;

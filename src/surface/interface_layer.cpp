@@ -73,7 +73,6 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
   TransitionCounts n;
   const Real T = p_.thickness;
   const Real m = p_.margin;
-  const Real v2_trap = p_.trap_speed * p_.trap_speed;
 
   // 1. the hot grains: trap, dislodge, sleep
   std::vector<std::uint32_t> keep;
@@ -100,8 +99,8 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
     }
     const Real h = hf.static_top_at(x.x, x.y);
     if (hot.state[i] == GrainState::Active) {
-      // only a grain resting on something: a slow grain at the top of a bounce stays free
-      if (x.z < h && norm2(hot.v[i]) < v2_trap && (contacts[i] & DemSolver::kTouches)) {
+      // (a slow grain at the top of a bounce, or one sliding over the bed, stays free)
+      if (x.z < h && held(p_.seat, hot, i, contacts[i])) {
         // frozen where it is; its contacts with other frozen grains go inert at the next step,
         // while those with active grains keep their springs, so that the grains resting on it do
         // not lose their friction

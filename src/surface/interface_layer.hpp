@@ -1,9 +1,10 @@
 // The particle interface (DESIGN.md §5): the band of frozen grains, of constant thickness T just
 // below the static top h, through which matter passes between the grains and the height field.
 // After each height-field update every grain is classified against h at its own (x, y), with the
-// band measured normal to the local slope (T / cos theta in the vertical):
+// band measured normal to the local slope (T / cos theta in the vertical); "held" is seat.hpp's
+// rule (seated, no contact slipping, too slow to leave its seat):
 //
-//   ACTIVE    centre below h and slow   -> INTERFACE (trapped: v = w = 0; its contacts with
+//   ACTIVE    centre below h and held   -> INTERFACE (trapped: v = w = 0; its contacts with
 //                                                     other frozen grains go inert)
 //   INTERFACE centre above h            -> ACTIVE    (dislodged, from rest)
 //   INTERFACE centre below h - T        -> STATIC    (sleeps: leaves the DEM, filed by column)
@@ -30,6 +31,7 @@
 #include "dem/dem_solver.hpp"
 #include "dem/grains.hpp"
 #include "surface/height_field.hpp"
+#include "surface/seat.hpp"
 #include "surface/static_reach.hpp"
 
 namespace sandflow {
@@ -52,7 +54,7 @@ struct TransitionCounts {
 
 struct InterfaceParams {
   Real thickness = 0.015;   ///< T [m]
-  Real trap_speed = 0.1;    ///< a grain at least this fast is never trapped [m/s]
+  SeatParams seat;          ///< which grains are held
   Real margin = 0.0025;     ///< hysteresis of the band's edges [m]
   Real density = 2600;      ///< to restore the mass of a woken grain [kg/m^3]
 };

@@ -23,15 +23,14 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
   for (std::size_t i = 0; i < hot.size(); ++i)
     counts_[i] = hot.state[i] != GrainState::Active || (contacts_[i] & DemSolver::kTouches);
   hf_.measure(hot, interface_.static_tops(hf_, st), counts_);
-  // The columns where grains move: a grain in contact with the pile faster than flow_speed. There
-  // the rolling layer flows (BCRE with theta0); elsewhere it is at rest and deposits up to
-  // theta_max.
-  const Real v2_fast = p_.flow_speed * p_.flow_speed;
+  // The columns where grains move: a grain in contact with the pile with the energy to leave a
+  // seat (seat.hpp). There the rolling layer flows (BCRE with theta0); elsewhere it is at rest
+  // and deposits up to theta_max.
   flowing_.assign(hf_.columns(), 0);
   fast_.clear();
   for (std::size_t i = 0; i < hot.size(); ++i) {
-    if (hot.state[i] != GrainState::Active || !(contacts_[i] & DemSolver::kTouches) ||
-        norm2(hot.v[i]) < v2_fast || below_level(hot.x[i]))
+    if (hot.state[i] != GrainState::Active ||
+        !moves_pile(p_.interface.seat, hot, i, contacts_[i]) || below_level(hot.x[i]))
       continue;
     fast_.push_back(static_cast<std::uint32_t>(i));
     hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) { flowing_[c] = 1; });

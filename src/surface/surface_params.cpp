@@ -52,17 +52,20 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   hf.avalanche_depth = d;
   hf.gap = d;  // a quarter of d cut H at gaps left below grains held up from the side
   p.interface.thickness = interface_thickness(scene);
-  p.interface.trap_speed = sc.trap_speed.value_or(0.3 * std::sqrt(g * d));
-  // 0.6 sqrt(g d), measured (docs/physics.md, "Which grains move the bed"): a lower threshold
-  // makes the small heaps more like plain DEM's and simulates more grains in the large ones
-  p.flow_speed = sc.flow_speed.value_or(0.6 * std::sqrt(g * d));
-  if (p.flow_speed < p.interface.trap_speed)
+  SeatParams& seat = p.interface.seat;
+  seat.gravity = g;
+  seat.trap_speed = sc.trap_speed.value_or(-1.0);
+  seat.flow_speed = sc.flow_speed.value_or(-1.0);
+  // (the seat's bound as a speed, for a grain of the mean size at rest in its seat)
+  const Real seat_speed = std::sqrt(2 * g * kSeatRise * d / 2);
+  if (sc.trap_speed.value_or(seat_speed) > sc.flow_speed.value_or(seat_speed))
     throw InputError(fmt::format(
         "{}: surface.flow_speed = {:.4g} m/s is less than surface.trap_speed = {:.4g} m/s{}: a "
-        "grain would dig the static layer while slow enough to be trapped in it; set flow_speed "
+        "grain would move the static layer while slow enough to be trapped in it; set flow_speed "
         ">= trap_speed",
-        scene.path, p.flow_speed, p.interface.trap_speed,
-        sc.flow_speed ? "" : " (flow_speed unset: its default 0.6 sqrt(|g| d))"));
+        scene.path, sc.flow_speed.value_or(seat_speed), sc.trap_speed.value_or(seat_speed),
+        sc.flow_speed ? (sc.trap_speed ? "" : " (trap_speed unset: the seat's bound)")
+                      : " (flow_speed unset: the seat's bound)"));
   p.interface.density = scene.material.density;
   p.interface.margin = 0.25 * d;
   // a tenth of the time a grain takes to fall its diameter: the surface moves less than that

@@ -22,9 +22,6 @@ constexpr Real kHeapPacking = 0.6;
 struct SurfaceParams {
   HeightFieldParams grid;
   InterfaceParams interface;
-  /// A grain touching the pile at least this fast moves the rolling layer: its columns flow
-  /// (theta0, not theta_max) and the static top stays below it (the impact rule) [m/s].
-  Real flow_speed = 0.3;
   int update_steps = 1;      ///< DEM steps between height-field updates
   Real update_interval = 0;  ///< update_steps * dt [s]
   Real z_top = 1, z_floor = -1;  ///< vertical span searched for the terrain [m]

@@ -33,7 +33,7 @@ struct Fixture {
   static InterfaceParams interface_params() {
     InterfaceParams p;
     p.thickness = 0.015;
-    p.trap_speed = 0.1;
+    p.seat.trap_speed = 0.1;
     p.margin = 0.0025;
     return p;
   }
@@ -42,7 +42,7 @@ struct Fixture {
     hf.set_static_top(std::vector<Real>(100, h_level));
   }
   TransitionCounts transfer() {
-    std::vector<std::uint8_t> contacts(hot.size(), DemSolver::kTouches);
+    std::vector<std::uint8_t> contacts(hot.size(), DemSolver::kTouches | DemSolver::kSeated);
     return layer.transfer(hf, hot, st, dem, contacts);
   }
   GrainState state_of(GrainId id) const {
@@ -109,7 +109,7 @@ TEST(Interface, WithoutListChangesOnlyTrappingHappensAndTheRestWaits) {
   f.hot.state[1] = GrainState::Interface;
   f.hot.add(3, {0.07, 0.07, 0.025}, {0.01, 0, 0}, kR, 2600);  // slow, below the new h
   f.set_h(0.03);  // 0 is now above h + m, 1 below h - T - m, and 2 within T of h
-  std::vector<std::uint8_t> contacts(f.hot.size(), DemSolver::kTouches);
+  std::vector<std::uint8_t> contacts(f.hot.size(), DemSolver::kTouches | DemSolver::kSeated);
   TransitionCounts n = f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts, false);
   EXPECT_EQ(n.trapped, 1);
   EXPECT_EQ(f.state_of(3), GrainState::Interface);
@@ -119,7 +119,7 @@ TEST(Interface, WithoutListChangesOnlyTrappingHappensAndTheRestWaits) {
   EXPECT_EQ(f.state_of(2), GrainState::Static);
   // the next transfer that may change the list does what waited, waking where h fell since the
   // last such transfer (not since the last update)
-  contacts.assign(f.hot.size(), DemSolver::kTouches);
+  contacts.assign(f.hot.size(), DemSolver::kTouches | DemSolver::kSeated);
   n = f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts, true);
   EXPECT_EQ(n.dislodged, 1);
   EXPECT_EQ(n.slept, 1);

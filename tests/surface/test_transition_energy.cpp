@@ -48,7 +48,7 @@ TEST(TransitionEnergy, TrappingCountsTheKineticEnergyItRemoves) {
   hot.w[0] = {2, 0, 1};
   const Real kinetic =
       0.5 * hot.m[0] * norm2(hot.v[0]) + 0.5 / hot.inv_I[0] * norm2(hot.w[0]);
-  std::vector<std::uint8_t> contacts(1, DemSolver::kTouches);
+  std::vector<std::uint8_t> contacts(1, DemSolver::kTouches | DemSolver::kSeated);
   const TransitionCounts n = layer.transfer(hf, hot, st, dem, contacts);
   ASSERT_EQ(n.trapped, 1);
   EXPECT_NEAR(n.energy_trapped, kinetic, 1e-15);
