@@ -1,5 +1,5 @@
 // `sandflow compare`: a scene run in both modes, with several seeds each, and the two compared
-// against the spread between the plain-DEM seeds (DESIGN.md §9: sameness is statistics).
+// against the spread between the plain-DEM seeds (docs/design.md §9: sameness is statistics).
 #include <algorithm>
 #include <cmath>
 #include <filesystem>

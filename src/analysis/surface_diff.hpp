@@ -1,4 +1,4 @@
-// Sameness of two runs (DESIGN.md §9): their final sand surfaces H(x, y), measured from the grains
+// Sameness of two runs (docs/design.md §9): their final sand surfaces H(x, y), measured from the grains
 // by the height field's own thick rays, compared column by column (compare_surfaces) and as
 // surfaces in space (surface_distance).
 #pragma once

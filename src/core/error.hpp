@@ -1,4 +1,4 @@
-// The two kinds of error the library raises; it never prints and never exits (STYLE.md).
+// The two kinds of error the library raises; it never prints and never exits (docs/style.md).
 #pragma once
 
 #include <stdexcept>

@@ -1,4 +1,4 @@
-// The contact law of DESIGN.md §3 as pure functions of two bodies' state and the contact's
+// The contact law of docs/design.md §3 as pure functions of two bodies' state and the contact's
 // history, so that it can be tested against closed forms and shared by grain pairs and walls.
 //
 //   normal:      F_n = k_n delta - c_n v_n, clamped at 0 (no pull),

@@ -1,4 +1,4 @@
-// One DEM step over the hot grains (DESIGN.md §3): neighbours, contact forces, integration.
+// One DEM step over the hot grains (docs/design.md §3): neighbours, contact forces, integration.
 // Both modes of sandflow call exactly this code; surface mode only changes which grains are hot.
 #pragma once
 
@@ -28,7 +28,7 @@ struct DemParams {
   Vec3 gravity{0, 0, -9.81};
 };
 
-/// Fixed spheres that stand for a mesh's surface (its "particle surface", DESIGN.md §6): ACTIVE
+/// Fixed spheres that stand for a mesh's surface (its "particle surface", docs/design.md §6): ACTIVE
 /// grains collide with them by the grain-grain law, as with a grain that never moves.
 struct BoundaryParticles {
   std::vector<Vec3> x;                 ///< centres [m]

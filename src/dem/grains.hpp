@@ -1,4 +1,4 @@
-// Grains in the three states of DESIGN.md §2, stored as structure of arrays.
+// Grains in the three states of docs/design.md §2, stored as structure of arrays.
 //
 // The hot store holds the grains that take part in DEM: ACTIVE ones (integrated) and INTERFACE
 // ones (fixed, but they push). Each property is one contiguous array, indexed by a slot that

@@ -1,4 +1,4 @@
-// Neighbour search (DESIGN.md §3): a uniform cell grid over the grains' extent builds Verlet half
+// Neighbour search (docs/design.md §3): a uniform cell grid over the grains' extent builds Verlet half
 // lists. Each grain i has an allowance a_i, how far it may move before the lists are rebuilt; a
 // pair i < j is listed when closer than r_i + r_j + a_i + a_j, so no unlisted pair can touch
 // before some grain has used up its allowance. With one allowance for all (half the skin) these

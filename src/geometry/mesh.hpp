@@ -1,4 +1,4 @@
-// Triangle meshes for obstacles (DESIGN.md §6): the plain data every mesh reader produces, the
+// Triangle meshes for obstacles (docs/design.md §6): the plain data every mesh reader produces, the
 // placement a scene gives it, and the checks a scene reports ("open mesh").
 //
 // A mesh is a triangle soup with shared vertex indices; nothing here assumes it is closed,

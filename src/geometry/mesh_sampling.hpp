@@ -1,4 +1,4 @@
-// Mesh obstacles as fixed boundary particles (DESIGN.md §6, "particle surfaces"): points placed
+// Mesh obstacles as fixed boundary particles (docs/design.md §6, "particle surfaces"): points placed
 // on the surface densely enough that no grain can pass between them.
 //
 // Each triangle is cut into n^2 congruent copies of itself, n = ceil(longest edge / spacing), and

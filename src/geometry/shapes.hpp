@@ -1,4 +1,4 @@
-// Analytic geometry the grains collide with (DESIGN.md §6): every shape is a solid described by a
+// Analytic geometry the grains collide with (docs/design.md §6): every shape is a solid described by a
 // signed distance (positive outside) and its outward normal, so one contact routine serves all.
 // A container (a box or a cylinder that holds grains) is made of solid wall slabs.
 #pragma once

@@ -1,4 +1,4 @@
-// What a run writes in its output folder (DESIGN.md §8): stats.csv (a row per frame),
+// What a run writes in its output folder (docs/design.md §8): stats.csv (a row per frame),
 // summary.json (the run's Table 1 row and heap figures) and frames/NNNN.ply.
 //
 // Whole files are written atomically and durably: to NAME.tmp, flushed to the disk (fsync), then

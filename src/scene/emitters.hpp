@@ -1,4 +1,4 @@
-// Emitters (DESIGN.md §7): where grains come from. A pour drops batches from a disk or a
+// Emitters (docs/design.md §7): where grains come from. A pour drops batches from a disk or a
 // rectangle, each batch placed on free slots of a hexagonal pattern so that no two new grains
 // overlap, and the next batch waits until the last one has fallen one slot spacing. A block fills
 // a box with a jittered cubic lattice and gives it a velocity (a splash, a wave); a lattice fills a

@@ -31,7 +31,7 @@ struct MaterialConfig {
   Real wall_rolling_friction = 0.1; ///< rolling resistance between grains and geometry [-]
 };
 
-/// Deriving k_n from the load a contact carries (DESIGN.md §3), separately for each mode. Used
+/// Deriving k_n from the load a contact carries (docs/design.md §3), separately for each mode. Used
 /// when `from_load` is set; material.k_n is then ignored.
 struct StiffnessConfig {
   bool from_load = false;
@@ -42,7 +42,7 @@ struct StiffnessConfig {
   std::optional<Real> surface_depth;///< deepest loaded grain in surface mode [m]; unset: R_min+T+2d
 };
 
-/// The height field and the particle interface (DESIGN.md §4, §5). Unset values take defaults
+/// The height field and the particle interface (docs/design.md §4, §5). Unset values take defaults
 /// derived from the material (surface/surface_params.hpp); angles in radians.
 struct SurfaceConfig {
   std::optional<Real> cell_size;            ///< column width [m]; default: mean diameter

@@ -1,4 +1,4 @@
-// k_n derived from the load a contact carries (DESIGN.md §3), for each mode: in DEM the deepest
+// k_n derived from the load a contact carries (docs/design.md §3), for each mode: in DEM the deepest
 // grain carries the whole heap above it; in surface mode only the thin layer of grains above the
 // static surface, so springs can be softer and dt larger. Impacts bound k_n in both modes.
 #pragma once

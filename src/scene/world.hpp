@@ -1,5 +1,5 @@
 // A World is a scene brought to life: grains, geometry, emitters and the solver, stepped in the
-// order of DESIGN.md §1. The app drives it frame by frame and writes what it reports.
+// order of docs/design.md §1. The app drives it frame by frame and writes what it reports.
 #pragma once
 
 #include <array>

@@ -1,4 +1,4 @@
-// The height field of the static layer (DESIGN.md §4): a uniform grid of columns over the scene.
+// The height field of the static layer (docs/design.md §4): a uniform grid of columns over the scene.
 // Per column, at its centre: L (terrain top), H (top of the sand, measured from the grains), h (top
 // of the static layer) and R = H - h (the rolling layer). Slopes live on the edges between
 // columns, as on a MAC grid. One update runs the paper's order H -> theta -> Gamma -> h -> R -> R_min.

@@ -1,4 +1,4 @@
-// The particle interface (DESIGN.md §5): the band of frozen grains, of constant thickness T just
+// The particle interface (docs/design.md §5): the band of frozen grains, of constant thickness T just
 // below the static top h, through which matter passes between the grains and the height field.
 // After each height-field update every grain is classified against h at its own (x, y), with the
 // band measured normal to the local slope (T / cos theta in the vertical); "held" is seat.hpp's

@@ -1,4 +1,4 @@
-// The surface-flow method of Zhu & Yang (DESIGN.md §1): the height field of the static layer and
+// The surface-flow method of Zhu & Yang (docs/design.md §1): the height field of the static layer and
 // the particle interface, updated together every few DEM steps.
 #pragma once
 

@@ -1,4 +1,4 @@
-// The contact law against closed forms (DESIGN.md §3).
+// The contact law against closed forms (docs/design.md §3).
 #include <gtest/gtest.h>
 
 #include <cmath>

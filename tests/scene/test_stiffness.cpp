@@ -1,4 +1,4 @@
-// k_n from the load a contact carries (DESIGN.md §3), per mode.
+// k_n from the load a contact carries (docs/design.md §3), per mode.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// The BCRE exchange of the height field on analytic slopes (DESIGN.md §4), and the measurement of
+// The BCRE exchange of the height field on analytic slopes (docs/design.md §4), and the measurement of
 // H from grains.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The four transitions of the particle interface (DESIGN.md §5) against a given static top h.
+// The four transitions of the particle interface (docs/design.md §5) against a given static top h.
 #include <gtest/gtest.h>
 
 #include <set>

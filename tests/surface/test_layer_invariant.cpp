@@ -1,4 +1,4 @@
-// The invariant of the layers (DESIGN.md §5): no STATIC grain lies within reach of an ACTIVE
+// The invariant of the layers (docs/design.md §5): no STATIC grain lies within reach of an ACTIVE
 // grain, so that no grain can creep into the static layer (which pushes nothing) nor have a static
 // grain wake inside it; and the band of interface grains is measured normal to the slope.
 #include <gtest/gtest.h>

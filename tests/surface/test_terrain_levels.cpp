@@ -1,4 +1,4 @@
-// The multi-valued terrain (DESIGN.md §4): the solids under each column, the level a column's
+// The multi-valued terrain (docs/design.md §4): the solids under each column, the level a column's
 // sand rests on, and a pour onto a shelf that overhangs a floor.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Energy through the changes of state (DESIGN.md §5: a transition creates no energy): trapping
+// Energy through the changes of state (docs/design.md §5: a transition creates no energy): trapping
 // removes the grain's kinetic energy and the springs of its contacts with frozen grains, and
 // counts them; a dislodged grain that lies inside a frozen one starts with its contact preloaded,
 // so that the spring gives back nothing at once and pushes the two apart slowly.
