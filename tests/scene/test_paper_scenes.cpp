@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "scene/scene_loader.hpp"
 #include "scene/world.hpp"
@@ -15,6 +16,19 @@ namespace {
 
 class PaperScene : public ::testing::TestWithParam<std::string> {};
 
+/// Runs `w` for `frames` frames; returns the centres of all its grains, static ones included.
+std::vector<Vec3> grains_after(World& w, int frames) {
+  for (int f = 0; f < frames; ++f) w.advance_frame();
+  std::vector<Vec3> x;
+  std::vector<Real> r;
+  w.all_grains(x, r);
+  return x;
+}
+
+const char* mode_name(Mode mode) {
+  return mode == Mode::Dem ? "dem" : "surface";
+}
+
 TEST_P(PaperScene, TinyVersionRunsInBothModesWithNoGrainInsideGeometry) {
   const std::string path = std::string(SANDFLOW_SOURCE_DIR) + "/scenes/" + GetParam() + ".toml";
   for (Mode mode : {Mode::Dem, Mode::Surface}) {
@@ -23,11 +37,8 @@ TEST_P(PaperScene, TinyVersionRunsInBothModesWithNoGrainInsideGeometry) {
     s.simulation.mode = mode;
     s.output.frames = 20;
     World w(s);
-    for (int f = 0; f < 20; ++f) w.advance_frame();
-    std::vector<Vec3> x;
-    std::vector<Real> r;
-    w.all_grains(x, r);
-    const char* name = mode == Mode::Dem ? "dem" : "surface";
+    const std::vector<Vec3> x = grains_after(w, 20);
+    const char* name = mode_name(mode);
     EXPECT_GT(x.size(), 0u) << name;
     EXPECT_LE(x.size(), 600u) << name;
     EXPECT_EQ(w.total_grains(), static_cast<std::int64_t>(x.size())) << name;
@@ -50,11 +61,8 @@ TEST(ColumnScene, ASmallColumnIsLiftedAndSpreadsInBothModes) {
     s.geometry[1].remove_at = 0.3;
     s.simulation.mode = mode;
     World w(s);
-    for (int f = 0; f < 24; ++f) w.advance_frame();
-    std::vector<Vec3> x;
-    std::vector<Real> r;
-    w.all_grains(x, r);
-    const char* name = mode == Mode::Dem ? "dem" : "surface";
+    const std::vector<Vec3> x = grains_after(w, 24);
+    const char* name = mode_name(mode);
     ASSERT_EQ(x.size(), 600u) << name;
     EXPECT_EQ(w.geometry().count_inside(x), 0u) << name;
     Real reach = 0;
