@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "analysis/statistics.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "io/folder_lock.hpp"
@@ -46,14 +47,6 @@ double max_overlap(const RunResult& r) {
 
 nlohmann::json number_or_null(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
-}
-
-/// Mean of the values (NaN when there are none).
-double mean(const std::vector<double>& v) {
-  if (v.empty()) return std::nan("");
-  double s = 0;
-  for (double x : v) s += x;
-  return s / static_cast<double>(v.size());
 }
 
 /// The heap angles of the runs whose fit worked.

@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include "analysis/statistics.hpp"
+
 namespace sandflow {
 namespace {
 
@@ -204,36 +206,20 @@ HeapFit measure_heap(const std::vector<Vec3>& pos, const std::vector<Real>& radi
   }
 
   // 6. Least-squares line through the flank.
-  double mr = 0, mh = 0;
+  std::vector<double> flank_r, flank_h;
   for (const auto& q : flank) {
-    mr += q.r;
-    mh += q.h;
+    flank_r.push_back(q.r);
+    flank_h.push_back(q.h);
   }
-  mr /= static_cast<double>(flank.size());
-  mh /= static_cast<double>(flank.size());
-  double srr = 0, srh = 0;
-  for (const auto& q : flank) {
-    srr += (q.r - mr) * (q.r - mr);
-    srh += (q.r - mr) * (q.h - mh);
-  }
-  const double slope = srh / srr;
-  const double intercept = mh - slope * mr;
-  double sse = 0;
-  for (const auto& q : flank) {
-    const double e = q.h - (intercept + slope * q.r);
-    sse += e * e;
-  }
-  fit.fit_rms = std::sqrt(sse / static_cast<double>(flank.size()));
-  if (!(slope < 0)) {
+  const LineFit line = fit_line(flank_r, flank_h);
+  fit.fit_rms = line.rms();
+  if (!(line.slope < 0)) {
     fit.reason = "the flank does not descend away from the apex";
     return fit;
   }
-  fit.repose_angle_deg = rad_to_deg(std::atan(-slope));
-  // the slope's standard error, carried through atan
-  const double n = static_cast<double>(flank.size());
-  const double slope_se = std::sqrt(sse / (n - 2) / srr);
-  fit.repose_angle_se_deg = rad_to_deg(slope_se / (1 + slope * slope));
-  fit.base_radius = -intercept / slope;
+  fit.repose_angle_deg = line.descent_deg();
+  fit.repose_angle_se_deg = line.descent_se_deg();
+  fit.base_radius = -line.intercept / line.slope;
   fit.ok = true;
   return fit;
 }

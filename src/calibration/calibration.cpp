@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "analysis/statistics.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "core/timer.hpp"
@@ -67,44 +68,17 @@ ConeFit cone_fit(const OnBase& b, Real d, Real base_radius, Real tilt, bool wedg
   // (in cell order, so that the sums do not depend on the map's layout)
   std::vector<std::pair<std::uint64_t, std::pair<Real, Real>>> cells(top.begin(), top.end());
   std::sort(cells.begin(), cells.end());
-  double mr = 0, mh = 0;
+  std::vector<double> rho, h;
   for (const auto& [k, v] : cells) {
-    mr += v.first;
-    mh += v.second;
+    rho.push_back(v.first);
+    h.push_back(v.second);
   }
-  const double n = static_cast<double>(cells.size());
-  mr /= n;
-  mh /= n;
-  double srr = 0, srh = 0;
-  for (const auto& [k, v] : cells) {
-    srr += (v.first - mr) * (v.first - mr);
-    srh += (v.first - mr) * (v.second - mh);
-  }
-  const double slope = srh / srr;
-  double sse = 0;
-  for (const auto& [k, v] : cells) {
-    const double e = v.second - (mh + slope * (v.first - mr));
-    sse += e * e;
-  }
-  if (!(slope < 0)) return f;
+  const LineFit line = fit_line(rho, h);
+  if (!(line.slope < 0)) return f;
   f.ok = true;
-  f.angle_deg = rad_to_deg(std::atan(-slope));
-  f.se_deg = rad_to_deg(std::sqrt(sse / (n - 2) / srr) / (1 + slope * slope));
+  f.angle_deg = line.descent_deg();
+  f.se_deg = line.descent_se_deg();
   return f;
-}
-
-double mean(const std::vector<double>& v) {
-  double s = 0;
-  for (double a : v) s += a;
-  return v.empty() ? 0 : s / static_cast<double>(v.size());
-}
-
-double standard_deviation(const std::vector<double>& v) {
-  if (v.size() < 2) return 0;
-  const double m = mean(v);
-  double s = 0;
-  for (double a : v) s += (a - m) * (a - m);
-  return std::sqrt(s / static_cast<double>(v.size() - 1));
 }
 
 }  // namespace
@@ -272,7 +246,7 @@ Calibration calibrate(const SceneConfig& scene, int trials, const CalibrationPro
         scene.path, kMaxTilt, mean(theta_poured) + kMaxTilt));
   cal.theta0_deg = mean(theta_poured);
   cal.theta0_sd_deg = standard_deviation(theta_poured);
-  cal.theta_stop_deg = mean(theta_stop);
+  cal.theta_stop_deg = theta_stop.empty() ? 0 : mean(theta_stop);
   cal.theta_stop_sd_deg = standard_deviation(theta_stop);
   cal.theta_max_deg = mean(theta_max);
   cal.theta_max_sd_deg = standard_deviation(theta_max);
