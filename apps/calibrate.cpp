@@ -12,8 +12,8 @@
 
 #include "calibration/calibration.hpp"
 #include "commands.hpp"
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
-#include "io/run_output.hpp"
 #include "scene/scene_loader.hpp"
 
 namespace sandflow {

@@ -13,9 +13,9 @@
 
 #include "analysis/statistics.hpp"
 #include "commands.hpp"
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/folder_lock.hpp"
-#include "io/run_output.hpp"
 #include "scene/scene_loader.hpp"
 #include "surface/surface_params.hpp"
 

@@ -9,9 +9,9 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/pov_writer.hpp"
-#include "io/run_output.hpp"
 #include "report/report.hpp"
 
 namespace fs = std::filesystem;

@@ -20,6 +20,7 @@
 
 #include "calibration/calibration.hpp"
 #include "commands.hpp"
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/export_formats.hpp"
 #include "io/folder_lock.hpp"

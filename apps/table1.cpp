@@ -10,9 +10,9 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/folder_lock.hpp"
-#include "io/run_output.hpp"
 #include "scene/scene_loader.hpp"
 #include "table1.hpp"
 

@@ -10,8 +10,8 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
-#include "io/run_output.hpp"
 
 namespace sandflow {
 namespace {

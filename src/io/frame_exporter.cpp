@@ -7,9 +7,9 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/ply.hpp"
-#include "io/run_output.hpp"
 #include "surface/surface_params.hpp"
 
 namespace sandflow {

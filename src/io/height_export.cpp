@@ -2,19 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <iterator>
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/export_formats.hpp"
 #include "io/png_gray.hpp"
-#include "io/run_output.hpp"
 
 namespace sandflow {
-
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -44,20 +41,8 @@ std::size_t write_height_png(const std::string& path, const HeightFieldParams& g
       value[static_cast<std::size_t>(row) * nx + i] = v;
     }
   }
-  const std::string tmp = path + ".tmp";
-  std::error_code ec;
-  try {
-    write_gray_png(tmp, nx, ny, value, 16);
-  } catch (const OutputError&) {
-    fs::remove(tmp, ec);
-    throw;
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    const std::string reason = ec.message();
-    fs::remove(tmp, ec);
-    throw OutputError(path + ": cannot write: " + reason);
-  }
+  write_file_atomic_by_name(
+      path, [&](const std::string& tmp) { write_gray_png(tmp, nx, ny, value, 16); }, Sync::Later);
   return clamped;
 }
 

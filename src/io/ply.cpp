@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/export_formats.hpp"
 
@@ -34,10 +35,6 @@ struct FileCloser {
   }
 };
 using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
-
-std::string system_reason(int err) {
-  return err != 0 ? std::string(std::strerror(err)) : std::string("unknown I/O error");
-}
 
 template <class T>
 void put_le(unsigned char*& p, T v) {
@@ -515,18 +512,8 @@ void write_ply(const std::string& path, const FrameData& f, UpAxis up) {
       "property uint id\nproperty uchar state\n"
       "end_header\n";
 
-  const std::string tmp = path + ".tmp";
-  auto fail = [&](const std::string& what, int err) -> void {
-    std::remove(tmp.c_str());
-    throw OutputError(path + ": " + what + ": " + system_reason(err));
-  };
-
-  errno = 0;
-  FilePtr fp(std::fopen(tmp.c_str(), "wb"));
-  if (!fp) fail("cannot create " + tmp, errno);
-  if (std::fwrite(header.data(), 1, header.size(), fp.get()) != header.size()) {
-    fail("write failed", errno);
-  }
+  AtomicFile file(path, Sync::Later);  // a run flushes its frames before each checkpoint
+  file.write(header);
   std::vector<unsigned char> buf(std::min(n, kChunkGrains) * kRecordBytes);
   for (std::size_t first = 0; first < n; first += kChunkGrains) {
     const std::size_t last = std::min(n, first + kChunkGrains);
@@ -544,14 +531,10 @@ void write_ply(const std::string& path, const FrameData& f, UpAxis up) {
       put_le(p, f.id.empty() ? static_cast<std::uint32_t>(i) : f.id[i]);
       put_le(p, f.state.empty() ? std::uint8_t{0} : f.state[i]);
     }
-    const std::size_t bytes = static_cast<std::size_t>(p - buf.data());
-    if (std::fwrite(buf.data(), 1, bytes, fp.get()) != bytes) fail("write failed", errno);
+    file.write(
+        {reinterpret_cast<const char*>(buf.data()), static_cast<std::size_t>(p - buf.data())});
   }
-  // fclose flushes: a full disk shows up here.
-  errno = 0;
-  if (std::fclose(fp.release()) != 0) fail("write failed", errno);
-  errno = 0;
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) fail("cannot rename " + tmp, errno);
+  file.commit();
 }
 
 FrameData parse_frame_ply(std::string_view bytes, const std::string& name) {

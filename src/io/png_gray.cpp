@@ -13,6 +13,7 @@
 #include <cstring>
 #include <string_view>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
 
@@ -171,8 +172,6 @@ bool write_raw(std::FILE* fp, int width, int height, const double* value, int bi
   return true;
 }
 
-std::string reason(int err) { return err ? std::strerror(err) : "unknown error"; }
-
 }  // namespace
 
 GrayImage parse_gray_png(std::string_view bytes, const std::string& name, int max_side) {
@@ -215,7 +214,7 @@ GrayImage read_gray_png(const std::string& path, int max_side) {
   refuse_special_file(path, "image");
   errno = 0;
   std::FILE* fp = std::fopen(path.c_str(), "rb");
-  if (!fp) throw InputError(path + ": cannot open the image: " + reason(errno));
+  if (!fp) throw InputError(path + ": cannot open the image: " + system_reason(errno));
   // read in pieces up to the limit: a pipe or a device has no size to check first
   std::string bytes;
   char buf[1 << 16];
@@ -231,7 +230,7 @@ GrayImage read_gray_png(const std::string& path, int max_side) {
   }
   const int read_errno = std::ferror(fp) ? (errno ? errno : EIO) : 0;
   std::fclose(fp);
-  if (read_errno) throw InputError(path + ": cannot read the image: " + reason(read_errno));
+  if (read_errno) throw InputError(path + ": cannot read the image: " + system_reason(read_errno));
   return parse_gray_png(bytes, path, max_side);
 }
 
@@ -242,7 +241,7 @@ void write_gray_png(const std::string& path, int width, int height,
     throw OutputError(path + ": write_gray_png: bad image size or bit depth");
   errno = 0;
   std::FILE* fp = std::fopen(path.c_str(), "wb");
-  if (!fp) throw OutputError(path + ": cannot create: " + reason(errno));
+  if (!fp) throw OutputError(path + ": cannot create: " + system_reason(errno));
   ErrorText err{};
   const bool ok = write_raw(fp, width, height, value.data(), bit_depth, &err);
   const bool closed = std::fclose(fp) == 0;

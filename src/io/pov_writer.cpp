@@ -8,7 +8,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -20,6 +19,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 
 namespace sandflow {
@@ -400,29 +400,6 @@ void write_grains(std::string& s, const FrameData& f) {
   }
 }
 
-std::string system_reason(int err) {
-  return err != 0 ? std::string(std::strerror(err)) : std::string("unknown I/O error");
-}
-
-void write_text_atomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  auto fail = [&](const std::string& what, int err) {
-    std::remove(tmp.c_str());
-    throw OutputError(path + ": " + what + ": " + system_reason(err));
-  };
-  errno = 0;
-  std::FILE* fp = std::fopen(tmp.c_str(), "wb");
-  if (!fp) fail("cannot create " + tmp, errno);
-  const bool wrote = std::fwrite(text.data(), 1, text.size(), fp) == text.size();
-  const int write_err = errno;
-  errno = 0;
-  const bool closed = std::fclose(fp) == 0;  // flushes: a full disk shows up here
-  if (!wrote) fail("write failed", write_err);
-  if (!closed) fail("write failed", errno);
-  errno = 0;
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) fail("cannot rename " + tmp, errno);
-}
-
 std::string tail_of(const std::string& path, std::size_t max_chars) {
   std::ifstream in(path, std::ios::binary);
   std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -590,7 +567,7 @@ void write_pov_scene(const std::string& path, const FrameData& f,
   }
   line(s, "");
   write_grains(s, f);
-  write_text_atomically(path, s);
+  write_file_atomic(path, s, Sync::Later);
 }
 
 std::string find_program(const std::string& name) {

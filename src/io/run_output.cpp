@@ -1,15 +1,12 @@
 #include "io/run_output.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 
 namespace sandflow {
@@ -66,56 +63,6 @@ void prepare_resumed_dir(const std::string& dir, int frame) {
   }
 }
 
-namespace {
-
-[[noreturn]] void fail_write(const std::string& path, const std::string& tmp, int fd, int err) {
-  if (fd >= 0) ::close(fd);
-  ::unlink(tmp.c_str());
-  throw OutputError(fmt::format("{}: cannot write: {}", path, std::strerror(err)));
-}
-
-}  // namespace
-
-void write_file_atomic(const std::string& path, std::string_view bytes) {
-  const std::string tmp = path + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0)
-    throw OutputError(fmt::format("{}: cannot create {}: {}", path, tmp, std::strerror(errno)));
-  for (std::size_t done = 0; done < bytes.size();) {
-    const ssize_t k = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (k < 0 && errno == EINTR) continue;
-    if (k <= 0) fail_write(path, tmp, fd, k < 0 ? errno : EIO);
-    done += static_cast<std::size_t>(k);
-  }
-  if (::fsync(fd) != 0) fail_write(path, tmp, fd, errno);
-  if (::close(fd) != 0) fail_write(path, tmp, -1, errno);
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) fail_write(path, tmp, -1, errno);
-  const fs::path parent = fs::path(path).parent_path();
-  sync_dir(parent.empty() ? "." : parent.string());
-}
-
-void sync_file(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0 || ::fsync(fd) != 0) {
-    const int err = errno;
-    if (fd >= 0) ::close(fd);
-    throw OutputError(fmt::format("{}: cannot flush to the disk: {}", path, std::strerror(err)));
-  }
-  ::close(fd);
-}
-
-void sync_dir(const std::string& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  // (some file systems cannot flush a folder: EINVAL says so, and there is nothing to do)
-  if (fd < 0 || (::fsync(fd) != 0 && errno != EINVAL)) {
-    const int err = errno;
-    if (fd >= 0) ::close(fd);
-    throw OutputError(fmt::format("{}: cannot flush the folder to the disk: {}", dir,
-                                  std::strerror(err)));
-  }
-  ::close(fd);
-}
-
 std::string frame_path(const std::string& dir, int frame) {
   return (fs::path(dir) / "frames" / fmt::format("{:04d}.ply", frame)).string();
 }
@@ -143,7 +90,7 @@ StatsWriter::StatsWriter(const std::string& path, const std::vector<FrameStats>&
   for (const FrameStats& s : rows) text += stats_row(s);
   write_file_atomic(path, text);
   f_ = std::fopen(path.c_str(), "a");
-  if (!f_) throw OutputError(fmt::format("{}: cannot write: {}", path, std::strerror(errno)));
+  if (!f_) throw OutputError(fmt::format("{}: cannot write: {}", path, system_reason(errno)));
 }
 
 StatsWriter::~StatsWriter() {
@@ -153,7 +100,7 @@ StatsWriter::~StatsWriter() {
 void StatsWriter::write(const FrameStats& s) {
   const std::string row = stats_row(s);
   if (std::fputs(row.c_str(), f_) < 0 || std::fflush(f_) != 0)
-    throw OutputError(fmt::format("{}: cannot write: {}", path_, std::strerror(errno)));
+    throw OutputError(fmt::format("{}: cannot write: {}", path_, system_reason(errno)));
 }
 
 }  // namespace sandflow

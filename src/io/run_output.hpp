@@ -1,15 +1,10 @@
 // What a run writes in its output folder (docs/design.md §8): stats.csv (a row per frame),
-// summary.json (the run's Table 1 row and heap figures) and frames/NNNN.ply.
-//
-// Whole files are written atomically and durably: to NAME.tmp, flushed to the disk (fsync), then
-// renamed over NAME and the folder flushed, so that a reader, a crash or a power cut leaves
-// either the old file or the new one, never half of one. A write that fails (a full disk, an
-// unwritable folder) removes its temporary file and throws OutputError naming the path.
+// summary.json (the run's Table 1 row and heap figures) and frames/NNNN.ply. Whole files are
+// written with write_file_atomic (core/atomic_file.hpp).
 #pragma once
 
 #include <cstdio>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -25,13 +20,6 @@ void prepare_output_dir(const std::string& dir, bool force);
 /// Prepares the folder of a run resumed at frame `frame`: removes the temporary files a killed
 /// run left, and the frames after `frame` (the resumed run writes them again).
 void prepare_resumed_dir(const std::string& dir, int frame);
-
-/// Writes `bytes` to `path` atomically and durably (see above). Throws OutputError.
-void write_file_atomic(const std::string& path, std::string_view bytes);
-
-/// Flushes a file already written, and a folder's entries, to the disk. Throws OutputError.
-void sync_file(const std::string& path);
-void sync_dir(const std::string& dir);
 
 /// Path of frame `frame` (1-based) in a run folder: DIR/frames/NNNN.ply.
 std::string frame_path(const std::string& dir, int frame);
