@@ -4,7 +4,8 @@
 #                     writes its report (out/floor-demo/report.html)
 #   ./setup.sh test   runs the whole test suite
 # Options (environment): SANDFLOW_DEMO_GRAINS (default 20000; the full scene has 107687),
-#   SANDFLOW_BUILD (build folder, default build), SANDFLOW_SANITIZE=1 (ASan + UBSan build).
+#   SANDFLOW_BUILD (build folder, default build), SANDFLOW_SANITIZE=1 (ASan + UBSan build, with
+#   the assertions of src/core/assert.hpp).
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -16,7 +17,7 @@ packages=(g++ cmake make pkg-config libtomlplusplus-dev libcli11-dev libfmt-dev 
           libgtest-dev libpng-dev zlib1g-dev povray)
 scripts/install_packages.sh "${packages[@]}"
 
-# 2. Build (Release, or the sanitizer build)
+# 2. Build (Release, or the sanitizer build; RelWithDebInfo and the sanitizers turn the assertions on)
 build=${SANDFLOW_BUILD:-build}
 flags=(-DCMAKE_BUILD_TYPE=Release -DSANDFLOW_WERROR="${SANDFLOW_WERROR:-OFF}")
 if [ "${SANDFLOW_SANITIZE:-0}" = 1 ]; then
