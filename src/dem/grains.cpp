@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <utility>
 
+#include <fmt/format.h>
+
 namespace sandflow {
 
 void Grains::add(GrainId gid, const Vec3& pos, const Vec3& vel, Real radius, Real density) {
@@ -69,6 +71,40 @@ void StaticStore::file_by_column(std::size_t columns) {
                 return x[a].z < x[b].z || (x[a].z == x[b].z && a < b);
               });
   ++revision;
+}
+
+std::string store_error(const Grains& hot, const StaticStore& statics, GrainId next_id,
+                        std::int64_t expected) {
+  const std::size_t n = hot.size(), ns = statics.size();
+  for (std::size_t size : {hot.state.size(), hot.x.size(), hot.v.size(), hot.w.size(), hot.r.size(),
+                           hot.m.size(), hot.inv_m.size(), hot.inv_I.size()})
+    if (size != n)
+      return fmt::format("the hot store's arrays differ in length ({} ids, {})", n, size);
+  for (std::size_t size : {statics.x.size(), statics.r.size(), statics.column.size()})
+    if (size != ns)
+      return fmt::format("the static store's arrays differ in length ({} ids, {})", ns, size);
+  std::vector<std::uint8_t> held(next_id, 0);  // 1: hot, 2: static
+  for (std::size_t i = 0; i < n; ++i) {
+    const GrainId id = hot.id[i];
+    if (hot.state[i] == GrainState::Static)
+      return fmt::format("grain {} is STATIC but in the hot store (slot {})", id, i);
+    if (id >= next_id) return fmt::format("grain {} in the hot store: ids end at {}", id, next_id);
+    if (held[id]) return fmt::format("grain {} is twice in the hot store", id);
+    held[id] = 1;
+  }
+  for (std::size_t k = 0; k < ns; ++k) {
+    const GrainId id = statics.id[k];
+    if (id >= next_id)
+      return fmt::format("grain {} in the static store: ids end at {}", id, next_id);
+    if (held[id])
+      return fmt::format("grain {} is in the static store and {}", id,
+                         held[id] == 1 ? "in the hot store" : "twice in it");
+    held[id] = 2;
+  }
+  if (static_cast<std::int64_t>(n + ns) != expected)
+    return fmt::format("{} ACTIVE and INTERFACE grains and {} STATIC ones are {}, not {}", n, ns,
+                       n + ns, expected);
+  return {};
 }
 
 }  // namespace sandflow

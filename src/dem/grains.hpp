@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "core/vec3.hpp"
@@ -60,5 +61,12 @@ struct StaticStore {
   /// Files every grain by its column (counting sort), each column's grains in ascending z.
   void file_by_column(std::size_t columns);
 };
+
+/// The invariant of the stores (docs/design.md §2), for assertions: every array of each store has
+/// its size, the hot store holds no STATIC grain, every id is below `next_id` and held at most
+/// once in the two stores together, and they hold `expected` grains (so each of those is in
+/// exactly one). Returns what is wrong, or "" when nothing is. O(n + next_id).
+std::string store_error(const Grains& hot, const StaticStore& statics, GrainId next_id,
+                        std::int64_t expected);
 
 }  // namespace sandflow

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "core/assert.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "geometry/mesh_sampling.hpp"
@@ -310,6 +311,13 @@ void World::step() {
   }
   dem_.step(grains_, geometry_, ts_.dt, profile_);
   check_overlap(step_ + 1);
+  // (assertions) every grain held once, in the store of its state, as many as were emitted less
+  // those that left (docs/design.md §2); advance_frame checks the count in every build
+  if constexpr (kAssertions) {
+    const std::string fault =
+        store_error(grains_, static_, next_id_, static_cast<std::int64_t>(next_id_) - left_);
+    SANDFLOW_ASSERT(fault.empty(), fmt::format("{}: {}", where(step_ + 1), fault));
+  }
   ++step_;
   time_ = static_cast<Real>(step_) * ts_.dt;
 }

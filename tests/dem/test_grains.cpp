@@ -1,0 +1,57 @@
+// The invariant of the two stores (store_error): every grain once, in the store of its state.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "dem/grains.hpp"
+
+namespace sandflow {
+namespace {
+
+// grains 0-3 hot (1 INTERFACE), 4-5 static: six of the seven ids given, one left the domain
+void fill(Grains& hot, StaticStore& statics) {
+  for (GrainId id : {0u, 3u, 1u, 2u}) hot.add(id, {0, 0, 0.01 * id}, {}, 0.005, 2600);
+  hot.state[2] = GrainState::Interface;
+  statics.add(5, {0, 0, -0.01}, 0.005, 0);
+  statics.add(4, {0, 0, -0.02}, 0.005, 0);
+}
+
+bool says(const std::string& error, const std::string& what) {
+  return error.find(what) != std::string::npos;
+}
+
+TEST(Stores, EveryGrainOnceInTheStoreOfItsState) {
+  Grains hot;
+  StaticStore statics;
+  fill(hot, statics);
+  EXPECT_EQ(store_error(hot, statics, 7, 6), "");
+  EXPECT_TRUE(says(store_error(hot, statics, 7, 7), "are 6, not 7"));
+}
+
+TEST(Stores, AGrainInBothStoresIsNamed) {
+  Grains hot;
+  StaticStore statics;
+  fill(hot, statics);
+  statics.add(3, {0, 0, -0.03}, 0.005, 0);  // a sleeping grain that stayed hot
+  const std::string e = store_error(hot, statics, 7, 7);
+  EXPECT_TRUE(says(e, "grain 3 is in the static store and in the hot store")) << e;
+}
+
+TEST(Stores, AStaticGrainInTheHotStoreOrATwiceHeldOneIsNamed) {
+  Grains hot;
+  StaticStore statics;
+  fill(hot, statics);
+  hot.state[1] = GrainState::Static;
+  EXPECT_TRUE(says(store_error(hot, statics, 7, 6), "grain 3 is STATIC but in the hot store"));
+  hot.state[1] = GrainState::Active;
+  hot.id[1] = 0;
+  EXPECT_TRUE(says(store_error(hot, statics, 7, 6), "grain 0 is twice in the hot store"));
+  hot.id[1] = 9;
+  EXPECT_TRUE(says(store_error(hot, statics, 7, 6), "grain 9 in the hot store: ids end at 7"));
+  hot.id[1] = 3;
+  hot.v.pop_back();
+  EXPECT_TRUE(says(store_error(hot, statics, 7, 6), "arrays differ in length"));
+}
+
+}  // namespace
+}  // namespace sandflow
