@@ -3,12 +3,32 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <string>
 
+#include <fmt/format.h>
 #include <omp.h>
+
+#include "core/assert.hpp"
 
 namespace sandflow {
 
 namespace {
+
+/// (assertions) The largest run whose pair list is checked against the brute-force reference
+/// after every rebuild: O(n^2), 2 million distances at this size.
+constexpr std::size_t kPairCheckMaxGrains = 2000;
+
+/// (assertions) The contact law gives finite results for a finite state with a contact normal; a
+/// non-finite state, or centres that meet (no normal), is a blow-up that the guards report
+/// (docs/scenes.md, "Guards"). Finite here means |a| < 1e154, so that no product of two such
+/// numbers inside the law overflows.
+[[maybe_unused]] bool tame(const Vec3& a) {
+  return std::isfinite(norm2(a));
+}
+[[maybe_unused]] bool finite_result(const ContactForce& cf, const ContactHistory& h, bool rolling) {
+  return is_finite(cf.force_i) && is_finite(cf.q) && is_finite(h.xi) &&
+         (!rolling || (is_finite(cf.t_roll) && is_finite(h.psi)));
+}
 
 // The rare paths of the sweep, kept out of its loop.
 
@@ -50,6 +70,17 @@ void DemSolver::step(Grains& grains, const Geometry& geometry, Real dt, Profile&
   // Lists stay valid while every grain stays within its allowance.
   if (rolling_ ? sweep<true>(grains, geometry, dt) : sweep<false>(grains, geometry, dt))
     need_rebuild_ = true;
+  // (assertions) the lists are the grains' (added or removed ones rebuild them), and the pass
+  // integrated ACTIVE grains only: a frozen one is still at rest
+  if constexpr (kAssertions) {
+    SANDFLOW_ASSERT(x_at_build_.size() == grains.size(),
+                    "grains were added or removed without a rebuild");
+    for (std::size_t i = 0; i < grains.size(); ++i)
+      SANDFLOW_ASSERT(
+          grains.state[i] == GrainState::Active ||
+              (grains.v[i] == Vec3{} && grains.w[i] == Vec3{} && is_finite(grains.x[i])),
+          fmt::format("the frozen grain {} (slot {}) is not at rest", grains.id[i], i));
+  }
 }
 
 void DemSolver::set_boundary(BoundaryParticles boundary) {
@@ -299,6 +330,13 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
   std::swap(pairs_, old_pairs_);
   std::swap(walls_, old_walls_);
   build_pair_list(grains, allow_, rolling_, grid_, old_pairs_, slot_of_id_, pairs_);
+  // (assertions) the grid found every pair the brute-force reference finds, in small runs
+  if constexpr (kAssertions) {
+    if (n <= kPairCheckMaxGrains) {
+      const std::string fault = pair_list_error(grains, allow_, pairs_);
+      SANDFLOW_ASSERT(fault.empty(), "the pair list after a rebuild: " + fault);
+    }
+  }
   // the normal damping of a pair depends on its masses only: computed once per list
 #pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i)
@@ -545,6 +583,12 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
         ev.push_back({s, 0.0, relax_preload(cp.k_n, decay, pl.delta0[s], g.delta)});
       ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
       cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, dt);
+      SANDFLOW_ASSERT(!(dist > 0 && tame(d) && tame(v[i] - v[j]) && tame(w[i]) && tame(w[j]) &&
+                        tame(pl.xi[s]) && (!kRolling || tame(pl.psi[s]))) ||
+                          finite_result(cf, h, kRolling),
+                      fmt::format("grains {} and {}: the contact law gave a non-finite force or "
+                                  "history from a finite state",
+                                  grains.id[i], grains.id[j]));
       pl.touch[s] = (pl.touch[s] & kPreloaded) | kTouching | (cf.sliding ? kSlipping : 0);
       pl.xi[s] = h.xi;
       if constexpr (kRolling) pl.psi[s] = h.psi;
@@ -624,6 +668,12 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
       auto touch_fixed = [&](const ContactParams& p, const ContactGeometry& cg, Vec3& xi, Vec3& psi) {
         ContactHistory h{xi, psi};
         const ContactForce cf = contact_force<kRolling>(p, cg, v[i], w[i], Vec3{}, h, dt);
+        SANDFLOW_ASSERT(!(tame(cg.n) && std::isfinite(cg.delta) && tame(v[i]) && tame(w[i]) &&
+                          tame(xi) && (!kRolling || tame(psi))) ||
+                            finite_result(cf, h, kRolling),
+                        fmt::format("grain {}: the contact law gave a non-finite force or history "
+                                    "against the geometry from a finite state",
+                                    grains.id[i]));
         xi = h.xi;
         psi = h.psi;
         f += cf.force_i;

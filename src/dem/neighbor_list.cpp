@@ -5,6 +5,8 @@
 #include <limits>
 #include <omp.h>
 
+#include <fmt/format.h>
+
 namespace sandflow {
 
 void CellGrid::build(const std::vector<Vec3>& x, Real min_cell) {
@@ -292,6 +294,38 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(
 std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const Grains& grains,
                                                                         Real skin) {
   return brute_force_pairs(grains, std::vector<Real>(grains.size(), skin / 2));
+}
+
+std::string pair_list_error(const Grains& grains, const std::vector<Real>& allow,
+                            const PairList& pairs) {
+  const std::size_t n = grains.size();
+  if (pairs.start.size() != n + 1 || pairs.start[0] != 0 || pairs.start[n] != pairs.j.size())
+    return fmt::format("the list has {} offsets for {} grains, or they do not span its {} slots",
+                       pairs.start.size(), n, pairs.j.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (pairs.start[i] > pairs.start[i + 1])
+      return fmt::format("the row of slot {} ends before it starts", i);
+    for (std::uint32_t s = pairs.start[i]; s < pairs.start[i + 1]; ++s)
+      if (pairs.j[s] <= i || pairs.j[s] >= n ||
+          (s > pairs.start[i] && pairs.j[s] <= pairs.j[s - 1]))
+        return fmt::format(
+            "the row of slot {} (grain {}) lists slot {}: not above it, not a "
+            "grain, or out of order",
+            i, grains.id[i], pairs.j[s]);
+  }
+  for (const auto& [i, j] : brute_force_pairs(grains, allow)) {
+    const auto row_begin = pairs.j.begin() + pairs.start[i];
+    const auto row_end = pairs.j.begin() + pairs.start[i + 1];
+    if (std::binary_search(row_begin, row_end, j)) continue;
+    const Real dist = norm(grains.x[i] - grains.x[j]);
+    const Real cut = grains.r[i] + grains.r[j] + allow[i] + allow[j];
+    if (dist >= cut * (1 - 1e-9)) continue;  // (at the cut: rounding decides)
+    return fmt::format(
+        "grains {} and {} (slots {}, {}) are {:.6g} m apart, within reach "
+        "({:.6g} m; touching below {:.6g} m), but not in the list",
+        grains.id[i], grains.id[j], i, j, dist, cut, grains.r[i] + grains.r[j]);
+  }
+  return {};
 }
 
 }  // namespace sandflow

@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -118,6 +119,14 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(
 /// The same with one skin for all grains.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const Grains& grains,
                                                                         Real skin);
+
+/// The half list against the reference, for assertions after a rebuild: its rows well formed
+/// (n + 1 offsets, each row's partners ascending and above the row's grain) and every pair of
+/// brute_force_pairs(grains, allow) in it. A pair within rounding of its cut (1e-9 of it) may be
+/// listed or not: the list's owner adds the allowances in its own order. Returns the first fault,
+/// or "" when there is none. O(n^2).
+std::string pair_list_error(const Grains& grains, const std::vector<Real>& allow,
+                            const PairList& pairs);
 
 constexpr std::uint32_t kNoSlot = 0xffffffffu;
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <string>
 
 #include "core/rng.hpp"
 #include "dem/dem_solver.hpp"
@@ -109,6 +110,43 @@ TEST(CellGrid, ABallQueryVisitsEveryGrainWithinReach) {
     }
     EXPECT_LT(in_ball, in_cube * 3 / 4) << "seed " << seed;
   }
+}
+
+// The check that follows every rebuild in a build with assertions (pair_list_error): silent on
+// the grid's list, and it names the pair a broken list misses and a row out of order.
+TEST(NeighbourList, TheRebuildCheckNamesAMissingPairAndABadRow) {
+  Grains g = random_grains(500, 8, 0.08);
+  for (std::size_t i = 0; i < g.size(); i += 4) g.state[i] = GrainState::Interface;
+  std::vector<Real> allow(g.size(), 0.001);
+  for (std::size_t i = 0; i < g.size(); i += 4) allow[i] = 0;  // as the solver: frozen, none
+  CellGrid grid;
+  PairList pl, none;
+  build_pair_list(g, allow, false, grid, none, {}, pl);
+  EXPECT_EQ(pair_list_error(g, allow, pl), "");
+
+  // a touching pair dropped from its row
+  std::uint32_t a = 0, s = 0;
+  while (s == pl.start[a + 1] || norm(g.x[a] - g.x[pl.j[s]]) >= g.r[a] + g.r[pl.j[s]]) {
+    if (s == pl.start[a + 1])
+      ++a;
+    else
+      ++s;
+  }
+  const std::uint32_t b = pl.j[s];
+  PairList missing = pl;
+  missing.j.erase(missing.j.begin() + s);
+  for (std::size_t i = a + 1; i < missing.start.size(); ++i) --missing.start[i];
+  const std::string e = pair_list_error(g, allow, missing);
+  EXPECT_NE(e.find("grains " + std::to_string(g.id[a]) + " and " + std::to_string(g.id[b])),
+            std::string::npos)
+      << e;
+
+  // a row out of order
+  PairList swapped = pl;
+  std::uint32_t c = 0;
+  while (pl.start[c + 1] - pl.start[c] < 2) ++c;
+  std::swap(swapped.j[pl.start[c]], swapped.j[pl.start[c] + 1]);
+  EXPECT_NE(pair_list_error(g, allow, swapped).find("out of order"), std::string::npos);
 }
 
 TEST(NeighbourList, FrozenPairsAreNotListed) {
