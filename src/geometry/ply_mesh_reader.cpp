@@ -2,116 +2,31 @@
 // gives x, y, z (any numeric type; other properties skipped); the 'face' element gives the list
 // 'vertex_indices' (or 'vertex_index') of any integer types; polygons are fan-triangulated.
 // Other elements are read past. Every count is checked against the limits and the bytes left
-// before anything is allocated (mesh_io.hpp).
+// before anything is allocated (mesh_io.hpp). The header is parsed by geometry/ply_format.hpp, as
+// the frame reader's (io/ply.cpp) is.
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <utility>
 #include <vector>
 
 #include "geometry/mesh_io.hpp"
 #include "geometry/mesh_io_detail.hpp"
+#include "geometry/ply_format.hpp"
 
 namespace sandflow::mesh_io {
 
 namespace {
 
-enum class Encoding { Ascii, BinaryLe, BinaryBe };
-enum class Type { I8, U8, I16, U16, I32, U32, F32, F64 };
-
-struct Property {
-  std::string name;
-  bool is_list = false;
-  Type count_type = Type::U8;  ///< lists only
-  Type type = Type::F32;       ///< the value, or a list's items
-};
-
-struct Element {
-  std::string name;
-  std::uint64_t count = 0;
-  std::vector<Property> props;
-  std::size_t line = 0;  ///< header line, for messages
-};
-
-std::size_t type_size(Type t) {
-  switch (t) {
-    case Type::I8:
-    case Type::U8:
-      return 1;
-    case Type::I16:
-    case Type::U16:
-      return 2;
-    case Type::I32:
-    case Type::U32:
-    case Type::F32:
-      return 4;
-    case Type::F64:
-      return 8;
-  }
-  return 8;
-}
+using ply::Element;
+using ply::Encoding;
+using ply::Property;
+using ply::Type;
 
 std::string number_text(double v) {
   if (std::isfinite(v) && v == std::floor(v) && std::fabs(v) < 1e18)
     return std::to_string(static_cast<std::int64_t>(v));
   return std::to_string(v);
-}
-
-bool is_integer(Type t) {
-  return t != Type::F32 && t != Type::F64;
-}
-
-bool parse_type(std::string_view s, Type& t) {
-  struct Name {
-    std::string_view name;
-    Type type;
-  };
-  static constexpr Name kNames[] = {
-      {"char", Type::I8},   {"int8", Type::I8},     {"uchar", Type::U8},   {"uint8", Type::U8},
-      {"short", Type::I16}, {"int16", Type::I16},   {"ushort", Type::U16}, {"uint16", Type::U16},
-      {"int", Type::I32},   {"int32", Type::I32},   {"uint", Type::U32},   {"uint32", Type::U32},
-      {"float", Type::F32}, {"float32", Type::F32}, {"double", Type::F64}, {"float64", Type::F64}};
-  for (const Name& n : kNames)
-    if (s == n.name) {
-      t = n.type;
-      return true;
-    }
-  return false;
-}
-
-template <class T>
-T load(const unsigned char* p, bool big_endian) {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, p, sizeof(T));
-  if (big_endian != (std::endian::native == std::endian::big))
-    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
-  T v;
-  std::memcpy(&v, b, sizeof(T));
-  return v;
-}
-
-double decode(const unsigned char* p, Type t, bool big_endian) {
-  switch (t) {
-    case Type::I8:
-      return static_cast<std::int8_t>(p[0]);
-    case Type::U8:
-      return p[0];
-    case Type::I16:
-      return load<std::int16_t>(p, big_endian);
-    case Type::U16:
-      return load<std::uint16_t>(p, big_endian);
-    case Type::I32:
-      return load<std::int32_t>(p, big_endian);
-    case Type::U32:
-      return load<std::uint32_t>(p, big_endian);
-    case Type::F32:
-      return load<float>(p, big_endian);
-    case Type::F64:
-      return load<double>(p, big_endian);
-  }
-  return 0;
 }
 
 // The properties of one record, in one encoding: where a value comes from and how to name the
@@ -151,7 +66,7 @@ class AsciiSource final : public RecordSource {
     return v;
   }
   std::uint64_t list_count(Type, Type) override {
-    const double n = scalar(Type::U32);
+    const double n = scalar(Type::UInt32);
     if (!(n >= 0) || n != std::floor(n) || n > 1e9) fail("bad list length");
     return static_cast<std::uint64_t>(n);
   }
@@ -192,16 +107,16 @@ class BinarySource final : public RecordSource {
   }
   double scalar(Type t) override {
     value_start_ = p_;
-    need(type_size(t));
-    const double v = decode(p_, t, big_endian_);
-    p_ += type_size(t);
+    need(ply::type_size(t));
+    const double v = ply::decode(p_, t, big_endian_);
+    p_ += ply::type_size(t);
     return v;
   }
   std::uint64_t list_count(Type t, Type item) override {
     const double n = scalar(t);
     if (n < 0) fail("negative list length");
     // the list must fit in the bytes left before anything is allocated for it
-    if (n * static_cast<double>(type_size(item)) > static_cast<double>(end_ - p_))
+    if (n * static_cast<double>(ply::type_size(item)) > static_cast<double>(end_ - p_))
       fail("a list of " + std::to_string(static_cast<std::uint64_t>(n)) +
            " items runs past the end of the file (file truncated?)");
     return static_cast<std::uint64_t>(n);
@@ -227,20 +142,45 @@ class BinarySource final : public RecordSource {
   std::uint64_t index_ = 0;
 };
 
+// The mesh reader's words for a problem in the header, after "FILE:LINE: ".
+constexpr ply::Words kMeshWords = {
+    "not a PLY file (expected the first line 'ply')",
+    "the header has no 'end_header' line",
+    "no 'format' line before 'end_header'",
+    "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'",
+    "binary_big_endian PLY is not supported",  // (accepted)
+    "unknown format '{}'",
+    "expected 'element <name> <count>' with a non-negative count",
+    "expected 'element <name> <count>' with a non-negative count",
+    "'property' before any 'element'",
+    "expected 'property <type> <name>' or 'property list <integer type> <type> <name>'",
+    "expected 'property <type> <name>' or 'property list <integer type> <type> <name>'",
+    "expected 'property <type> <name>' or 'property list <integer type> <type> <name>'",
+    "duplicate property '{}'",  // (accepted)
+    "unexpected '{}' in the header",
+};
+static_assert(ply::all_worded(kMeshWords));
+
+// The mesh reader accepts all the PLY grammar allows (ply_format.hpp): any blank between words,
+// a last line without its newline, both byte orders, and a count past 2^64 - 1, which the limits
+// then refuse.
+constexpr ply::Dialect kMeshDialect{.line_label = ":", .words = &kMeshWords};
+
 class PlyMeshReader {
  public:
   PlyMeshReader(std::string_view data, const std::string& file) : data_(data), file_(file) {}
 
   TriangleMesh read() {
-    LineCursor header(data_);
-    read_header(header);
-    check_counts(header.bytes_left());
+    ply::Header header = ply::parse_header(data_, kMeshDialect, file_);
+    encoding_ = header.encoding;
+    elements_ = std::move(header.elements);
+    check_counts(data_.size() - header.body_offset);
     find_mesh_properties();
     if (encoding_ == Encoding::Ascii) {
-      AsciiSource source(data_.substr(header.offset()), header.line_number(), file_);
+      AsciiSource source(data_.substr(header.body_offset), header.end_line, file_);
       read_elements(source);
     } else {
-      BinarySource source(data_, header.offset(), encoding_ == Encoding::BinaryBe, file_);
+      BinarySource source(data_, header.body_offset, encoding_ == Encoding::BinaryBigEndian, file_);
       read_elements(source);
     }
     return std::move(mesh_);
@@ -248,81 +188,6 @@ class PlyMeshReader {
 
  private:
   // ---- header ----
-  void read_header(LineCursor& cursor) {
-    std::string_view line;
-    if (!cursor.next(line) || line != "ply")
-      fail_line(file_, 1, "not a PLY file (expected the first line 'ply')");
-    bool have_format = false;
-    while (true) {
-      if (!cursor.next(line))
-        fail_line(file_, cursor.line_number() + 1, "the header has no 'end_header' line");
-      Tokens tokens(line);
-      std::string_view word;
-      if (!tokens.next(word) || word == "comment" || word == "obj_info") continue;
-      const std::size_t n = cursor.line_number();
-      if (word == "end_header") break;
-      if (word == "format")
-        have_format = read_format(tokens, n);
-      else if (word == "element")
-        read_element(tokens, n);
-      else if (word == "property")
-        read_property(tokens, n);
-      else
-        fail_line(file_, n, "unexpected '" + std::string(word.substr(0, 40)) + "' in the header");
-    }
-    if (!have_format)
-      fail_line(file_, cursor.line_number(), "no 'format' line before 'end_header'");
-  }
-
-  bool read_format(Tokens& tokens, std::size_t line) {
-    std::string_view kind, version;
-    if (!tokens.next(kind) || !tokens.next(version) || version != "1.0" || !tokens.empty())
-      fail_line(file_, line,
-                "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
-    if (kind == "ascii")
-      encoding_ = Encoding::Ascii;
-    else if (kind == "binary_little_endian")
-      encoding_ = Encoding::BinaryLe;
-    else if (kind == "binary_big_endian")
-      encoding_ = Encoding::BinaryBe;
-    else
-      fail_line(file_, line, "unknown format '" + std::string(kind.substr(0, 40)) + "'");
-    return true;
-  }
-
-  void read_element(Tokens& tokens, std::size_t line) {
-    std::string_view name, count;
-    Element e;
-    if (!tokens.next(name) || !tokens.next(count) || !tokens.empty() ||
-        !parse_count(count, e.count))
-      fail_line(file_, line, "expected 'element <name> <count>' with a non-negative count");
-    e.name = std::string(name);
-    e.line = line;
-    elements_.push_back(std::move(e));
-  }
-
-  void read_property(Tokens& tokens, std::size_t line) {
-    if (elements_.empty()) fail_line(file_, line, "'property' before any 'element'");
-    std::string_view w[4];
-    int n = 0;
-    while (n < 4 && tokens.next(w[n])) ++n;
-    Property p;
-    bool ok = false;
-    if (n == 4 && w[0] == "list" && tokens.empty()) {
-      p.is_list = true;
-      p.name = std::string(w[3]);
-      ok = parse_type(w[1], p.count_type) && parse_type(w[2], p.type) && is_integer(p.count_type);
-    } else if (n == 2) {
-      p.name = std::string(w[1]);
-      ok = parse_type(w[0], p.type);
-    }
-    if (!ok)
-      fail_line(
-          file_, line,
-          "expected 'property <type> <name>' or 'property list <integer type> <type> <name>'");
-    elements_.back().props.push_back(std::move(p));
-  }
-
   void find_mesh_properties() {
     int vertex_elements = 0, face_elements = 0;
     for (const Element& e : elements_) {
@@ -352,7 +217,7 @@ class PlyMeshReader {
     for (std::size_t k = 0; k < e.props.size(); ++k) {
       const Property& p = e.props[k];
       if (p.name != "vertex_indices" && p.name != "vertex_index") continue;
-      if (!p.is_list || !is_integer(p.type))
+      if (!p.is_list || !ply::is_integer(p.type))
         fail_line(file_, e.line, "'" + p.name + "' must be a list of integers");
       indices_ = static_cast<int>(k);
     }
@@ -362,10 +227,7 @@ class PlyMeshReader {
   void check_counts(std::size_t bytes_left) {
     std::uint64_t left = bytes_left;
     for (const Element& e : elements_) {
-      std::uint64_t min_bytes = 0;
-      for (const Property& p : e.props)
-        min_bytes +=
-            encoding_ == Encoding::Ascii ? 2 : type_size(p.is_list ? p.count_type : p.type);
+      const std::uint64_t min_bytes = ply::min_record_bytes(encoding_, e);
       const std::uint64_t limit = e.name == "vertex" ? kMaxMeshVertices : kMaxMeshTriangles;
       const std::string where =
           file_ + ":" + std::to_string(e.line) + ": element '" + e.name + "': ";

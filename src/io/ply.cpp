@@ -18,6 +18,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "geometry/ply_format.hpp"
 #include "io/export_formats.hpp"
 
 namespace sandflow {
@@ -57,104 +58,51 @@ void check_sizes(const FrameData& f) {
 // ---------------------------------------------------------------------------------------------
 // Reading
 
-enum class Type { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+using ply::Element;
+using ply::Encoding;
+using ply::Property;
+using ply::Type;
 
-std::size_t type_size(Type t) {
-  switch (t) {
-    case Type::Int8:
-    case Type::UInt8:
-      return 1;
-    case Type::Int16:
-    case Type::UInt16:
-      return 2;
-    case Type::Int32:
-    case Type::UInt32:
-    case Type::Float32:
-      return 4;
-    case Type::Float64:
-      return 8;
-  }
-  return 1;
-}
-
-bool parse_type(std::string_view s, Type* t) {
-  struct Name {
-    std::string_view a, b;
-    Type t;
-  };
-  static constexpr Name kNames[] = {
-      {"char", "int8", Type::Int8},        {"uchar", "uint8", Type::UInt8},
-      {"short", "int16", Type::Int16},     {"ushort", "uint16", Type::UInt16},
-      {"int", "int32", Type::Int32},       {"uint", "uint32", Type::UInt32},
-      {"float", "float32", Type::Float32}, {"double", "float64", Type::Float64},
-  };
-  for (const auto& n : kNames) {
-    if (s == n.a || s == n.b) {
-      *t = n.t;
-      return true;
-    }
-  }
-  return false;
-}
-
-bool is_integer(Type t) {
-  return t != Type::Float32 && t != Type::Float64;
-}
-
-// Decodes one little-endian scalar; the caller has checked that the bytes exist.
-double decode_le(const unsigned char* p, Type t) {
-  unsigned char b[8];
-  const std::size_t n = type_size(t);
-  std::memcpy(b, p, n);
-  if constexpr (std::endian::native == std::endian::big) std::reverse(b, b + n);
-  auto as = [&b]<class T>(T) {
-    T v;
-    std::memcpy(&v, b, sizeof(T));
-    return static_cast<double>(v);
-  };
-  switch (t) {
-    case Type::Int8:
-      return as(std::int8_t{});
-    case Type::UInt8:
-      return as(std::uint8_t{});
-    case Type::Int16:
-      return as(std::int16_t{});
-    case Type::UInt16:
-      return as(std::uint16_t{});
-    case Type::Int32:
-      return as(std::int32_t{});
-    case Type::UInt32:
-      return as(std::uint32_t{});
-    case Type::Float32:
-      return as(float{});
-    case Type::Float64:
-      return as(double{});
-  }
-  return 0.0;
-}
-
-struct Property {
-  std::string name;
-  Type type = Type::Float32;  // item type for lists
-  bool is_list = false;
-  Type count_type = Type::UInt8;
+// The frame reader's words for a problem in the header, after "NAME: header line N: ".
+constexpr ply::Words kFrameWords = {
+    "not a PLY file (expected the first line 'ply')",
+    "end of file, but the header has no 'end_header' line (file truncated?)",
+    "no 'format' line before 'end_header'",
+    "expected 'format <kind> 1.0'",
+    "binary_big_endian PLY is not supported (use binary_little_endian)",
+    "unknown format '{}'",
+    "expected 'element <name> <count>'",
+    "element count '{}' is not a non-negative integer",
+    "property before any element",
+    "expected 'property <type> <name>' or 'property list <type> <type> <name>'",
+    "list count type '{}' is not an integer type",
+    "unknown property type '{}'",
+    "duplicate property '{}'",
+    "unexpected '{}'",
 };
+static_assert(ply::all_worded(kFrameWords));
 
-struct Element {
-  std::string name;
-  std::uint64_t count = 0;
-  std::vector<Property> props;
-  int line = 0;  ///< header line, for messages
-};
+// What the frame reader accepts of the PLY grammar (geometry/ply_format.hpp): words between spaces
+// and tabs, header lines that end with a newline, binary data in little-endian order only, each
+// property named once, names cut to 40 characters.
+constexpr ply::Dialect kFrameDialect{.blanks = " \t",
+                                     .magic_only = true,
+                                     .final_newline = true,
+                                     .big_endian = false,
+                                     .saturate_counts = false,
+                                     .unique_properties = true,
+                                     .name_chars = 40,
+                                     .line_label = ": header line ",
+                                     .words = &kFrameWords};
 
-enum class Format { Ascii, BinaryLE };
-
-struct Header {
-  Format format = Format::Ascii;
-  UpAxis up = UpAxis::Z;  // "comment up_axis y": written by write_ply with UpAxis::Y
-  std::vector<Element> elements;
-  std::size_t body_offset = 0;  // first byte after "end_header\n"
-};
+// "comment up_axis y": written by write_ply with UpAxis::Y
+UpAxis up_axis(const ply::Header& h) {
+  for (std::string_view line : h.comments) {
+    const auto w = ply::split_words(line, kFrameDialect.blanks);
+    if (w.size() == 3 && w[1] == "up_axis" && w[2] == "y") return UpAxis::Y;
+  }
+  return UpAxis::Z;
+}
 
 // Where each grain field comes from inside a vertex record: a property index, or -1.
 enum Field { kX, kY, kZ, kRadius, kVx, kVy, kVz, kId, kState, kFieldCount };
@@ -168,20 +116,21 @@ class Reader {
   Reader(std::string_view data, const std::string& name) : data_(data), name_(name) {}
 
   FrameData read() {
-    const Header h = parse_header();
+    const ply::Header h = ply::parse_header(data_, kFrameDialect, name_);
+    const UpAxis up = up_axis(h);
     const unsigned char* p = bytes() + h.body_offset;
     const unsigned char* end = bytes() + data_.size();
     for (const Element& e : h.elements) {
       if (e.name == "vertex") {
-        FrameData f = read_vertices(h.format, e, p, end);
+        FrameData f = read_vertices(h.encoding, e, p, end);
         // back to the scene's frame, z up
-        for (Vec3& x : f.position) x = from_up_axis(x, h.up);
-        for (Vec3& v : f.velocity) v = from_up_axis(v, h.up);
+        for (Vec3& x : f.position) x = from_up_axis(x, up);
+        for (Vec3& v : f.velocity) v = from_up_axis(v, up);
         return f;
       }
-      skip_element(h.format, e, p, end);
+      skip_element(h.encoding, e, p, end);
     }
-    fail("header line " + std::to_string(end_header_line_) + ": no 'vertex' element");
+    fail("header line " + std::to_string(h.end_line) + ": no 'vertex' element");
   }
 
  private:
@@ -192,132 +141,22 @@ class Reader {
   }
 
   // The place of a byte of the data: its line in an ascii file, its offset in a binary one.
-  std::string place(Format format, const unsigned char* p) const {
+  std::string place(Encoding encoding, const unsigned char* p) const {
     const auto offset = static_cast<std::size_t>(p - bytes());
-    if (format != Format::Ascii) return "byte " + std::to_string(offset);
+    if (encoding != Encoding::Ascii) return "byte " + std::to_string(offset);
     return "line " + std::to_string(1 + std::count(data_.begin(), data_.begin() + offset, '\n'));
   }
 
-  static std::vector<std::string_view> split(std::string_view line) {
-    std::vector<std::string_view> words;
-    std::size_t i = 0;
-    while (i < line.size()) {
-      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-      std::size_t j = i;
-      while (j < line.size() && line[j] != ' ' && line[j] != '\t') ++j;
-      if (j > i) words.push_back(line.substr(i, j - i));
-      i = j;
-    }
-    return words;
-  }
-
-  Header parse_header() {
-    Header h;
-    const std::string_view text = data_;
-    if (text.substr(0, 3) != "ply" || text.size() < 4 || (text[3] != '\n' && text[3] != '\r')) {
-      fail("header line 1: not a PLY file (expected the first line 'ply')");
-    }
-    std::size_t pos = 0;
-    int line_no = 0;
-    bool have_format = false;
-    while (true) {
-      const std::size_t nl = text.find('\n', pos);
-      if (nl == std::string_view::npos)
-        fail("header line " + std::to_string(line_no + 1) +
-             ": end of file, but the header has no 'end_header' line (file truncated?)");
-      std::string_view line = text.substr(pos, nl - pos);
-      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-      pos = nl + 1;
-      ++line_no;
-      const std::string where = "header line " + std::to_string(line_no) + ": ";
-      const auto w = split(line);
-      if (line_no == 1) continue;  // "ply", checked above
-      if (w.empty()) continue;
-      if (w[0] == "comment" && w.size() == 3 && w[1] == "up_axis" && w[2] == "y") h.up = UpAxis::Y;
-      if (w[0] == "comment" || w[0] == "obj_info") continue;
-      if (w[0] == "end_header") {
-        if (!have_format) fail(where + "no 'format' line before 'end_header'");
-        h.body_offset = pos;
-        end_header_line_ = line_no;
-        return h;
-      }
-      if (w[0] == "format") {
-        if (w.size() != 3 || w[2] != "1.0") fail(where + "expected 'format <kind> 1.0'");
-        if (w[1] == "ascii") {
-          h.format = Format::Ascii;
-        } else if (w[1] == "binary_little_endian") {
-          h.format = Format::BinaryLE;
-        } else if (w[1] == "binary_big_endian") {
-          fail(where + "binary_big_endian PLY is not supported (use binary_little_endian)");
-        } else {
-          fail(where + "unknown format '" + std::string(w[1].substr(0, 40)) + "'");
-        }
-        have_format = true;
-      } else if (w[0] == "element") {
-        Element e;
-        if (w.size() != 3) fail(where + "expected 'element <name> <count>'");
-        e.name = std::string(w[1].substr(0, 40));
-        e.line = line_no;
-        const auto r = std::from_chars(w[2].data(), w[2].data() + w[2].size(), e.count);
-        if (r.ec != std::errc() || r.ptr != w[2].data() + w[2].size()) {
-          fail(where + "element count '" + std::string(w[2].substr(0, 40)) +
-               "' is not a non-negative integer");
-        }
-        h.elements.push_back(std::move(e));
-      } else if (w[0] == "property") {
-        if (h.elements.empty()) fail(where + "property before any element");
-        Property prop;
-        if (w.size() == 5 && w[1] == "list") {
-          prop.is_list = true;
-          if (!parse_type(w[2], &prop.count_type) || !is_integer(prop.count_type)) {
-            fail(where + "list count type '" + std::string(w[2].substr(0, 40)) +
-                 "' is not an integer type");
-          }
-          if (!parse_type(w[3], &prop.type)) {
-            fail(where + "unknown property type '" + std::string(w[3].substr(0, 40)) + "'");
-          }
-          prop.name = std::string(w[4].substr(0, 40));
-        } else if (w.size() == 3) {
-          if (!parse_type(w[1], &prop.type)) {
-            fail(where + "unknown property type '" + std::string(w[1].substr(0, 40)) + "'");
-          }
-          prop.name = std::string(w[2].substr(0, 40));
-        } else {
-          fail(where + "expected 'property <type> <name>' or 'property list <type> <type> <name>'");
-        }
-        for (const Property& q : h.elements.back().props) {
-          if (q.name == prop.name) fail(where + "duplicate property '" + prop.name + "'");
-        }
-        h.elements.back().props.push_back(std::move(prop));
-      } else {
-        fail(where + "unexpected '" + std::string(w[0].substr(0, 40)) + "'");
-      }
-    }
-  }
-
-  // Smallest number of bytes one record can take, used to reject counts that cannot fit.
-  static std::size_t min_record_bytes(Format format, const Element& e) {
-    std::size_t n = 0;
-    for (const Property& p : e.props) {
-      if (format == Format::Ascii) {
-        n += 2;  // a digit and a separator, also for a list's count
-      } else {
-        n += type_size(p.is_list ? p.count_type : p.type);
-      }
-    }
-    return n;
-  }
-
-  void check_count(Format format, const Element& e, const unsigned char* p,
+  void check_count(Encoding encoding, const Element& e, const unsigned char* p,
                    const unsigned char* end) const {
     const std::string where = "header line " + std::to_string(e.line) + ": element '" + e.name +
                               "' declares " + std::to_string(e.count) + " records";
     if (e.name == "vertex" && e.count > kMaxFrameGrains)
       fail(where + ", more than the limit of " + std::to_string(kMaxFrameGrains) + " grains");
-    const std::size_t min_bytes = min_record_bytes(format, e);
+    const std::size_t min_bytes = ply::min_record_bytes(encoding, e);
     if (min_bytes == 0) return;
     // The last ascii token needs no trailing separator.
-    const std::size_t avail = static_cast<std::size_t>(end - p) + (format == Format::Ascii);
+    const std::size_t avail = static_cast<std::size_t>(end - p) + (encoding == Encoding::Ascii);
     if (e.count > avail / min_bytes) {
       fail(where + " but only " + std::to_string(end - p) +
            " bytes of data follow the header (truncated file or corrupt count)");
@@ -325,9 +164,10 @@ class Reader {
   }
 
   // "line 12: element 'vertex' record 3: " (ascii) or "byte 480: element 'vertex' record 3: "
-  std::string record_place(Format format, const unsigned char* p, const Element& e,
+  std::string record_place(Encoding encoding, const unsigned char* p, const Element& e,
                            std::uint64_t record) const {
-    return place(format, p) + ": element '" + e.name + "' record " + std::to_string(record) + ": ";
+    return place(encoding, p) + ": element '" + e.name + "' record " + std::to_string(record) +
+           ": ";
   }
 
   // Reads the next ascii number; fails naming the record when the data ends or is not a number.
@@ -337,13 +177,13 @@ class Reader {
     const unsigned char* start = p;
     while (p < end && !std::isspace(*p)) ++p;
     if (start == p)
-      fail(record_place(Format::Ascii, p, e, record) + "unexpected end of data (truncated file)");
+      fail(record_place(Encoding::Ascii, p, e, record) + "unexpected end of data (truncated file)");
     const char* b = reinterpret_cast<const char*>(start);
     const char* t = reinterpret_cast<const char*>(p);
     double v = 0;
     const auto r = std::from_chars(b, t, v);
     if (r.ec != std::errc() || r.ptr != t) {
-      fail(record_place(Format::Ascii, start, e, record) + "'" +
+      fail(record_place(Encoding::Ascii, start, e, record) + "'" +
            std::string(b, std::min<std::size_t>(t - b, 40)) + "' is not a number");
     }
     return v;
@@ -351,45 +191,46 @@ class Reader {
 
   double next_binary(const unsigned char*& p, const unsigned char* end, Type t, const Element& e,
                      std::uint64_t record) const {
-    const std::size_t n = type_size(t);
+    const std::size_t n = ply::type_size(t);
     if (static_cast<std::size_t>(end - p) < n) {
-      fail(record_place(Format::BinaryLE, p, e, record) +
+      fail(record_place(Encoding::BinaryLittleEndian, p, e, record) +
            "unexpected end of data (truncated file)");
     }
-    const double v = decode_le(p, t);
+    const double v = ply::decode(p, t, false);
     p += n;
     return v;
   }
 
-  std::uint64_t list_count(double v, Format format, const unsigned char* at, const Element& e,
+  std::uint64_t list_count(double v, Encoding encoding, const unsigned char* at, const Element& e,
                            std::uint64_t record) const {
     if (!(v >= 0) || v != std::floor(v) || v > 4.0e9) {
-      fail(record_place(format, at, e, record) + "bad list length");
+      fail(record_place(encoding, at, e, record) + "bad list length");
     }
     return static_cast<std::uint64_t>(v);
   }
 
   // Reads one record, storing the values of the wanted scalar properties into `out`
   // (indexed like e.props; lists are skipped).
-  void read_record(Format format, const Element& e, std::uint64_t record, const unsigned char*& p,
-                   const unsigned char* end, double* out) const {
+  void read_record(Encoding encoding, const Element& e, std::uint64_t record,
+                   const unsigned char*& p, const unsigned char* end, double* out) const {
     for (std::size_t k = 0; k < e.props.size(); ++k) {
       const Property& prop = e.props[k];
       const unsigned char* at = p;
-      if (format == Format::Ascii) {
+      if (encoding == Encoding::Ascii) {
         if (prop.is_list) {
-          const std::uint64_t n = list_count(next_ascii(p, end, e, record), format, at, e, record);
+          const std::uint64_t n =
+              list_count(next_ascii(p, end, e, record), encoding, at, e, record);
           for (std::uint64_t i = 0; i < n; ++i) next_ascii(p, end, e, record);
         } else {
           out[k] = next_ascii(p, end, e, record);
         }
       } else {
         if (prop.is_list) {
-          const std::uint64_t n = list_count(next_binary(p, end, prop.count_type, e, record),
-                                             format, at, e, record);
-          const std::size_t item = type_size(prop.type);
+          const std::uint64_t n =
+              list_count(next_binary(p, end, prop.count_type, e, record), encoding, at, e, record);
+          const std::size_t item = ply::type_size(prop.type);
           if (n > static_cast<std::size_t>(end - p) / item) {
-            fail(record_place(format, at, e, record) +
+            fail(record_place(encoding, at, e, record) +
                  "list runs past the end of the file (truncated file)");
           }
           p += n * item;
@@ -400,15 +241,15 @@ class Reader {
     }
   }
 
-  void skip_element(Format format, const Element& e, const unsigned char*& p,
+  void skip_element(Encoding encoding, const Element& e, const unsigned char*& p,
                     const unsigned char* end) const {
     if (e.props.empty()) return;
-    check_count(format, e, p, end);
+    check_count(encoding, e, p, end);
     std::vector<double> scratch(e.props.size());
-    for (std::uint64_t r = 0; r < e.count; ++r) read_record(format, e, r, p, end, scratch.data());
+    for (std::uint64_t r = 0; r < e.count; ++r) read_record(encoding, e, r, p, end, scratch.data());
   }
 
-  FrameData read_vertices(Format format, const Element& e, const unsigned char*& p,
+  FrameData read_vertices(Encoding encoding, const Element& e, const unsigned char*& p,
                           const unsigned char* end) const {
     // Map the grain fields to property indices.
     const std::string where = "header line " + std::to_string(e.line) + ": ";
@@ -430,7 +271,7 @@ class Reader {
     }
     if (field[kRadius] < 0)
       fail(where + "vertex element has no 'radius' property (grain radii are needed)");
-    check_count(format, e, p, end);
+    check_count(encoding, e, p, end);
 
     FrameData f;
     const std::size_t n = static_cast<std::size_t>(e.count);
@@ -443,9 +284,9 @@ class Reader {
     auto get = [&](int fi, double fallback) { return field[fi] >= 0 ? v[field[fi]] : fallback; };
     for (std::size_t i = 0; i < n; ++i) {
       const unsigned char* record = p;
-      read_record(format, e, i, p, end, v.data());
+      read_record(encoding, e, i, p, end, v.data());
       auto bad = [&](const std::string& what) {
-        fail(place(format, record) + ": vertex " + std::to_string(i) + ": " + what);
+        fail(place(encoding, record) + ": vertex " + std::to_string(i) + ": " + what);
       };
       f.position[i] = {get(kX, 0), get(kY, 0), get(kZ, 0)};
       f.radius[i] = get(kRadius, 0);
@@ -472,7 +313,6 @@ class Reader {
 
   std::string_view data_;
   const std::string& name_;
-  int end_header_line_ = 0;
 };
 
 std::string read_file(const std::string& path) {
