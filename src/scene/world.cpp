@@ -312,11 +312,17 @@ void World::step() {
   dem_.step(grains_, geometry_, ts_.dt, profile_);
   check_overlap(step_ + 1);
   // (assertions) every grain held once, in the store of its state, as many as were emitted less
-  // those that left (docs/design.md §2); advance_frame checks the count in every build
+  // those that left (docs/design.md §2; advance_frame checks the count in every build), and the
+  // INTERFACE grains at rest: frozen with v = w = 0, and the DEM moves ACTIVE grains only
   if constexpr (kAssertions) {
     const std::string fault =
         store_error(grains_, static_, next_id_, static_cast<std::int64_t>(next_id_) - left_);
     SANDFLOW_ASSERT(fault.empty(), fmt::format("{}: {}", where(step_ + 1), fault));
+    for (std::size_t i = 0; i < grains_.size(); ++i)
+      SANDFLOW_ASSERT(grains_.state[i] == GrainState::Active ||
+                          (grains_.v[i] == Vec3{} && grains_.w[i] == Vec3{}),
+                      fmt::format("{}: the INTERFACE grain {} is not at rest", where(step_ + 1),
+                                  grains_.id[i]));
   }
   ++step_;
   time_ = static_cast<Real>(step_) * ts_.dt;
