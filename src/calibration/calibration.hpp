@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "analysis/heap.hpp"
-#include "scene/scene_config.hpp"
+#include "config/scene_config.hpp"
 
 namespace sandflow {
 

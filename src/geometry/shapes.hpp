@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "config/scene_config.hpp"
 #include "core/vec3.hpp"
 #include "geometry/mesh.hpp"
 #include "geometry/mesh_sampling.hpp"
 #include "geometry/winding_number.hpp"
-#include "scene/scene_config.hpp"
 
 namespace sandflow {
 

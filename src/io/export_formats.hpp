@@ -21,9 +21,9 @@
 #include <string_view>
 #include <vector>
 
+#include "config/scene_config.hpp"
 #include "core/vec3.hpp"
 #include "io/frame.hpp"
-#include "scene/scene_config.hpp"
 
 namespace sandflow {
 

@@ -17,7 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "scene/scene_config.hpp"
+#include "config/scene_config.hpp"
 #include "surface/height_field.hpp"
 
 namespace sandflow {

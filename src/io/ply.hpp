@@ -19,8 +19,8 @@
 #include <string>
 #include <string_view>
 
+#include "config/scene_config.hpp"
 #include "io/frame.hpp"
-#include "scene/scene_config.hpp"
 
 namespace sandflow {
 

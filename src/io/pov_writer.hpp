@@ -32,10 +32,10 @@
 #include <utility>
 #include <vector>
 
+#include "config/scene_config.hpp"
 #include "core/vec3.hpp"
 #include "geometry/mesh.hpp"
 #include "io/frame.hpp"
-#include "scene/scene_config.hpp"
 
 namespace sandflow {
 

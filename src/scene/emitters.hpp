@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "config/scene_config.hpp"
 #include "core/rng.hpp"
 #include "core/vec3.hpp"
 #include "dem/grains.hpp"
-#include "scene/scene_config.hpp"
 
 namespace sandflow {
 

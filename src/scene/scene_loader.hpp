@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "config/scene_config.hpp"
 #include "io/png_gray.hpp"
-#include "scene/scene_config.hpp"
 
 namespace sandflow {
 

@@ -3,8 +3,8 @@
 // static surface, so springs can be softer and dt larger. Impacts bound k_n in both modes.
 #pragma once
 
+#include "config/scene_config.hpp"
 #include "geometry/shapes.hpp"
-#include "scene/scene_config.hpp"
 
 namespace sandflow {
 

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "config/scene_config.hpp"
 #include "core/rng.hpp"
 #include "core/timer.hpp"
 #include "dem/dem_solver.hpp"
@@ -16,7 +17,6 @@
 #include "geometry/shapes.hpp"
 #include "io/frame.hpp"
 #include "scene/emitters.hpp"
-#include "scene/scene_config.hpp"
 #include "scene/stiffness.hpp"
 #include "surface/surface_flow.hpp"
 

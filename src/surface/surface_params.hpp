@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "config/scene_config.hpp"
 #include "geometry/shapes.hpp"
-#include "scene/scene_config.hpp"
 #include "surface/height_field.hpp"
 #include "surface/interface_layer.hpp"
 

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string>
 
-#include "scene/scene_config.hpp"
+#include "config/scene_config.hpp"
 
 namespace sandflow::test {
 

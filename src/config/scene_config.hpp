@@ -1,6 +1,7 @@
 // A scene as plain data, after parsing and validation: every field in SI units, angles already in
-// radians where the struct says so. The loader (scene_loader.hpp) fills it from a TOML file; the
-// World is built from it. Defaults here are the documented defaults of docs/scenes.md.
+// radians where the struct says so. The loader (scene/scene_loader.hpp) fills it from a TOML file;
+// the World is built from it. Defaults here are the documented defaults of docs/scenes.md.
+// It is a leaf of the layers (docs/design.md): plain structs over core/, read by every layer above.
 #pragma once
 
 #include <array>
