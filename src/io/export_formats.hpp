@@ -23,7 +23,7 @@
 
 #include "config/scene_config.hpp"
 #include "core/vec3.hpp"
-#include "io/frame.hpp"
+#include "dem/frame.hpp"
 
 namespace sandflow {
 

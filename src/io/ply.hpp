@@ -20,7 +20,7 @@
 #include <string_view>
 
 #include "config/scene_config.hpp"
-#include "io/frame.hpp"
+#include "dem/frame.hpp"
 
 namespace sandflow {
 

@@ -34,8 +34,8 @@
 
 #include "config/scene_config.hpp"
 #include "core/vec3.hpp"
+#include "dem/frame.hpp"
 #include "geometry/mesh.hpp"
-#include "io/frame.hpp"
 
 namespace sandflow {
 

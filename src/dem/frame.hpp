@@ -1,4 +1,6 @@
-// One frame of visible grains, as written to frames/NNNN.ply and read back by `sandflow measure`.
+// One frame of grains as plain arrays: what the World hands out (all grains, or the visible ones)
+// and what frames/NNNN.ply holds, written and read back (`sandflow measure`) by io/. It sits with
+// the grains, below both, so that the World needs nothing from io/ to produce it.
 #pragma once
 
 #include <cstdint>
