@@ -15,7 +15,7 @@
 #include "analysis/surface_diff.hpp"
 #include "calibration/calibration.hpp"
 #include "checkpoint/checkpoint.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 namespace sandflow {
 

@@ -15,7 +15,7 @@
 
 #include "core/timer.hpp"
 #include "dem/dem_solver.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 using namespace sandflow;
 

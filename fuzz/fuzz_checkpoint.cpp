@@ -15,7 +15,7 @@
 #include "checkpoint/checkpoint.hpp"
 #include "fuzz_common.hpp"
 #include "scene/scene_loader.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 namespace {
 

@@ -19,7 +19,7 @@
 #include "fuzz_common.hpp"
 #include "geometry/mesh_io.hpp"
 #include "scene/scene_loader.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;

@@ -16,7 +16,7 @@
 
 #include "fuzz_common.hpp"
 #include "scene/scene_loader.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 namespace {
 

@@ -11,7 +11,7 @@
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "core/timer.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 namespace sandflow {
 

@@ -26,7 +26,7 @@
 #include <string_view>
 #include <vector>
 
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 namespace sandflow {
 

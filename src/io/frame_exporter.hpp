@@ -30,7 +30,7 @@
 #include "io/export_formats.hpp"
 #include "io/height_export.hpp"
 #include "io/pov_writer.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 namespace sandflow {
 

@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 namespace sandflow {
 

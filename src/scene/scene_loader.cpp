@@ -36,7 +36,7 @@
 #include "geometry/heightmap.hpp"
 #include "io/export_formats.hpp"
 #include "io/png_gray.hpp"
-#include "scene/emitters.hpp"
+#include "sim/emitters.hpp"
 #include "surface/surface_params.hpp"
 
 namespace sandflow {

@@ -15,7 +15,7 @@
 #include "cli_runner.hpp"
 #include "core/error.hpp"
 #include "io/folder_lock.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 namespace fs = std::filesystem;
 

@@ -10,7 +10,7 @@
 
 #include "checkpoint/checkpoint.hpp"
 #include "core/error.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 #include "support/test_scenes.hpp"
 
 namespace sandflow {

@@ -10,7 +10,7 @@
 
 #include "core/error.hpp"
 #include "scene/scene_loader.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 #include "support/test_scenes.hpp"
 
 namespace sandflow {

@@ -6,7 +6,7 @@
 #include "core/error.hpp"
 #include "dem/contact.hpp"
 #include "dem/dem_solver.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 namespace sandflow {
 namespace {
@@ -125,6 +125,32 @@ TEST(ContactLaw, CoulombCapHolds) {
   // on slip the history is rescaled so the spring alone gives the capped force
   const Real c_t = p.c_t_ratio * pair_geometry(1e-4).c_n;
   EXPECT_NEAR(-p.k_t * h.xi.x - c_t * 0.02, f_t.x, 1e-12 * f.f_n);
+}
+
+// k_t_ratio = 0 and rolling_stiffness_ratio = 0 are allowed: a contact of no tangential (or
+// rolling) stiffness is a dashpot capped at Coulomb's bound, and its history stays finite when it
+// slips (it was divided by k = 0, and the next step was NaN).
+TEST(ContactLaw, SpringsOfNoStiffnessSlipWithAFiniteHistory) {
+  MaterialConfig m;
+  m.k_n = 1e4;
+  m.restitution = 0.5;
+  m.friction = 0.1;
+  m.rolling_friction = 0.1;
+  m.k_t_ratio = 0;
+  m.rolling_stiffness_ratio = 0;
+  const ContactParams p = contact_params(m);
+  ASSERT_EQ(p.k_t, 0.0);
+  ASSERT_EQ(p.k_r, 0.0);
+  const ContactGeometry g = pair_geometry(1e-4);
+  ContactHistory h;
+  // fast sliding and spinning: both dashpots exceed their caps
+  const auto f = contact_force<true>(p, g, {50, 0, 0}, {0, 0, 0}, {400, 0, 0}, h, 1e-5);
+  EXPECT_TRUE(f.sliding);
+  EXPECT_EQ(h.xi, Vec3{});
+  EXPECT_EQ(h.psi, Vec3{});
+  const Vec3 f_t{f.force_i.x, f.force_i.y, 0};
+  EXPECT_NEAR(norm(f_t), 0.1 * f.f_n, 1e-12 * f.f_n);
+  EXPECT_TRUE(std::isfinite(norm(f.t_roll)));
 }
 
 TEST(ContactLaw, RollingTorqueCapHolds) {

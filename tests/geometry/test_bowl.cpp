@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "geometry/shapes.hpp"
-#include "scene/world.hpp"
 #include "sdf_check.hpp"
+#include "sim/world.hpp"
 
 namespace sandflow {
 namespace {

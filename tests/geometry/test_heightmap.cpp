@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "geometry/heightmap.hpp"
-#include "scene/world.hpp"
 #include "sdf_check.hpp"
+#include "sim/world.hpp"
 
 namespace sandflow {
 namespace {

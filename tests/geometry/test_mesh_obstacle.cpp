@@ -8,7 +8,7 @@
 
 #include "core/error.hpp"
 #include "geometry/shapes.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 #include "support/test_scenes.hpp"
 
 namespace sandflow {

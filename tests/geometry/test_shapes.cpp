@@ -6,7 +6,7 @@
 
 #include "core/error.hpp"
 #include "geometry/shapes.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 namespace sandflow {
 namespace {

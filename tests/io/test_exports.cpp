@@ -30,7 +30,7 @@
 #include "io/png_gray.hpp"
 #include "io/pov_writer.hpp"
 #include "scene/scene_loader.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 #include "support/xml_tags.hpp"
 #include "surface/surface_params.hpp"
 

@@ -7,7 +7,7 @@
 #include <set>
 
 #include "core/error.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 #include "support/test_scenes.hpp"
 
 namespace sandflow {

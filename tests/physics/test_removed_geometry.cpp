@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 #include "support/test_scenes.hpp"
 
 namespace sandflow {

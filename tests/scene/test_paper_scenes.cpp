@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "scene/scene_loader.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 namespace sandflow {
 namespace {

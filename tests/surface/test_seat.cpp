@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 #include "support/test_scenes.hpp"
 #include "surface/seat.hpp"
 #include "surface/surface_flow.hpp"

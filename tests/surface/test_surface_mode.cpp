@@ -9,7 +9,7 @@
 #include <set>
 
 #include "analysis/surface_diff.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 #include "support/test_scenes.hpp"
 
 namespace sandflow {

@@ -12,7 +12,7 @@
 
 #include "core/error.hpp"
 #include "geometry/shapes.hpp"
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 #include "support/test_scenes.hpp"
 #include "surface/height_field.hpp"
 #include "surface/surface_params.hpp"

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <vector>
 
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 #include "surface/interface_layer.hpp"
 
 namespace sandflow {

@@ -1,4 +1,4 @@
-#include "scene/stiffness.hpp"
+#include "sim/stiffness.hpp"
 
 #include <algorithm>
 #include <cmath>

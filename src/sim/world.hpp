@@ -16,8 +16,8 @@
 #include "dem/frame.hpp"
 #include "dem/grains.hpp"
 #include "geometry/shapes.hpp"
-#include "scene/emitters.hpp"
-#include "scene/stiffness.hpp"
+#include "sim/emitters.hpp"
+#include "sim/stiffness.hpp"
 #include "surface/surface_flow.hpp"
 
 namespace sandflow {

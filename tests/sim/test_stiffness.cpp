@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "scene/stiffness.hpp"
+#include "sim/stiffness.hpp"
 #include "support/test_scenes.hpp"
 #include "surface/surface_params.hpp"
 

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "scene/emitters.hpp"
-#include "scene/world.hpp"
+#include "sim/emitters.hpp"
+#include "sim/world.hpp"
 
 namespace sandflow {
 namespace {

@@ -1,4 +1,4 @@
-#include "scene/emitters.hpp"
+#include "sim/emitters.hpp"
 
 #include <algorithm>
 #include <cmath>

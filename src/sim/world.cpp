@@ -1,4 +1,4 @@
-#include "scene/world.hpp"
+#include "sim/world.hpp"
 
 #include <algorithm>
 #include <cmath>
