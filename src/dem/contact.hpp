@@ -110,7 +110,8 @@ inline Vec3 capped_spring(Vec3& s, const Vec3& rate, Real k, Real c, Real cap, R
   capped = f2 > cap * cap;
   if (capped) {
     f *= (f2 > 0 ? cap / std::sqrt(f2) : 0.0);
-    s = (f + rate * c) * (-1.0 / k);
+    // (a spring of no stiffness, k_t_ratio = 0, holds no stretch: 1/k would make it infinite)
+    s = k > 0 ? (f + rate * c) * (-1.0 / k) : Vec3{};
   }
   return f;
 }
