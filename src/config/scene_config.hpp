@@ -55,7 +55,8 @@ struct SurfaceConfig {
   /// or "" (the scene's, or the built-in defaults where it sets none)
   std::string angles_source;
   std::optional<Real> rolling_min;          ///< R_min [m]; default one mean diameter
-  std::optional<Real> interface_thickness;  ///< T [m]; default one mean diameter
+  std::optional<Real> flowing_min;          ///< R_min under a flowing layer [m]; default 4 d
+  std::optional<Real> interface_thickness;  ///< T [m]; default half a mean diameter
   std::optional<Real> update_interval;      ///< time between height-field updates [s]
   std::optional<Real> trap_speed;           ///< grains slower than this may be trapped [m/s]
   /// a grain touching the pile faster than this makes the rolling layer flow and digs [m/s]

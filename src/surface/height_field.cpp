@@ -251,9 +251,14 @@ void HeightField::exchange(Real dt, const std::vector<std::uint8_t>& flowing) {
       h_new[c] = std::max(h_[c] + dh, L_[c]);  // erosion never digs below the terrain
       Gamma_[c] = -(h_new[c] - h_[c]) / dt;
     }
+  const Real flowing_min = std::max(p_.flowing_min, p_.rolling_min);
   for (std::size_t c = 0; c < h_.size(); ++c) {
-    // R_min: the visible surface is always made of grains that can move
-    h_[c] = std::max(std::min(h_new[c], H_[c] - p_.rolling_min), L_[c]);
+    // R_min: the visible surface is always made of grains that can move. Where grains flow, DEM
+    // shears a layer several grains deep (docs/physics.md, "The flowing layer"): a static top one
+    // grain below the surface would hold up grains that DEM lets slide, and the heap grows steep.
+    const bool flows = flowing.empty() || flowing[c];
+    const Real r_min = flows ? flowing_min : p_.rolling_min;
+    h_[c] = std::max(std::min(h_new[c], H_[c] - r_min), L_[c]);
     R_[c] = H_[c] - h_[c];
   }
 }

@@ -27,6 +27,7 @@ struct HeightFieldParams {
   Real theta0 = 0.56;         ///< repose angle [rad]
   Real theta_max = 0.66;      ///< a static slope steeper than this erodes on its own [rad]
   Real rolling_min = 0.01;    ///< R_min [m]
+  Real flowing_min = 0;       ///< R_min under a flowing layer [m] (never below rolling_min)
   Real avalanche_depth = 0.01;///< thickness that rolls where theta > theta_max [m]
   Real gap = 0.01;            ///< a grain separated from the pile below by more is airborne [m]
 };
@@ -74,7 +75,8 @@ class HeightField {
   /// picks each column's level; where it changes, h starts afresh at the new L.
   void measure(const Grains& hot, const std::vector<Real>& static_top,
                const std::vector<std::uint8_t>& counts = {});
-  /// Steps 2-6 over a time dt: slopes, exchange, h, R, and the R_min floor. `flowing` marks the
+  /// Steps 2-6 over a time dt: slopes, exchange, h, R, and the R_min floor (flowing_min under a
+  /// flowing layer). `flowing` marks the
   /// columns whose rolling layer holds moving grains (empty: all flow). A rolling layer at rest
   /// deposits up to theta_max, the steepest a static slope stands; a flowing one erodes the
   /// static layer down to theta0 (the hysteresis of the angle of repose).

@@ -21,6 +21,10 @@ Real rolling_min(const SceneConfig& scene) {
   return scene.surface.rolling_min.value_or(scene.material.diameter);
 }
 
+Real flowing_min(const SceneConfig& scene) {
+  return scene.surface.flowing_min.value_or(4 * scene.material.diameter);
+}
+
 Real interface_thickness(const SceneConfig& scene) {
   // half a diameter: the invariant of the layers, not the band, keeps grains out of the static
   // layer (docs/physics.md), and a thinner band simulates fewer grains
@@ -49,6 +53,7 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   hf.theta0 = sc.repose_angle;
   hf.theta_max = sc.max_angle.value_or(sc.repose_angle + deg_to_rad(6.0));
   hf.rolling_min = rolling_min(scene);
+  hf.flowing_min = flowing_min(scene);
   hf.avalanche_depth = d;
   hf.gap = d;  // a quarter of d cut H at gaps left below grains held up from the side
   p.interface.thickness = interface_thickness(scene);

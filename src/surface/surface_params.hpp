@@ -27,8 +27,9 @@ struct SurfaceParams {
   Real z_top = 1, z_floor = -1;  ///< vertical span searched for the terrain [m]
 };
 
-/// R_min [m] and T [m] of a scene (defaults: d and d/2).
+/// R_min [m], R_min under a flowing layer [m] and T [m] of a scene (defaults: d, 4 d and d/2).
 Real rolling_min(const SceneConfig& scene);
+Real flowing_min(const SceneConfig& scene);
 Real interface_thickness(const SceneConfig& scene);
 
 /// Height [m] and base radius [m] of the cone that holds every grain of the scene at theta_0

@@ -30,6 +30,9 @@ SceneConfig restart_scene(Mode mode) {
   s.material.diameter_spread = 0.1;
   s.material.k_n = 1e4;
   s.material.rolling_friction = 0.3;
+  // the block is four grains deep: under the pour a flowing layer of 4 d would leave no grain to
+  // put to sleep in 14 frames, and the static layer's state would go untested
+  s.surface.flowing_min = 0.01;
   s.output.fps = 60;
   GeometryConfig box = test::box_entry({0, 0, 0.1}, {0.12, 0.12, 0.2});
   box.container = true;

@@ -326,6 +326,7 @@ TEST(SceneLoader, SurfaceTableIsReadWithAnglesInRadians) {
       "repose_angle = 30\n"
       "max_angle = 30\n"  // equal to the repose angle is allowed
       "rolling_min = 0\n"
+      "flowing_min = 0.03\n"
       "interface_thickness = 0.015\n"
       "update_interval = 0.004\n"
       "trap_speed = 0.05\n"
@@ -334,7 +335,7 @@ TEST(SceneLoader, SurfaceTableIsReadWithAnglesInRadians) {
       std::string(kMinimal);
   const SceneConfig c = load_scene_from_string(text, "t.toml");
   const SurfaceConfig& s = c.surface;
-  ASSERT_TRUE(s.cell_size && s.exchange_rate && s.max_angle && s.rolling_min &&
+  ASSERT_TRUE(s.cell_size && s.exchange_rate && s.max_angle && s.rolling_min && s.flowing_min &&
               s.interface_thickness && s.update_interval && s.trap_speed && s.flow_speed &&
               s.extent);
   EXPECT_EQ(*s.cell_size, 0.012);
@@ -342,6 +343,7 @@ TEST(SceneLoader, SurfaceTableIsReadWithAnglesInRadians) {
   EXPECT_DOUBLE_EQ(s.repose_angle, kPi / 6);
   EXPECT_DOUBLE_EQ(*s.max_angle, kPi / 6);
   EXPECT_EQ(*s.rolling_min, 0.0);
+  EXPECT_EQ(*s.flowing_min, 0.03);
   EXPECT_EQ(*s.interface_thickness, 0.015);
   EXPECT_EQ(*s.update_interval, 0.004);
   EXPECT_EQ(*s.trap_speed, 0.05);
@@ -376,6 +378,8 @@ TEST(SceneLoader, BadSurfaceValuesNameTheKey) {
   expect_error(s + "max_angle = 95\n", {"t.toml:4:1: surface.max_angle = 95 is outside (0, 90)"});
   expect_error(s + "rolling_min = -0.01\n",
                {"t.toml:4:1: surface.rolling_min = -0.01 is not >= 0"});
+  expect_error(s + "flowing_min = -0.01\n",
+               {"t.toml:4:1: surface.flowing_min = -0.01 is not >= 0"});
   expect_error(s + "interface_thickness = 0\n",
                {"t.toml:4:1: surface.interface_thickness = 0 is not > 0"});
   expect_error(s + "update_interval = 0\n", {"t.toml:4:1: surface.update_interval = 0 is not > 0"});

@@ -133,6 +133,43 @@ TEST(Exchange, RollingLayerNeverThinnerThanRmin) {
   }
 }
 
+TEST(Exchange, AFlowingLayerKeepsFlowingMinAndOneAtRestOnlyRmin) {
+  // a thick rolling layer on a gentle slope deposits; where it flows the static top stays
+  // flowing_min below the surface, where it rests it may rise to R_min below it
+  const Real r_min = 0.01, flowing_min = 0.04;
+  for (std::uint8_t flows : {0, 1}) {
+    HeightField hf = ramp(10, 0.08, r_min);
+    HeightFieldParams p = hf.params();
+    p.flowing_min = flowing_min;
+    HeightField field(p, hf.terrain());
+    field.set_surface(hf.surface());
+    field.set_static_top(hf.static_top());
+    for (int k = 0; k < 200; ++k)
+      field.exchange(0.003, std::vector<std::uint8_t>(field.columns(), flows));
+    const Real floor = flows ? flowing_min : r_min;
+    for_interior(field, [&](std::size_t c) {
+      EXPECT_GE(field.rolling()[c], floor - 1e-12) << "flows " << int(flows) << ", column " << c;
+      EXPECT_LE(field.rolling()[c], floor + 1e-9) << "flows " << int(flows) << ", column " << c;
+    });
+  }
+}
+
+TEST(Exchange, FlowingMinBelowRminChangesNothing) {
+  // flowing_min never thins the layer below R_min
+  HeightField hf = ramp(10, 0.08, 0.01);
+  HeightFieldParams p = hf.params();
+  p.flowing_min = 0.002;
+  HeightField field(p, hf.terrain());
+  field.set_surface(hf.surface());
+  field.set_static_top(hf.static_top());
+  for (int k = 0; k < 200; ++k) {
+    hf.exchange(0.003, std::vector<std::uint8_t>(hf.columns(), 1));
+    field.exchange(0.003, std::vector<std::uint8_t>(field.columns(), 1));
+  }
+  for (std::size_t c = 0; c < hf.columns(); ++c)
+    EXPECT_EQ(field.static_top()[c], hf.static_top()[c]) << c;
+}
+
 TEST(Exchange, AvalancheStartsOnlyAboveThetaMax) {
   // no rolling layer: BCRE alone would hold any slope; theta_max makes the steep one fail
   HeightField steep = ramp(45, 0.0);
