@@ -27,6 +27,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/process.hpp"
 #include "geometry/shapes.hpp"
 #include "io/ply.hpp"
 #include "io/pov_writer.hpp"

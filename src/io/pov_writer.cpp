@@ -2,12 +2,10 @@
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -15,12 +13,9 @@
 #include <string_view>
 #include <type_traits>
 
-#include <fcntl.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/process.hpp"
 
 namespace sandflow {
 namespace {
@@ -570,69 +565,16 @@ void write_pov_scene(const std::string& path, const FrameData& f,
   write_file_atomic(path, s, Sync::Later);
 }
 
-std::string find_program(const std::string& name) {
-  const char* path_env = std::getenv("PATH");
-  std::string_view dirs = path_env ? path_env : "/usr/local/bin:/usr/bin:/bin";
-  while (!dirs.empty()) {
-    const std::size_t colon = dirs.find(':');
-    std::string dir(dirs.substr(0, colon));
-    dirs = colon == std::string_view::npos ? std::string_view{} : dirs.substr(colon + 1);
-    if (dir.empty()) dir = ".";
-    const std::string candidate = dir + "/" + name;
-    if (::access(candidate.c_str(), X_OK) == 0 && !fs::is_directory(candidate)) return candidate;
-  }
-  return "";
-}
-
 std::string find_povray() {
   return find_program("povray");
 }
 
 namespace {
 
-// Runs args[0] (a full path) with `args` in `work_dir`, stdin from /dev/null, stdout and stderr
-// to `log_path`, and waits for it. Returns "" on exit status 0, else what went wrong. Safe to
-// call from several threads at once: the log is opened close-on-exec, so a child started by
-// another thread does not hold it.
-std::string run_logged(std::vector<std::string> args, const std::string& work_dir,
-                       const std::string& log_path, const std::string& what) {
-  // Everything the child needs is prepared before fork: it may only call async-signal-safe
-  // functions (the parent has other threads).
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  errno = 0;
-  const int log_fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (log_fd < 0) throw OutputError(log_path + ": cannot create: " + system_reason(errno));
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    const int err = errno;
-    ::close(log_fd);
-    return "cannot start " + what + ": " + system_reason(err);
-  }
-  if (pid == 0) {
-    const int null_fd = ::open("/dev/null", O_RDONLY);
-    if (null_fd >= 0) ::dup2(null_fd, 0);
-    ::dup2(log_fd, 1);
-    ::dup2(log_fd, 2);
-    if (::chdir(work_dir.c_str()) != 0) ::_exit(126);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  ::close(log_fd);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (WIFSIGNALED(status))
-    return what + " was killed by signal " + std::to_string(WTERMSIG(status));
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    return what + " failed with exit status " + std::to_string(WEXITSTATUS(status));
-  return "";
-}
-
-// Runs `args` as run_logged does, into the file `partial`, which becomes `out_path` only when the
-// program succeeded and wrote something: no half-made picture or movie is ever left under its
-// name. Throws OutputError with the end of the log (`nothing`: the message when no file came).
+// Runs `args` with run_logged (core/process.hpp) into the file `partial`, which becomes
+// `out_path` only when the program succeeded and wrote something: no half-made picture or movie is
+// ever left under its name. Throws OutputError with the end of the log (`nothing`: the message
+// when no file came).
 void run_into_file(const std::vector<std::string>& args, const std::string& work_dir,
                    const std::string& log_path, const std::string& what,
                    const std::string& partial, const std::string& out_path,

@@ -86,9 +86,7 @@ void write_pov_scene(const std::string& path, const FrameData& f,
                      const std::vector<GeometryConfig>& geometry, const PovOptions& opt,
                      const std::vector<const TriangleMesh*>& meshes = {});
 
-/// Full path of the executable `name` found on PATH, or "" when there is none.
-std::string find_program(const std::string& name);
-/// find_program("povray").
+/// find_program("povray") (core/process.hpp).
 std::string find_povray();
 
 /// Renders `pov_path` to `png_path` (width x height, antialiased unless `antialias` is false,

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cli_runner.hpp"
+#include "core/process.hpp"
 #include "io/ply.hpp"
 #include "io/pov_writer.hpp"
 
