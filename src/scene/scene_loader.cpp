@@ -1,9 +1,10 @@
 // Scene files (TOML) -> SceneConfig.
 //
-// The document is parsed whole, the --set overrides are grafted onto the parsed tree, and only
-// then is the tree read into the structs, so an override passes through exactly the checks a
-// value in the file does. Each grafted value is parsed with "--set KEY" as its source path: an
-// error can always say where its value came from, "PATH:LINE:COL" or "--set KEY".
+// The document is parsed whole (toml_reader.cpp, behind the guard of toml_guard.cpp), the --set
+// overrides are grafted onto the parsed tree, and only then is the tree read into the structs, so
+// an override passes through exactly the checks a value in the file does. Each grafted value is
+// parsed with "--set KEY" as its source path: an error can always say where its value came from,
+// "PATH:LINE:COL" or "--set KEY".
 //
 // Every table is read by a TableReader. Each read() names one key, converts it and checks its
 // range; the keys a table reads are, by construction, the keys it accepts, so finish() reports
@@ -24,7 +25,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -32,14 +32,16 @@
 #include <utility>
 
 #include "core/error.hpp"
-#include "core/file_kind.hpp"
 #include "geometry/heightmap.hpp"
 #include "io/export_formats.hpp"
 #include "io/png_gray.hpp"
+#include "scene/toml_guard.hpp"
+#include "scene/toml_reader.hpp"
 #include "sim/emitters.hpp"
 #include "surface/surface_params.hpp"
 
 namespace sandflow {
+namespace loader {
 namespace {
 
 constexpr Real kInf = std::numeric_limits<Real>::infinity();
@@ -967,191 +969,6 @@ SceneConfig read_scene(const toml::table& root, const std::string& path,
   return c;
 }
 
-// ---- Parsing ------------------------------------------------------------------------------------
-
-// What Debian's toml++ 3.3 cannot be given safely, found before it sees the text:
-// - It recurses once per level of table nesting when it finishes a document, so a dotted key of
-//   100,000 parts (a.a.a...) overflows the stack. It caps the nesting of inline tables and arrays
-//   itself (256 levels); the parts of a dotted key or table name are capped here, so no document
-//   nests deeper than about 256 x 16 levels.
-// - Its test for Unicode whitespace reaches __builtin_unreachable() for most non-ASCII characters
-//   (upstream issues 190 and 295, undefined behaviour), and it makes that test on characters
-//   outside strings and comments (even inside a malformed value: 1'Z'), and after a backslash in
-//   a """multi-line string""". TOML allows non-ASCII characters only in strings and comments, so
-//   the first is an error anyway; the second is refused too.
-// toml_hazard() follows TOML's grammar far enough to know where a string may start: at the start
-// of a key, a table name or a value, never inside another token. A text it misreads is one
-// toml++ refuses at or before that point, so a character it takes for part of a string is one
-// toml++ reads as such or never reads.
-constexpr int kMaxKeyParts = 16;
-
-struct TomlHazard {
-  std::size_t line = 1, column = 1;
-  std::string what;
-};
-
-std::optional<TomlHazard> toml_hazard(std::string_view text) {
-  // What the grammar expects next: a key (at a line's start, after '{' or ',' in an inline table,
-  // after a key's '.'), a table name (after '[' at a line's start, after its '.'), a value (after
-  // '=', '[' or ',' in an array), or nothing a string may start (Other).
-  enum class Expect { Key, KeyPart, Table, TablePart, Value, Other };
-  enum class Open { Array, InlineTable };
-  const auto key_char = [](char ch) {
-    return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-';
-  };
-  const auto value_char = [&](char ch) {  // bare values: numbers, dates, true, inf, nan
-    return key_char(ch) || ch == '+' || ch == '.' || ch == ':';
-  };
-  const auto ascii = [](char ch) { return static_cast<unsigned char>(ch) < 0x80; };
-  std::size_t i = 0, line = 1, line_start = 0;
-  const auto hazard = [&](std::size_t at, std::string what) {
-    return TomlHazard{line, at - line_start + 1, std::move(what)};
-  };
-  Expect expect = Expect::Key;
-  std::vector<Open> open;  // the arrays and inline tables around i
-  int parts = 0;           // parts of the key or table name being read
-  // Skips a string opened at i by `quote`, by TOML's rules (escapes only in "basic" strings; a
-  // multi-line string's closing triple may be followed by one or two quotes of its content).
-  const auto skip_string = [&](char quote) -> std::optional<TomlHazard> {
-    const bool multi = text.substr(i, 3) == std::string(3, quote);
-    i += multi ? 3 : 1;
-    while (i < text.size()) {
-      const char ch = text[i];
-      if (ch == '\\' && quote == '"' && multi) {
-        // an escape, or a line-ending backslash that trims the whitespace after it
-        std::size_t j = i + 1;
-        while (j < text.size() && (text[j] == ' ' || text[j] == '\t' || text[j] == '\r' ||
-                                   text[j] == '\n')) {
-          if (text[j] == '\n') {
-            ++line;
-            line_start = j + 1;
-          }
-          ++j;
-        }
-        if (j < text.size() && !ascii(text[j]))
-          return hazard(j, "a non-ASCII character after a backslash in a multi-line string, "
-                           "which the TOML library cannot read safely: write it as \\uXXXX");
-        i = j == i + 1 ? i + 2 : j;
-      } else if (ch == '\\' && quote == '"') {
-        i += text.substr(i + 1, 1) == "\n" ? 1 : 2;
-      } else if (ch == '\n') {
-        if (!multi) return std::nullopt;  // an unterminated string: toml++ reports it
-        ++line;
-        line_start = ++i;
-      } else if (ch != quote) {
-        ++i;
-      } else if (!multi) {
-        ++i;
-        return std::nullopt;
-      } else if (text.substr(i, 3) == std::string(3, quote)) {
-        i += 3;
-        for (int extra = 0; extra < 2 && i < text.size() && text[i] == quote; ++extra) ++i;
-        return std::nullopt;
-      } else {
-        ++i;
-      }
-    }
-    return std::nullopt;
-  };
-  // One more part of a key or table name.
-  const auto part = [&](std::size_t at) -> std::optional<TomlHazard> {
-    if (++parts > kMaxKeyParts)
-      return hazard(at, "a dotted key or table name of more than " +
-                            std::to_string(kMaxKeyParts) + " parts: expected at most " +
-                            std::to_string(kMaxKeyParts));
-    return std::nullopt;
-  };
-  while (i < text.size()) {
-    const std::size_t at = i;
-    const char ch = text[i];
-    const bool key_like = expect == Expect::Key || expect == Expect::Table;
-    if (ch == '\n') {
-      ++line;
-      line_start = ++i;
-      if (open.empty()) {
-        expect = Expect::Key;
-        parts = 0;
-      }
-    } else if (ch == ' ' || ch == '\t' || ch == '\r') {
-      ++i;
-    } else if (ch == '#') {
-      while (i < text.size() && text[i] != '\n') ++i;
-    } else if (!ascii(ch)) {
-      return hazard(at, "a non-ASCII character outside a string or comment: TOML allows them "
-                        "only in \"strings\" and # comments");
-    } else if (ch == '"' || ch == '\'') {
-      if (key_like || expect == Expect::Value) {
-        if (auto h = skip_string(ch)) return h;
-        if (key_like)
-          if (auto h = part(at)) return h;
-        expect = expect == Expect::Key     ? Expect::KeyPart
-                 : expect == Expect::Table ? Expect::TablePart
-                                           : Expect::Other;
-      } else {
-        expect = Expect::Other;  // not where a string may start: toml++ refuses it
-        ++i;
-      }
-    } else if (key_like && key_char(ch)) {
-      while (i < text.size() && key_char(text[i])) ++i;
-      if (auto h = part(at)) return h;
-      expect = expect == Expect::Key ? Expect::KeyPart : Expect::TablePart;
-    } else if (value_char(ch) && !(ch == '.' && (expect == Expect::KeyPart ||
-                                                 expect == Expect::TablePart))) {
-      while (i < text.size() && value_char(text[i])) ++i;
-      expect = Expect::Other;
-    } else {
-      ++i;
-      const bool in_array = !open.empty() && open.back() == Open::Array;
-      const bool in_table = !open.empty() && open.back() == Open::InlineTable;
-      if (ch == '.' && expect == Expect::KeyPart) {
-        expect = Expect::Key;
-      } else if (ch == '.' && expect == Expect::TablePart) {
-        expect = Expect::Table;
-      } else if (ch == '=' && expect == Expect::KeyPart) {
-        expect = Expect::Value;
-      } else if (ch == '[' && expect == Expect::Key && open.empty() && parts == 0) {
-        expect = Expect::Table;  // [table] or [[array of tables]]
-      } else if (ch == '[' && expect == Expect::Table && parts == 0) {
-        // the second '[' of [[
-      } else if (ch == '[' && expect == Expect::Value) {
-        open.push_back(Open::Array);
-      } else if (ch == '{' && expect == Expect::Value) {
-        open.push_back(Open::InlineTable);
-        expect = Expect::Key;
-        parts = 0;
-      } else if (ch == ']' && in_array && expect != Expect::TablePart) {
-        open.pop_back();
-        expect = Expect::Other;
-      } else if (ch == '}' && in_table) {
-        open.pop_back();
-        expect = Expect::Other;
-      } else if (ch == ',' && in_array) {
-        expect = Expect::Value;
-      } else if (ch == ',' && in_table) {
-        expect = Expect::Key;
-        parts = 0;
-      } else {
-        expect = Expect::Other;
-      }
-    }
-  }
-  return std::nullopt;
-}
-
-// toml::parse of a text checked by toml_hazard(); `name` is the source path of its nodes.
-toml::table parse_toml(std::string_view text, const std::string& name) {
-  if (const auto h = toml_hazard(text))
-    throw InputError(name + ":" + std::to_string(h->line) + ":" + std::to_string(h->column) + ": " +
-                     h->what);
-  try {
-    return toml::parse(text, std::string_view(name));
-  } catch (const toml::parse_error& err) {
-    const auto& at = err.source().begin;
-    throw InputError(name + ":" + std::to_string(at.line) + ":" + std::to_string(at.column) + ": " +
-                     std::string(err.description()));
-  }
-}
-
 // ---- Overrides ----------------------------------------------------------------------------------
 
 // "emitter[0].rate" or "emitter.0.rate" -> {"emitter", "0", "rate"}.
@@ -1269,6 +1086,7 @@ void apply_override(toml::table& root, const Override& o) {
 }
 
 }  // namespace
+}  // namespace loader
 
 // ---- Public entry points ------------------------------------------------------------------------
 
@@ -1291,32 +1109,9 @@ Override parse_override(const std::string& arg) {
 SceneConfig load_scene_from_string(const std::string& text, const std::string& name,
                                    const std::vector<Override>& overrides,
                                    const ImageReader& read_image) {
-  if (text.size() > kMaxSceneBytes)
-    throw InputError(name + ": the scene is " + std::to_string(text.size()) +
-                     " bytes, more than the limit of " + std::to_string(kMaxSceneBytes));
-  toml::table root = parse_toml(text, name);
-  for (const auto& o : overrides) apply_override(root, o);
-  return read_scene(root, name, read_image);
-}
-
-std::string read_scene_file(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw InputError(path + ": cannot open scene file (it is a directory)");
-  refuse_special_file(path, "scene file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open scene file");
-  // read in pieces up to the limit: a pipe or a device has no size to check first
-  std::string text;
-  char buf[1 << 16];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
-    if (text.size() + static_cast<std::size_t>(in.gcount()) > kMaxSceneBytes)
-      throw InputError(path + ": the scene file is larger than the limit of " +
-                       std::to_string(kMaxSceneBytes) + " bytes");
-    text.append(buf, static_cast<std::size_t>(in.gcount()));
-  }
-  if (in.bad()) throw InputError(path + ": cannot read scene file");
-  return text;
+  toml::table root = loader::parse_toml(text, name);
+  for (const auto& o : overrides) loader::apply_override(root, o);
+  return loader::read_scene(root, name, read_image);
 }
 
 SceneConfig load_scene(const std::string& path, const std::vector<Override>& overrides) {

@@ -107,7 +107,7 @@ CASES = {
     "two_height_sources.toml": ("a heightmap takes exactly one of heights, file, noise",
                                 '[[geometry]]\ntype = "heightmap"\nextent = [0, 0, 1, 1]\n'
                                 'heights = [[0, 1], [2, 3]]\nfile = "h.png"\n\n' + EMITTER),
-    # what the TOML library itself cannot be given safely (see toml_hazard in scene_loader.cpp)
+    # what the TOML library itself cannot be given safely (see toml_hazard in scene/toml_guard.cpp)
     "dotted_key_20_parts.toml": ("a dotted key or table name of more than 16 parts",
                                  ".".join(["material"] + ["a"] * 19) + " = 1\n\n" + EMITTER),
     "table_header_20_parts.toml": ("a dotted key or table name of more than 16 parts",
