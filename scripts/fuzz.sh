@@ -73,9 +73,9 @@ seeds_checkpoint() { SANDFLOW_FUZZ_WRITE_SEEDS="$1" "$build/fuzz/fuzz_checkpoint
 # The dictionaries: TOML syntax plus every key and word the scene loader reads
 {
   cat fuzz/toml.dict
-  grep -oE '(read|table|array_of_tables|require|has|fail_at)\("[a-z_]+"' src/scene/scene_loader.cpp |
+  grep -ohE '(read|table|array_of_tables|require|has|fail_at)\("[a-z_]+"' src/scene/*.cpp |
     sed -E 's/.*\("([a-z_]+)"/"\1"/'
-  grep -oE '\{"[a-z]+", [A-Za-z]+::' src/scene/scene_loader.cpp | sed -E 's/\{("[a-z]+").*/\1/'
+  grep -ohE '\{"[a-z]+", [A-Za-z]+::' src/scene/*.cpp | sed -E 's/\{("[a-z]+").*/\1/'
 } | sort -u > "$build/scene.dict"
 cat fuzz/ply.dict fuzz/mesh.dict > "$build/mesh.dict"
 cp fuzz/ply.dict "$build/frame_ply.dict"

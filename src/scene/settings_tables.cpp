@@ -1,0 +1,203 @@
+// The readers of the tables a scene has at most once: [material], [simulation], [stiffness],
+// [surface], [output] and [camera] (scene_tables.hpp).
+
+#include <cmath>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "io/export_formats.hpp"
+#include "scene/scene_tables.hpp"
+#include "surface/surface_params.hpp"
+
+namespace sandflow::loader {
+namespace {
+
+constexpr Choices<Mode> kModes[] = {{"surface", Mode::Surface}, {"dem", Mode::Dem}};
+constexpr Choices<OnLeave> kOnLeave[] = {{"stop", OnLeave::Stop}, {"count", OnLeave::Count}};
+constexpr Choices<UpAxis> kUpAxes[] = {{"z", UpAxis::Z}, {"y", UpAxis::Y}};
+
+}  // namespace
+
+void read_material(TableReader r, MaterialConfig& m) {
+  r.read("density", m.density, kPositive);
+  r.read("diameter", m.diameter, kPositive);
+  r.read("diameter_spread", m.diameter_spread, closed(0, 0.5));
+  r.read("k_n", m.k_n, kPositive);
+  r.read("k_t_ratio", m.k_t_ratio, closed(0, 1));
+  r.read("restitution", m.restitution, open_closed(0, 1));
+  r.read("tangential_damping_ratio", m.tangential_damping_ratio, closed(0, 1));
+  r.read("friction", m.friction, kNonNegative);
+  r.read("rolling_friction", m.rolling_friction, kNonNegative);
+  r.read("rolling_stiffness_ratio", m.rolling_stiffness_ratio, kNonNegative);
+  r.read("rolling_damping_ratio", m.rolling_damping_ratio, kNonNegative);
+  r.read("wall_friction", m.wall_friction, kNonNegative);
+  r.read("wall_rolling_friction", m.wall_rolling_friction, kNonNegative);
+  r.finish("[material]");
+}
+
+void read_simulation(TableReader r, SimulationConfig& s) {
+  r.read("mode", s.mode, kModes);
+  r.read("gravity", s.gravity);
+  r.read("dt", s.dt, kPositive);
+  r.read("dt_fraction", s.dt_fraction, open_closed(0, 0.2));
+  r.read("skin", s.skin, open_closed(0, 2));
+  r.read("skin_steps", s.skin_steps, closed(0, 1000));  // 0: one skin for all grains
+  r.read("skin_max", s.skin_max, closed(0, 2));
+  r.read("sort_every", s.sort_every, kNonNegative);  // 0: never re-sort
+  r.read("seed", s.seed, kNonNegative);
+  r.read("threads", s.threads, closed(0, 4096));
+  r.read("max_overlap_stop", s.max_overlap_stop, open_closed(0, 1));
+  r.read("domain", s.domain);
+  r.read("on_leave", s.on_leave, kOnLeave);
+  r.finish("[simulation]");
+  if (s.domain) {
+    const auto& d = *s.domain;
+    if (!(d[3] > d[0]) || !(d[4] > d[1]) || !(d[5] > d[2]))
+      r.fail_at("domain",
+                r.name("domain") + " = [" + format_real(d[0]) + ", " + format_real(d[1]) + ", " +
+                    format_real(d[2]) + ", " + format_real(d[3]) + ", " + format_real(d[4]) + ", " +
+                    format_real(d[5]) +
+                    "]: expected [x0, y0, z0, x1, y1, z1] with x1 > x0, y1 > y0, z1 > z0");
+  }
+}
+
+void read_stiffness(TableReader r, StiffnessConfig& k) {
+  r.read("from_load", k.from_load);
+  r.read("max_overlap", k.max_overlap, open_closed(0, 0.5));
+  r.read("impact_overlap", k.impact_overlap, open_closed(0, 0.5));
+  r.read("impact_speed", k.impact_speed, kNonNegative);
+  r.read("dem_depth", k.dem_depth, kPositive);
+  r.read("surface_depth", k.surface_depth, kPositive);
+  r.finish("[stiffness]");
+}
+
+void check_extent(const TableReader& r, const std::array<Real, 4>& extent) {
+  const auto& [x0, y0, x1, y1] = extent;
+  if (!(x1 > x0) || !(y1 > y0))
+    r.fail_at("extent", r.name("extent") + " = [" + format_real(x0) + ", " + format_real(y0) +
+                            ", " + format_real(x1) + ", " + format_real(y1) +
+                            "]: expected [x0, y0, x1, y1] with x1 > x0 and y1 > y0");
+}
+
+namespace {
+
+// The height field's extent: a rectangle, and the grid it makes at the cell size refused here,
+// with its place, when too large (without an extent, surface_params() refuses it once the
+// geometry gives the domain).
+void check_surface_extent(const TableReader& r, const SurfaceConfig& s, Real diameter) {
+  check_extent(r, *s.extent);
+  const auto& [x0, y0, x1, y1] = *s.extent;
+  const Real cell = s.cell_size.value_or(diameter);
+  const Real nx = std::ceil((x1 - x0) / cell), ny = std::ceil((y1 - y0) / cell);
+  if (!(nx * ny <= static_cast<Real>(kMaxHeightFieldColumns)))
+    r.fail_at(s.cell_size ? "cell_size" : "extent",
+              r.name("extent") + " at " +
+                  (s.cell_size ? r.name("cell_size") + " = " + format_real(cell) + " m"
+                               : "a cell size of " + format_real(cell) +
+                                     " m (the grain diameter: cell_size unset)") +
+                  " makes a height field of " + format_count(nx) + " x " + format_count(ny) +
+                  " columns, more than the limit of " + std::to_string(kMaxHeightFieldColumns) +
+                  ": set a larger cell_size or a smaller extent");
+}
+
+}  // namespace
+
+void read_surface(TableReader r, SurfaceConfig& s, Real diameter) {
+  r.read("cell_size", s.cell_size, kPositive);
+  r.read("exchange_rate", s.exchange_rate, kPositive);
+  std::optional<Real> repose_deg;
+  std::optional<Real> max_deg;
+  r.read("repose_angle", repose_deg, open(0, 90));
+  r.read("max_angle", max_deg, open(0, 90));
+  r.read("rolling_min", s.rolling_min, kNonNegative);
+  r.read("flowing_min", s.flowing_min, kNonNegative);
+  r.read("interface_thickness", s.interface_thickness, kPositive);
+  r.read("update_interval", s.update_interval, kPositive);
+  r.read("trap_speed", s.trap_speed, kNonNegative);
+  r.read("flow_speed", s.flow_speed, kNonNegative);
+  r.read("extent", s.extent);
+  r.finish("[surface]");
+
+  if (repose_deg) {
+    s.repose_angle = deg_to_rad(*repose_deg);
+    s.repose_angle_given = true;
+  }
+  if (max_deg) {
+    s.max_angle = deg_to_rad(*max_deg);
+    if (*s.max_angle < s.repose_angle) {
+      // The default repose angle is printed in degrees, rounded off its round trip via radians.
+      const std::string repose_text =
+          repose_deg
+              ? format_real(*repose_deg)
+              : format_real(std::round(rad_to_deg(s.repose_angle) * 1e9) / 1e9) + " (the default)";
+      r.fail_at("max_angle", r.name("max_angle") + " = " + format_real(*max_deg) +
+                                 " is less than " + r.name("repose_angle") + " = " + repose_text +
+                                 " (degrees): expected max_angle >= repose_angle");
+    }
+  }
+  if (s.extent) check_surface_extent(r, s, diameter);
+}
+
+void read_output(TableReader r, OutputConfig& o) {
+  r.read("fps", o.fps, kPositive);
+  r.read("duration", o.duration, kPositive);
+  r.read("settle_time", o.settle_time, kNonNegative);
+  std::optional<std::vector<TableReader::Word>> exports;
+  r.read("export", exports);
+  r.read("up_axis", o.up_axis, kUpAxes);
+  r.finish("[output]");
+  if (exports) {
+    o.exports.emplace();
+    for (const auto& w : *exports) {
+      const auto f = export_format(w.text);
+      if (!f)
+        fail(w.place, w.name + " = " + in_quotes(w.text) + " is not an export: expected one of " +
+                          export_names() + " (an empty array [] writes no per-frame files)");
+      if (!has_export(*o.exports, *f)) o.exports->push_back(*f);
+    }
+  }
+}
+
+// The render camera: a fixed one (position and look_at together, up optional) or only a field of
+// view for the automatic one.
+void read_camera(TableReader r, CameraConfig& c) {
+  const auto vector = [&r](std::string_view key, std::optional<Vec3>& out) {
+    const bool present = r.has(key);
+    Vec3 v{0, 0, 0};
+    r.read(key, v);  // also makes `key` one the table accepts
+    if (present) out = v;
+  };
+  vector("position", c.position);
+  vector("look_at", c.look_at);
+  vector("up", c.up);
+  r.read("fov", c.fov_deg, open(0, 180));
+  r.finish("[camera]");
+
+  if (c.position && !c.look_at)
+    r.require("look_at", "[x, y, z], the point the camera at camera.position looks at");
+  if (c.look_at && !c.position)
+    r.require("position", "[x, y, z], where the camera looking at camera.look_at stands");
+  if (c.up && !c.position)
+    r.fail_at("up", r.name("up") +
+                        " is set without camera.position and camera.look_at: the automatic camera "
+                        "keeps z up; set all three or leave up out");
+  if (!c.position) return;
+  const Vec3 view = *c.look_at - *c.position;
+  if (norm(view) == 0)
+    r.fail_at("look_at", r.name("look_at") +
+                             " is camera.position: expected a point the camera "
+                             "looks at, away from where it stands");
+  if (c.up) {
+    const Real n = norm(*c.up);
+    if (n == 0) r.fail_at("up", r.name("up") + " = [0, 0, 0]: expected a direction");
+    // the picture's up must not point along the view, or it cannot be set upright
+    if (norm(cross(*c.up / n, view / norm(view))) < 1e-3)
+      r.fail_at("up", r.name("up") +
+                          " is parallel to the view direction (look_at - position): expected a "
+                          "direction across it");
+  }
+}
+
+}  // namespace sandflow::loader
