@@ -75,6 +75,16 @@ void DemSolver::step(Grains& grains, const Geometry& geometry, Real dt, Profile&
                   "grains were added or removed without a rebuild");
 }
 
+void DemSolver::apply(std::span<const StateChange> changes) {
+  for (const StateChange& c : changes) {
+    if (c.from == GrainState::Static) forget_history(c.id);  // woken: no history
+    if (c.to == GrainState::Static)
+      need_rebuild_ = true;  // asleep: it leaves the lists
+    else if (c.from != GrainState::Active)
+      release(c.id);  // woken or dislodged
+  }
+}
+
 void DemSolver::set_boundary(BoundaryParticles boundary) {
   boundary_ = std::move(boundary);
   boundary_params_.clear();

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/timer.hpp"
@@ -68,6 +69,13 @@ struct DemState {
   std::int64_t rebuild_count = 0;
 };
 
+/// A grain's change of state, as the surface flow decides it (src/surface/); DemSolver::apply
+/// brings the lists and the contact history into line with a list of them.
+struct StateChange {
+  GrainId id;
+  GrainState from, to;
+};
+
 /// The deepest overlap among the listed contacts (DemSolver::deepest_overlap).
 struct DeepestOverlap {
   enum Kind { kNone, kGrain, kWall, kBoundary };
@@ -94,19 +102,18 @@ class DemSolver {
   /// the skin, or for a fast ACTIVE grain the way it goes in skin_steps steps at its speed, up to
   /// skin_max; a frozen grain none (it moves only through a change of state, which rebuilds) [m].
   Real allowance(const Grains& grains, std::size_t i, Real dt) const;
-  /// A grain that has just changed state (dislodged, or woken) and rebuilds the lists. A contact it
-  /// opens there with a grain that was frozen too starts at its present overlap: two frozen
-  /// grains may lie inside each other, and the change must not turn that into energy. One it
-  /// opens inside an ACTIVE grain deeper than the two close in one step (how deep any contact
-  /// of the DEM may begin) is counted in DemCounters::energy_inside: the invariant of the
-  /// layers says there is none. Consumed by the next rebuild, in the same step.
-  void release(GrainId id) {
-    released_.push_back(id);
-    need_rebuild_ = true;
-  }
+  /// Applies the changes of state the surface flow decided, before the next step: a grain that
+  /// goes to sleep leaves the lists, a woken one joins them without contact history, and a woken
+  /// or dislodged one is released: the lists are rebuilt, and a contact it opens there with a
+  /// grain that was frozen too starts at its present overlap (two frozen grains may lie inside
+  /// each other, and the change must not turn that into energy). One it opens inside an ACTIVE
+  /// grain deeper than the two close in one step (how deep any contact of the DEM may begin) is
+  /// counted in DemCounters::energy_inside: the invariant of the layers says there is none. A
+  /// trapped grain keeps the lists: its pairs with other frozen grains go inert in the sweep.
+  void apply(std::span<const StateChange> changes);
   bool needs_rebuild() const { return need_rebuild_; }
   /// Drops the contact history of a grain (its pairs and wall contacts start afresh at the next
-  /// rebuild, which this requests): for grains that change state.
+  /// rebuild, which this requests): for grains removed from the run, and woken ones (apply).
   void forget_history(GrainId id) {
     if (id < slot_of_id_.size()) slot_of_id_[id] = kNoSlot;
     need_rebuild_ = true;
@@ -137,6 +144,11 @@ class DemSolver {
   DemCounters& counters() { return counters_; }
 
  private:
+  /// A grain woken or dislodged (apply): consumed by the next rebuild, in the same step.
+  void release(GrainId id) {
+    released_.push_back(id);
+    need_rebuild_ = true;
+  }
   void rebuild(Grains& grains, const Geometry& geometry, Real dt);
   /// At a rebuild for steps of dt: the contacts of the released grains that open inside another
   /// grain.

@@ -297,17 +297,16 @@ void World::step() {
   }
   if (surface_ && step_ % surface_->params().update_steps == 0) {
     ScopedStage s(profile_, Stage::Surface);
-    transitions_ +=
-        surface_->update(grains_, static_, dem_, geometry_, surface_->params().update_interval);
+    apply(surface_->update(grains_, static_, dem_, geometry_, surface_->params().update_interval));
     ++surface_updates_;
   } else if (surface_ && dem_.needs_rebuild()) {
     ScopedStage s(profile_, Stage::Surface);
-    transitions_ += surface_->catch_up(grains_, static_, dem_, geometry_);
+    apply(surface_->catch_up(grains_, static_, dem_, geometry_));
   }
   if (!leaving_.empty()) remove_leaving();
   if (surface_ && dem_.needs_rebuild()) {
     ScopedStage s(profile_, Stage::Reach);
-    transitions_ += surface_->wake_within_reach(grains_, static_, dem_, ts_.dt);
+    apply(surface_->wake_within_reach(grains_, static_, dem_, ts_.dt));
   }
   dem_.step(grains_, geometry_, ts_.dt, profile_);
   check_overlap(step_ + 1);
@@ -326,6 +325,11 @@ void World::step() {
   }
   ++step_;
   time_ = static_cast<Real>(step_) * ts_.dt;
+}
+
+void World::apply(const Transitions& t) {
+  transitions_ += t.counts;
+  dem_.apply(t.changes);
 }
 
 std::string World::where(std::int64_t step) const {

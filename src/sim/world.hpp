@@ -67,7 +67,7 @@ struct FrameStats {
   /// grains' kinetic energy, and the springs of their contacts with frozen grains, which go
   /// inert), added by waking and dislodging (springs opened inside an ACTIVE grain: none while
   /// the invariant of the layers holds), and withheld by preloading the contacts a change of
-  /// state opened between grains that were frozen inside each other (DemSolver::release).
+  /// state opened between grains that were frozen inside each other (DemSolver::apply).
   Real energy_trapped = 0, energy_woken = 0, energy_preloaded = 0;
   /// Of energy_woken: the springs of contacts a woken or dislodged grain opened inside an ACTIVE
   /// grain, deeper than one step of motion (the invariant of the layers says none) [J].
@@ -152,6 +152,8 @@ class World {
  private:
   void step();
   void emit();
+  /// Counts the transitions of the surface flow, and has the DEM apply its changes of state.
+  void apply(const Transitions& t);
   /// Guards (docs/scenes.md): a non-finite grain stops the run; a grain outside the domain stops
   /// it or, with on_leave = "count", is marked for removal (leaving_).
   void check_grains();

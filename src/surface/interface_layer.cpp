@@ -66,11 +66,11 @@ void InterfaceLayer::recompute_tops(const HeightField& hf, const StaticStore& st
   }
 }
 
-TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticStore& st,
-                                          DemSolver& dem,
-                                          const std::vector<std::uint8_t>& contacts,
-                                          bool list_changes) {
-  TransitionCounts n;
+Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticStore& st,
+                                     const std::vector<std::uint8_t>& contacts, bool list_changes) {
+  Transitions out;
+  TransitionCounts& n = out.counts;
+  std::vector<StateChange>& changes = out.changes;
   const Real T = p_.thickness;
   const Real m = p_.margin;
 
@@ -91,7 +91,7 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
     if (x.z < hf.terrain()[static_cast<std::size_t>(c)]) {  // below the column's level
       if (hot.state[i] != GrainState::Active) {
         hot.state[i] = GrainState::Active;
-        dem.release(hot.id[i]);
+        changes.push_back({hot.id[i], GrainState::Interface, GrainState::Active});
         ++n.dislodged;
       }
       keep.push_back(i);
@@ -107,12 +107,14 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
         n.energy_trapped += 0.5 * (hot.m[i] * norm2(hot.v[i]) + norm2(hot.w[i]) / hot.inv_I[i]);
         hot.state[i] = GrainState::Interface;
         hot.v[i] = hot.w[i] = {};
+        changes.push_back({hot.id[i], GrainState::Active, GrainState::Interface});
         ++n.trapped;
       }
     } else if (x.z > h + m) {
       hot.state[i] = GrainState::Active;
       hot.v[i] = hot.w[i] = {};
-      dem.release(hot.id[i]);  // its pairs with interface grains enter the list
+      // (its pairs with interface grains enter the list)
+      changes.push_back({hot.id[i], GrainState::Interface, GrainState::Active});
       ++n.dislodged;
     } else if (x.z < h - vertical_band(T, hf.slope()[static_cast<std::size_t>(c)]) - m &&
                !(contacts[i] & DemSolver::kNearActive)) {
@@ -125,14 +127,14 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
         ++tops_of_;
       }
       st.add(hot.id[i], x, hot.r[i], static_cast<std::uint32_t>(c));
-      dem.invalidate();
+      changes.push_back({hot.id[i], GrainState::Interface, GrainState::Static});
       ++n.slept;
       continue;
     }
     keep.push_back(i);
   }
   if (keep.size() != hot.size()) hot.permute(keep);
-  if (!list_changes) return n;
+  if (!list_changes) return out;
 
   // 2. the static grains where h fell (and around: h is interpolated between column centres)
   const std::size_t nc = hf.columns();
@@ -154,7 +156,7 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
   h_seen_ = h_now;
   L_seen_ = L_now;
   if (n.slept > 0 || st.column_start.size() != nc + 1) st.file_by_column(nc);
-  if (!any) return n;
+  if (!any) return out;
 
   std::vector<std::uint8_t> flagged(st.size(), 0);
   for (std::size_t c = 0; c < nc; ++c) {
@@ -166,15 +168,14 @@ TransitionCounts InterfaceLayer::transfer(const HeightField& hf, Grains& hot, St
         flagged[k] = 1;
     }
   }
-  n.woken = wake(hf, hot, st, dem, flagged);
-  return n;
+  n.woken = wake(hf, hot, st, flagged, changes);
+  return out;
 }
 
-TransitionCounts InterfaceLayer::wake_within_reach(const HeightField& hf, Grains& hot,
-                                                   StaticStore& st, DemSolver& dem,
-                                                   const std::vector<Real>& allow) {
-  TransitionCounts n;
-  if (st.size() == 0) return n;
+Transitions InterfaceLayer::wake_within_reach(const HeightField& hf, Grains& hot, StaticStore& st,
+                                              const std::vector<Real>& allow) {
+  Transitions out;
+  if (st.size() == 0) return out;
   const std::size_t nh = hot.size();
   Real reach = 0;
   for (std::size_t i = 0; i < nh; ++i)
@@ -191,12 +192,13 @@ TransitionCounts InterfaceLayer::wake_within_reach(const HeightField& hf, Grains
       std::atomic_ref<std::uint8_t>(flagged[k]).store(1, std::memory_order_relaxed);
     });
   }
-  n.woken_by_reach = wake(hf, hot, st, dem, flagged);
-  return n;
+  out.counts.woken_by_reach = wake(hf, hot, st, flagged, out.changes);
+  return out;
 }
 
 std::int64_t InterfaceLayer::wake(const HeightField& hf, Grains& hot, StaticStore& st,
-                                  DemSolver& dem, const std::vector<std::uint8_t>& flagged) {
+                                  const std::vector<std::uint8_t>& flagged,
+                                  std::vector<StateChange>& changes) {
   const std::size_t nc = hf.columns();
   // the tops of the columns the woken grains reached are computed again from the grains that stay
   const bool follow = tops_follow(st) && tops_.size() == nc;
@@ -216,8 +218,7 @@ std::int64_t InterfaceLayer::wake(const HeightField& hf, Grains& hot, StaticStor
     hot.add(st.id[k], st.x[k], Vec3{}, st.r[k], p_.density);
     // (one below its column's level moves on its own; transfer() makes it ACTIVE next time)
     hot.state.back() = GrainState::Interface;
-    dem.forget_history(st.id[k]);
-    dem.release(st.id[k]);
+    changes.push_back({st.id[k], GrainState::Static, GrainState::Interface});
     ++woken;
   }
   if (woken > 0) {

@@ -52,6 +52,14 @@ struct TransitionCounts {
   std::int64_t total() const { return trapped + dislodged + slept + woken + woken_by_reach; }
 };
 
+/// What a transfer decided: grain by grain, the changes of state, which the DEM applies before
+/// its next step (DemSolver::apply: the surface flow does not touch the solver), and their counts
+/// for the statistics.
+struct Transitions {
+  std::vector<StateChange> changes;
+  TransitionCounts counts;
+};
+
 struct InterfaceParams {
   Real thickness = 0.015;   ///< T [m]
   SeatParams seat;          ///< which grains are held
@@ -72,19 +80,19 @@ class InterfaceLayer {
   /// at the first call, after a restart and where a column's level changed.
   const std::vector<Real>& static_tops(const HeightField& hf, const StaticStore& st);
 
-  /// Applies the four transitions against the current h; `dem` rebuilds its lists at the next
-  /// step where the hot set changed. A woken grain starts without contact history.
-  /// `contacts` is DemSolver::contacts_of for the hot grains. Without `list_changes` only trapping
-  /// happens (it keeps the pair list); the rest waits for a later call with them, which wakes
-  /// grains wherever h fell since the last such call.
-  TransitionCounts transfer(const HeightField& hf, Grains& hot, StaticStore& st, DemSolver& dem,
-                            const std::vector<std::uint8_t>& contacts, bool list_changes = true);
+  /// Makes the four transitions against the current h, in the stores; returns them, for the DEM
+  /// to apply. `contacts` is DemSolver::contacts_of for the hot grains. Without `list_changes`
+  /// only trapping happens (it keeps the pair list); the rest waits for a later call with them,
+  /// which wakes grains wherever h fell since the last such call.
+  Transitions transfer(const HeightField& hf, Grains& hot, StaticStore& st,
+                       const std::vector<std::uint8_t>& contacts, bool list_changes = true);
 
   /// The invariant: wakes (to INTERFACE) every STATIC grain k within reach of an ACTIVE grain i,
   /// |x_i - x_k| < r_i + r_k + allow[i], allow[i] being how far the coming rebuild lets i move
-  /// (DemSolver::allowance). Call it before every rebuild of the pair list, after the transfer.
-  TransitionCounts wake_within_reach(const HeightField& hf, Grains& hot, StaticStore& st,
-                                     DemSolver& dem, const std::vector<Real>& allow);
+  /// (DemSolver::allowance). Call it before every rebuild of the pair list, after the transfer;
+  /// returns the woken grains, for the DEM to apply.
+  Transitions wake_within_reach(const HeightField& hf, Grains& hot, StaticStore& st,
+                                const std::vector<Real>& allow);
 
   const InterfaceParams& params() const { return p_; }
   /// For restarts: h and L as the last transfer saw them (empty before the first).
@@ -112,10 +120,10 @@ class InterfaceLayer {
   /// Recomputes the tops of the marked columns from the static grains (filed by column).
   void recompute_tops(const HeightField& hf, const StaticStore& st,
                       const std::vector<std::uint8_t>& dirty);
-  /// Moves the static grains flagged in `wake` to the hot grains as INTERFACE, released to the
-  /// DEM (DemSolver::release); returns how many.
-  std::int64_t wake(const HeightField& hf, Grains& hot, StaticStore& st, DemSolver& dem,
-                    const std::vector<std::uint8_t>& wake);
+  /// Moves the static grains flagged in `wake` to the hot grains as INTERFACE, each added to
+  /// `changes`; returns how many.
+  std::int64_t wake(const HeightField& hf, Grains& hot, StaticStore& st,
+                    const std::vector<std::uint8_t>& wake, std::vector<StateChange>& changes);
 
   StaticReach reach_;  ///< the static grains near a point, for wake_within_reach
 };

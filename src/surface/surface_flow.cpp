@@ -15,8 +15,8 @@ bool SurfaceFlow::below_level(const Vec3& x) const {
   return c >= 0 && x.z < hf_.terrain()[static_cast<std::size_t>(c)];
 }
 
-TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& dem,
-                                     const Geometry& geometry, Real dt) {
+Transitions SurfaceFlow::update(Grains& hot, StaticStore& st, const DemSolver& dem,
+                                const Geometry& geometry, Real dt) {
   // a grain in flight touches nothing: only grains of the pile (and the interface) make H
   dem.contacts_of(hot, geometry, contacts_);
   counts_.resize(hot.size());
@@ -64,22 +64,22 @@ TransitionCounts SurfaceFlow::update(Grains& hot, StaticStore& st, DemSolver& de
   // step, they wait for its next rebuild, and at most until the next update.
   const bool now = dem.needs_rebuild() || pending_;
   pending_ = !now;
-  return interface_.transfer(hf_, hot, st, dem, contacts_, now);
+  return interface_.transfer(hf_, hot, st, contacts_, now);
 }
 
-TransitionCounts SurfaceFlow::wake_within_reach(Grains& hot, StaticStore& st, DemSolver& dem,
-                                                Real dt) {
+Transitions SurfaceFlow::wake_within_reach(Grains& hot, StaticStore& st, const DemSolver& dem,
+                                           Real dt) {
   allow_.resize(hot.size());
   for (std::size_t i = 0; i < hot.size(); ++i) allow_[i] = dem.allowance(hot, i, dt);
-  return interface_.wake_within_reach(hf_, hot, st, dem, allow_);
+  return interface_.wake_within_reach(hf_, hot, st, allow_);
 }
 
-TransitionCounts SurfaceFlow::catch_up(Grains& hot, StaticStore& st, DemSolver& dem,
-                                       const Geometry& geometry) {
+Transitions SurfaceFlow::catch_up(Grains& hot, StaticStore& st, const DemSolver& dem,
+                                  const Geometry& geometry) {
   if (!pending_ || !dem.needs_rebuild()) return {};
   pending_ = false;
   dem.contacts_of(hot, geometry, contacts_);
-  return interface_.transfer(hf_, hot, st, dem, contacts_, true);
+  return interface_.transfer(hf_, hot, st, contacts_, true);
 }
 
 }  // namespace sandflow

@@ -25,21 +25,22 @@ class SurfaceFlow {
  public:
   SurfaceFlow(const SurfaceParams& params, const Geometry& geometry);
 
-  /// One update over `dt` of simulated time, in the paper's order: measure H, evolve h through
-  /// the exchange, then pass grains between the layers.
   /// The geometry changed (a solid was removed): traces the columns' terrain again.
   void retrace_terrain(const Geometry& geometry) { hf_.set_solids(terrain_columns(p_, geometry)); }
 
-  TransitionCounts update(Grains& hot, StaticStore& st, DemSolver& dem, const Geometry& geometry,
-                          Real dt);
+  /// One update over `dt` of simulated time, in the paper's order: measure H, evolve h through
+  /// the exchange, then pass grains between the layers. Returns the changes of state, which the
+  /// DEM applies (DemSolver::apply): the surface flow reads the solver, it does not change it.
+  Transitions update(Grains& hot, StaticStore& st, const DemSolver& dem, const Geometry& geometry,
+                     Real dt);
 
-  /// Applies the transitions the last update left waiting, if `dem` rebuilds its lists anyway.
-  TransitionCounts catch_up(Grains& hot, StaticStore& st, DemSolver& dem,
-                            const Geometry& geometry);
+  /// Makes the transitions the last update left waiting, if `dem` rebuilds its lists anyway.
+  Transitions catch_up(Grains& hot, StaticStore& st, const DemSolver& dem,
+                       const Geometry& geometry);
 
   /// The invariant of the layers, before `dem` rebuilds its lists for steps of dt: every STATIC
   /// grain within reach of an ACTIVE grain wakes (InterfaceLayer::wake_within_reach).
-  TransitionCounts wake_within_reach(Grains& hot, StaticStore& st, DemSolver& dem, Real dt);
+  Transitions wake_within_reach(Grains& hot, StaticStore& st, const DemSolver& dem, Real dt);
 
   const SurfaceParams& params() const { return p_; }
   const HeightField& height_field() const { return hf_; }

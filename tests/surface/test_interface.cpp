@@ -16,7 +16,6 @@ struct Fixture {
   HeightField hf;
   Grains hot;
   StaticStore st;
-  DemSolver dem{DemParams{}};
   InterfaceLayer layer;
 
   // a flat static top at h_level over a 10 x 10 grid of 1 cm columns, sand up to h_level + 1 cm
@@ -43,7 +42,7 @@ struct Fixture {
   }
   TransitionCounts transfer() {
     std::vector<std::uint8_t> contacts(hot.size(), DemSolver::kTouches | DemSolver::kSeated);
-    return layer.transfer(hf, hot, st, dem, contacts);
+    return layer.transfer(hf, hot, st, contacts).counts;
   }
   GrainState state_of(GrainId id) const {
     for (std::size_t i = 0; i < hot.size(); ++i)
@@ -110,7 +109,7 @@ TEST(Interface, WithoutListChangesOnlyTrappingHappensAndTheRestWaits) {
   f.hot.add(3, {0.07, 0.07, 0.025}, {0.01, 0, 0}, kR, 2600);  // slow, below the new h
   f.set_h(0.03);  // 0 is now above h + m, 1 below h - T - m, and 2 within T of h
   std::vector<std::uint8_t> contacts(f.hot.size(), DemSolver::kTouches | DemSolver::kSeated);
-  TransitionCounts n = f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts, false);
+  TransitionCounts n = f.layer.transfer(f.hf, f.hot, f.st, contacts, false).counts;
   EXPECT_EQ(n.trapped, 1);
   EXPECT_EQ(f.state_of(3), GrainState::Interface);
   EXPECT_EQ(n.dislodged + n.slept + n.woken, 0);
@@ -120,7 +119,7 @@ TEST(Interface, WithoutListChangesOnlyTrappingHappensAndTheRestWaits) {
   // the next transfer that may change the list does what waited, waking where h fell since the
   // last such transfer (not since the last update)
   contacts.assign(f.hot.size(), DemSolver::kTouches | DemSolver::kSeated);
-  n = f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts, true);
+  n = f.layer.transfer(f.hf, f.hot, f.st, contacts, true).counts;
   EXPECT_EQ(n.dislodged, 1);
   EXPECT_EQ(n.slept, 1);
   EXPECT_EQ(n.woken, 1);
@@ -134,7 +133,7 @@ TEST(Interface, GrainInFlightIsNeverTrapped) {
   Fixture f(0.05);
   f.hot.add(0, {0.05, 0.05, 0.045}, {}, kR, 2600);  // slow and below h, but touching nothing
   std::vector<std::uint8_t> contacts{0};
-  EXPECT_EQ(f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts).trapped, 0);
+  EXPECT_EQ(f.layer.transfer(f.hf, f.hot, f.st, contacts).counts.trapped, 0);
   EXPECT_EQ(f.state_of(0), GrainState::Active);
 }
 
@@ -146,12 +145,12 @@ TEST(Interface, GrainNearAnActiveOneNeverSleeps) {
   f.hot.state[0] = GrainState::Interface;
   std::vector<std::uint8_t> contacts{DemSolver::kTouches | DemSolver::kTouchesActive |
                                      DemSolver::kNearActive};
-  EXPECT_EQ(f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts).slept, 0);
+  EXPECT_EQ(f.layer.transfer(f.hf, f.hot, f.st, contacts).counts.slept, 0);
   contacts[0] = DemSolver::kTouches | DemSolver::kNearActive;  // not touching, but within reach
-  EXPECT_EQ(f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts).slept, 0);
+  EXPECT_EQ(f.layer.transfer(f.hf, f.hot, f.st, contacts).counts.slept, 0);
   EXPECT_EQ(f.state_of(0), GrainState::Interface);
   contacts[0] = DemSolver::kTouches;  // only interface neighbours: it may sleep
-  EXPECT_EQ(f.layer.transfer(f.hf, f.hot, f.st, f.dem, contacts).slept, 1);
+  EXPECT_EQ(f.layer.transfer(f.hf, f.hot, f.st, contacts).counts.slept, 1);
 }
 
 TEST(Interface, HysteresisKeepsGrainsNearTheEdgesStill) {

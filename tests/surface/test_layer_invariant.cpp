@@ -67,7 +67,9 @@ struct Creep {
     if (hold_invariant && dem.needs_rebuild()) {
       std::vector<Real> allow(hot.size());
       for (std::size_t i = 0; i < hot.size(); ++i) allow[i] = dem.allowance(hot, i, dt);
-      c = layer.wake_within_reach(hf, hot, st, dem, allow);
+      const Transitions t = layer.wake_within_reach(hf, hot, st, allow);
+      dem.apply(t.changes);
+      c = t.counts;
     }
     if (deepest) *deepest = std::max(*deepest, deepest_into_static());
     Profile profile;
@@ -128,8 +130,9 @@ Real energy_when_the_layer_wakes(bool hold_invariant) {
   c.hf.set_static_top(std::vector<Real>(nc, -0.5));
   const std::size_t static_before = c.st.size();
   std::vector<std::uint8_t> contacts(c.hot.size(), DemSolver::kTouches | DemSolver::kNearActive);
-  const TransitionCounts n = c.layer.transfer(c.hf, c.hot, c.st, c.dem, contacts);
-  EXPECT_EQ(n.woken, static_cast<std::int64_t>(static_before));
+  const Transitions t = c.layer.transfer(c.hf, c.hot, c.st, contacts);
+  c.dem.apply(t.changes);
+  EXPECT_EQ(t.counts.woken, static_cast<std::int64_t>(static_before));
   EXPECT_EQ(c.st.size(), 0u);
   c.step(hold_invariant);  // the rebuild that opens the woken grains' contacts
   return c.dem.counters().energy_inside;
@@ -170,12 +173,11 @@ TEST(LayerInvariant, TheBandIsMeasuredNormalToTheSlope) {
     InterfaceLayer layer(ip);
     Grains hot;
     StaticStore st;
-    DemSolver dem{DemParams{}};
     const Vec3 at{0.05, 0.05, 0};
     hot.add(0, {at.x, at.y, hf.static_top_at(at.x, at.y) - 1.15 * kD - ip.margin}, {}, kR, 2600);
     hot.state[0] = GrainState::Interface;
     std::vector<std::uint8_t> contacts(1, DemSolver::kTouches);
-    const TransitionCounts n = layer.transfer(hf, hot, st, dem, contacts);
+    const TransitionCounts n = layer.transfer(hf, hot, st, contacts).counts;
     EXPECT_EQ(n.slept, theta_deg == 0.0 ? 1 : 0) << theta_deg << " degrees";
   }
 }

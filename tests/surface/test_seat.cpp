@@ -137,12 +137,12 @@ TopGrain top_grain(Real speed, Real spin = 0, bool pocket = true, bool h_above =
     above.set_surface(std::vector<Real>(above.columns(), top.z + 2 * kR));
     above.set_static_top(std::vector<Real>(above.columns(), top.z + kR));
     InterfaceLayer layer(sp.interface);
-    layer.transfer(above, hot, st, dem, contacts);
+    layer.transfer(above, hot, st, contacts);
   } else {
     SurfaceState state = flow.save_state();
     for (Real& h : state.columns.h) h = top.z - kR;
     flow.restore_state(state);
-    flow.update(hot, st, dem, geometry, sp.update_interval);
+    dem.apply(flow.update(hot, st, dem, geometry, sp.update_interval).changes);
     const std::int64_t c = hf.column_of(top.x, top.y);
     out.h_minus_bottom = hf.static_top()[static_cast<std::size_t>(c)] - (top.z - kR);
   }

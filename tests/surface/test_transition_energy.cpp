@@ -43,13 +43,12 @@ TEST(TransitionEnergy, TrappingCountsTheKineticEnergyItRemoves) {
   InterfaceLayer layer{InterfaceParams{}};
   Grains hot;
   StaticStore st;
-  DemSolver dem(params());
   hot.add(0, {0.015, 0.015, 0.01}, {0.03, -0.04, 0.0}, kR, kDensity);  // below h, slow
   hot.w[0] = {2, 0, 1};
   const Real kinetic =
       0.5 * hot.m[0] * norm2(hot.v[0]) + 0.5 / hot.inv_I[0] * norm2(hot.w[0]);
   std::vector<std::uint8_t> contacts(1, DemSolver::kTouches | DemSolver::kSeated);
-  const TransitionCounts n = layer.transfer(hf, hot, st, dem, contacts);
+  const TransitionCounts n = layer.transfer(hf, hot, st, contacts).counts;
   ASSERT_EQ(n.trapped, 1);
   EXPECT_NEAR(n.energy_trapped, kinetic, 1e-15);
 }
@@ -73,7 +72,7 @@ TEST(TransitionEnergy, ContactsOfTwoFrozenGrainsGoInertWithTheirSpringEnergyCoun
 // Grain B, just dislodged, lies `delta` inside frozen grain A (two grains frozen inside each other
 // by an impact, as a pour's stream leaves them). Returns the largest kinetic energy B reaches
 // over `steps` steps, over the energy of the spring at that overlap; `released` says whether the
-// change of state is made known to the DEM (DemSolver::release), which preloads the contact.
+// change of state is made known to the DEM (DemSolver::apply), which preloads the contact.
 struct Dislodged {
   Real peak_kinetic_over_spring = 0;
   Real preloaded = 0, relaxed = 0, final_overlap = 0, spring = 0;
@@ -86,8 +85,11 @@ Dislodged dislodge_inside(Real delta, bool released, int steps) {
   hot.add(0, {0, 0, 0}, {}, kR, kDensity);
   hot.add(1, {kD - delta, 0, 0}, {}, kR, kDensity);
   hot.state[0] = GrainState::Interface;
-  if (released) dem.release(1);
-  else dem.invalidate();
+  const StateChange dislodged[] = {{1, GrainState::Interface, GrainState::Active}};
+  if (released)
+    dem.apply(dislodged);
+  else
+    dem.invalidate();
   const Real dt = contact_time_on_fixed() / 50;
   Dislodged out;
   out.spring = 0.5 * 1e4 * delta * delta;
