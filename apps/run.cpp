@@ -656,9 +656,12 @@ int run_command(const RunOptions& o) {
   fmt::print("report           {} (plots; `sandflow report {}` adds pictures)\n",
              write_report({out, 6, false}), out);
   if (o.profile) {
+    // in the order of the step (summary.json has them by name); forces+integration is one sweep
     fmt::print("stage seconds   ");
-    for (const auto& [k, v] : s["stage_seconds"].items())
-      fmt::print(" {} {:.2f}", k, v.get<double>());
+    for (int k = 0; k < static_cast<int>(Stage::kCount); ++k) {
+      const std::string name(stage_name(static_cast<Stage>(k)));
+      fmt::print(" {} {:.2f}", name, s["stage_seconds"].value(name, 0.0));
+    }
     fmt::print("\n");
   }
   // (the overlap guard sees a grain crossing a surface, not one that went right through a mesh's

@@ -30,7 +30,8 @@
 
 namespace sandflow {
 
-constexpr std::uint32_t kCheckpointFormat = 3;
+/// 4: the stage timings are those of the eight stages of World::step (core/timer.hpp), not five.
+constexpr std::uint32_t kCheckpointFormat = 4;
 
 struct Checkpoint {
   std::uint32_t format = kCheckpointFormat;

@@ -18,20 +18,31 @@ class Stopwatch {
   Clock::time_point start_;
 };
 
-/// Forces covers the contact forces and the integration, done in one sweep (dem_solver.cpp);
-/// Surface the height-field updates and the transfers through the interface; Reach the invariant
-/// of the layers, held before each rebuild of the pair list (static grains within reach woken).
-enum class Stage { Emit, Surface, Reach, Neighbours, Forces, kCount };
+/// The stages of a step, in the order World::step runs them (docs/design.md §1).
+enum class Stage {
+  Guards,       ///< the checks that stop a run (non-finite grains, grains outside the domain, the
+                ///< overlap limit; the assertions of the test builds), the removal of the grains
+                ///< that left, and of the solids whose time has come
+  Emit,         ///< the emitters' new grains
+  HeightField,  ///< (surface mode, each update) H measured, the columns where grains move the
+                ///< pile, h evolved through the BCRE exchange
+  Impacts,      ///< (surface mode, each update) the static top held below the grains that move
+                ///< the pile
+  Transfer,     ///< (surface mode) trap, dislodge, sleep, wake: changes of state the DEM applies
+  Reach,        ///< (surface mode) the invariant of the layers, before each rebuild of the lists
+  Neighbours,   ///< the rebuilds of the pair, wall and boundary lists
+  Forces,       ///< the contact forces and the integration: one fused sweep over the grains
+                ///< (dem_solver.cpp), so its time is both, and its name says so
+  kCount
+};
 
+/// The stage's name in --profile and summary.json's stage_seconds.
 inline std::string_view stage_name(Stage s) {
-  switch (s) {
-    case Stage::Emit: return "emit";
-    case Stage::Surface: return "surface";
-    case Stage::Reach: return "reach";
-    case Stage::Neighbours: return "neighbours";
-    case Stage::Forces: return "forces";
-    default: return "?";
-  }
+  constexpr std::array<std::string_view, static_cast<std::size_t>(Stage::kCount)> kNames = {
+      "guards",   "emit",  "height_field", "impacts",
+      "transfer", "reach", "neighbours",   "forces+integration"};
+  const auto k = static_cast<std::size_t>(s);
+  return k < kNames.size() ? kNames[k] : "?";
 }
 
 struct Profile {
@@ -53,5 +64,12 @@ class ScopedStage {
   Stage s_;
   Stopwatch w_;
 };
+
+/// Runs f() as a part of stage s of p.
+template <class F>
+void timed(Profile& p, Stage s, F&& f) {
+  ScopedStage scope(p, s);
+  f();
+}
 
 }  // namespace sandflow

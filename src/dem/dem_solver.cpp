@@ -62,17 +62,12 @@ DemSolver::DemSolver(const DemParams& params)
     : params_(params), rolling_(params.contact.mu_r > 0) {}
 
 void DemSolver::step(Grains& grains, const Geometry& geometry, Real dt, Profile& profile) {
-  if (need_rebuild_ || wall_params_.size() != geometry.size()) {
-    ScopedStage s(profile, Stage::Neighbours);
-    rebuild(grains, geometry, dt);
-  }
-  ScopedStage s(profile, Stage::Forces);
-  // Lists stay valid while every grain stays within its allowance.
-  if (rolling_ ? sweep<true>(grains, geometry, dt) : sweep<false>(grains, geometry, dt))
-    need_rebuild_ = true;
-  // (assertions) the lists are the grains' (added or removed ones rebuild them)
-  SANDFLOW_ASSERT(x_at_build_.size() == grains.size(),
-                  "grains were added or removed without a rebuild");
+  timed(profile, Stage::Neighbours, [&] { update_lists(grains, geometry, dt); });
+  timed(profile, Stage::Forces, [&] { advance(grains, geometry, dt); });
+}
+
+void DemSolver::update_lists(Grains& grains, const Geometry& geometry, Real dt) {
+  if (need_rebuild_ || wall_params_.size() != geometry.size()) rebuild(grains, geometry, dt);
 }
 
 void DemSolver::apply(std::span<const StateChange> changes) {
@@ -83,6 +78,15 @@ void DemSolver::apply(std::span<const StateChange> changes) {
     else if (c.from != GrainState::Active)
       release(c.id);  // woken or dislodged
   }
+}
+
+void DemSolver::advance(Grains& grains, const Geometry& geometry, Real dt) {
+  // Lists stay valid while every grain stays within its allowance.
+  if (rolling_ ? sweep<true>(grains, geometry, dt) : sweep<false>(grains, geometry, dt))
+    need_rebuild_ = true;
+  // (assertions) the lists are the grains' (added or removed ones rebuild them)
+  SANDFLOW_ASSERT(x_at_build_.size() == grains.size(),
+                  "grains were added or removed without a rebuild");
 }
 
 void DemSolver::set_boundary(BoundaryParticles boundary) {

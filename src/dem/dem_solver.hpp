@@ -89,8 +89,16 @@ class DemSolver {
  public:
   explicit DemSolver(const DemParams& params);
 
-  /// Advances the ACTIVE grains by dt; INTERFACE grains push but stay put.
+  /// Advances the ACTIVE grains by dt; INTERFACE grains push but stay put: update_lists, then
+  /// advance, each timed as its stage of `profile` (World::step calls the two itself).
   void step(Grains& grains, const Geometry& geometry, Real dt, Profile& profile);
+  /// Stage "neighbours": rebuilds the pair, wall and boundary lists for steps of dt when they are
+  /// stale (a grain left its allowance, the grains or the geometry changed).
+  void update_lists(Grains& grains, const Geometry& geometry, Real dt);
+  /// Stage "forces": the contact forces and the integration, in one sweep over the grains (each
+  /// grain moves as soon as its forces are summed, while its data are in cache); after
+  /// update_lists.
+  void advance(Grains& grains, const Geometry& geometry, Real dt);
 
   /// Sets the boundary particles (before the first step).
   void set_boundary(BoundaryParticles boundary);

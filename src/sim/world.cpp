@@ -288,27 +288,56 @@ void World::emit() {
   dem_.invalidate();
 }
 
+// The step, stage by stage, in the order of docs/design.md §1; each stage is timed (--profile).
 void World::step() {
+  const bool update = surface_ && step_ % surface_->params().update_steps == 0;
+  timed(profile_, Stage::Guards, [&] { begin_step(); });
+  timed(profile_, Stage::Emit, [&] { emit(); });
+  if (update) {
+    timed(profile_, Stage::HeightField, [&] { update_height_field(); });
+    timed(profile_, Stage::Impacts, [&] { apply_impacts(); });
+  }
+  if (surface_) timed(profile_, Stage::Transfer, [&] { transfer(update); });
+  if (!leaving_.empty()) timed(profile_, Stage::Guards, [&] { remove_leaving(); });
+  if (surface_ && dem_.needs_rebuild()) timed(profile_, Stage::Reach, [&] { hold_invariant(); });
+  timed(profile_, Stage::Neighbours, [&] { dem_.update_lists(grains_, geometry_, ts_.dt); });
+  // (forces and integration: one fused sweep, so one stage)
+  timed(profile_, Stage::Forces, [&] { dem_.advance(grains_, geometry_, ts_.dt); });
+  timed(profile_, Stage::Guards, [&] { end_step(); });
+  ++step_;
+  time_ = static_cast<Real>(step_) * ts_.dt;
+}
+
+void World::begin_step() {
   remove_due_geometry(step_ + 1, true);
   check_grains();
-  {
-    ScopedStage s(profile_, Stage::Emit);
-    emit();
-  }
-  if (surface_ && step_ % surface_->params().update_steps == 0) {
-    ScopedStage s(profile_, Stage::Surface);
-    apply(surface_->update(grains_, static_, dem_, geometry_, surface_->params().update_interval));
-    ++surface_updates_;
-  } else if (surface_ && dem_.needs_rebuild()) {
-    ScopedStage s(profile_, Stage::Surface);
-    apply(surface_->catch_up(grains_, static_, dem_, geometry_));
-  }
-  if (!leaving_.empty()) remove_leaving();
-  if (surface_ && dem_.needs_rebuild()) {
-    ScopedStage s(profile_, Stage::Reach);
-    apply(surface_->wake_within_reach(grains_, static_, dem_, ts_.dt));
-  }
-  dem_.step(grains_, geometry_, ts_.dt, profile_);
+}
+
+void World::update_height_field() {
+  surface_->update_height_field(grains_, static_, dem_, geometry_,
+                                surface_->params().update_interval);
+  ++surface_updates_;
+}
+
+void World::apply_impacts() {
+  surface_->apply_impacts(grains_, surface_->params().update_interval);
+}
+
+void World::transfer(bool after_update) {
+  apply(after_update ? surface_->transfer(grains_, static_, dem_)
+                     : surface_->catch_up(grains_, static_, dem_, geometry_));
+}
+
+void World::hold_invariant() {
+  apply(surface_->wake_within_reach(grains_, static_, dem_, ts_.dt));
+}
+
+void World::apply(const Transitions& t) {
+  transitions_ += t.counts;
+  dem_.apply(t.changes);
+}
+
+void World::end_step() {
   check_overlap(step_ + 1);
   // (assertions) every grain held once, in the store of its state, as many as were emitted less
   // those that left (docs/design.md §2; advance_frame checks the count in every build), and the
@@ -323,13 +352,6 @@ void World::step() {
                       fmt::format("{}: the INTERFACE grain {} is not at rest", where(step_ + 1),
                                   grains_.id[i]));
   }
-  ++step_;
-  time_ = static_cast<Real>(step_) * ts_.dt;
-}
-
-void World::apply(const Transitions& t) {
-  transitions_ += t.counts;
-  dem_.apply(t.changes);
 }
 
 std::string World::where(std::int64_t step) const {

@@ -150,10 +150,25 @@ class World {
   void restore_state(WorldState s);
 
  private:
+  /// One step of dt, stage by stage (docs/design.md §1).
   void step();
+  // The stages of a step that are the World's own (neighbours and forces are DemSolver's).
+  /// Guards: the solids whose time has come are removed, then check_grains.
+  void begin_step();
   void emit();
-  /// Counts the transitions of the surface flow, and has the DEM apply its changes of state.
+  /// Height field: measure H, evolve h through the exchange (an update, every update_steps).
+  void update_height_field();
+  /// Impacts: the static top held below the grains that move the pile (the same update).
+  void apply_impacts();
+  /// Transfer: trap, dislodge, sleep and wake after an update, or what the last update left
+  /// waiting for a rebuild of the pair list; the DEM applies the changes.
+  void transfer(bool after_update);
+  /// Reach: the invariant of the layers, before a rebuild of the pair list.
+  void hold_invariant();
+  /// Counts the transitions of a stage, and has the DEM apply its changes of state.
   void apply(const Transitions& t);
+  /// Guards after the DEM: check_overlap, and (assertions) the stores and the frozen grains.
+  void end_step();
   /// Guards (docs/scenes.md): a non-finite grain stops the run; a grain outside the domain stops
   /// it or, with on_leave = "count", is marked for removal (leaving_).
   void check_grains();

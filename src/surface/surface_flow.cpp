@@ -15,8 +15,8 @@ bool SurfaceFlow::below_level(const Vec3& x) const {
   return c >= 0 && x.z < hf_.terrain()[static_cast<std::size_t>(c)];
 }
 
-Transitions SurfaceFlow::update(Grains& hot, StaticStore& st, const DemSolver& dem,
-                                const Geometry& geometry, Real dt) {
+void SurfaceFlow::update_height_field(const Grains& hot, const StaticStore& st,
+                                      const DemSolver& dem, const Geometry& geometry, Real dt) {
   // a grain in flight touches nothing: only grains of the pile (and the interface) make H
   dem.contacts_of(hot, geometry, contacts_);
   counts_.resize(hot.size());
@@ -36,6 +36,9 @@ Transitions SurfaceFlow::update(Grains& hot, StaticStore& st, const DemSolver& d
     hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) { flowing_[c] = 1; });
   }
   hf_.exchange(dt, flowing_);
+}
+
+void SurfaceFlow::apply_impacts(const Grains& hot, Real dt) {
   // The static layer retreats to `floor_z` under a grain at x moving at v, along its way until
   // the next update: a grain skidding sideways at 3 m/s crosses a column between two updates, and
   // the bed of the column it enters must be moving when it arrives, as its contacts would set it.
@@ -60,6 +63,9 @@ Transitions SurfaceFlow::update(Grains& hot, StaticStore& st, const DemSolver& d
     const Vec3& v = hot.v[i];
     clear_path(x, v, hot.r[i], x.z - 3 * hot.r[i] - std::max(-v.z, 0.0) * dt);
   }
+}
+
+Transitions SurfaceFlow::transfer(Grains& hot, StaticStore& st, const DemSolver& dem) {
   // Dislodging, sleeping and waking change the pair list: unless it is rebuilt anyway at this
   // step, they wait for its next rebuild, and at most until the next update.
   const bool now = dem.needs_rebuild() || pending_;

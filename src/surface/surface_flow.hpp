@@ -1,5 +1,10 @@
-// The surface-flow method of Zhu & Yang (docs/design.md §1): the height field of the static layer and
-// the particle interface, updated together every few DEM steps.
+// The surface-flow method of Zhu & Yang (docs/design.md §1): the height field of the static layer
+// and the particle interface, updated together every few DEM steps. An update is three stages,
+// which World::step calls and times one by one, in the paper's order: the height field (measure H,
+// evolve h through the exchange), the impacts (the static top held below the grains that move
+// the pile), the transfer (the changes of state). The transfer and the invariant of the layers
+// return the changes of state they made in the stores; the DEM applies them (DemSolver::apply):
+// the surface flow reads the solver, it does not change it.
 #pragma once
 
 #include <vector>
@@ -28,18 +33,27 @@ class SurfaceFlow {
   /// The geometry changed (a solid was removed): traces the columns' terrain again.
   void retrace_terrain(const Geometry& geometry) { hf_.set_solids(terrain_columns(p_, geometry)); }
 
-  /// One update over `dt` of simulated time, in the paper's order: measure H, evolve h through
-  /// the exchange, then pass grains between the layers. Returns the changes of state, which the
-  /// DEM applies (DemSolver::apply): the surface flow reads the solver, it does not change it.
-  Transitions update(Grains& hot, StaticStore& st, const DemSolver& dem, const Geometry& geometry,
-                     Real dt);
+  // One update over `dt` of simulated time: the three calls below, in this order.
 
-  /// Makes the transitions the last update left waiting, if `dem` rebuilds its lists anyway.
+  /// Stage "height field": measures H from the grains of the pile (the hot grains that touch
+  /// something, and the static tops), finds the columns where grains move the pile, and evolves
+  /// h there (BCRE with theta0) and elsewhere (deposit up to theta_max) through the exchange.
+  void update_height_field(const Grains& hot, const StaticStore& st, const DemSolver& dem,
+                           const Geometry& geometry, Real dt);
+  /// Stage "impacts": the static top retreats under the grains that move the pile (found by
+  /// update_height_field, on the same grains), along their way until the next update.
+  void apply_impacts(const Grains& hot, Real dt);
+  /// Stage "transfer" after an update: trap, dislodge, sleep and wake against the new h. Only
+  /// trapping keeps the pair list: unless `dem` rebuilds it at this step anyway, the rest waits
+  /// for its next rebuild (catch_up), and at most until the next update.
+  Transitions transfer(Grains& hot, StaticStore& st, const DemSolver& dem);
+  /// Stage "transfer" between updates: the transitions the last update left waiting, if `dem`
+  /// rebuilds its lists at this step anyway.
   Transitions catch_up(Grains& hot, StaticStore& st, const DemSolver& dem,
                        const Geometry& geometry);
 
-  /// The invariant of the layers, before `dem` rebuilds its lists for steps of dt: every STATIC
-  /// grain within reach of an ACTIVE grain wakes (InterfaceLayer::wake_within_reach).
+  /// Stage "reach", the invariant of the layers, before `dem` rebuilds its lists for steps of dt:
+  /// every STATIC grain within reach of an ACTIVE grain wakes (InterfaceLayer::wake_within_reach).
   Transitions wake_within_reach(Grains& hot, StaticStore& st, const DemSolver& dem, Real dt);
 
   const SurfaceParams& params() const { return p_; }
@@ -63,7 +77,7 @@ class SurfaceFlow {
   HeightField hf_;
   InterfaceLayer interface_;
   std::vector<std::uint8_t> contacts_, counts_, flowing_;
-  std::vector<std::uint32_t> fast_;
+  std::vector<std::uint32_t> fast_;  ///< the hot grains that move the pile, at the last update
   std::vector<Real> allow_;
   bool pending_ = false;  ///< transitions that change the pair list wait for its next rebuild
 };

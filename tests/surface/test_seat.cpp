@@ -142,7 +142,9 @@ TopGrain top_grain(Real speed, Real spin = 0, bool pocket = true, bool h_above =
     SurfaceState state = flow.save_state();
     for (Real& h : state.columns.h) h = top.z - kR;
     flow.restore_state(state);
-    dem.apply(flow.update(hot, st, dem, geometry, sp.update_interval).changes);
+    flow.update_height_field(hot, st, dem, geometry, sp.update_interval);
+    flow.apply_impacts(hot, sp.update_interval);
+    dem.apply(flow.transfer(hot, st, dem).changes);
     const std::int64_t c = hf.column_of(top.x, top.y);
     out.h_minus_bottom = hf.static_top()[static_cast<std::size_t>(c)] - (top.z - kR);
   }
