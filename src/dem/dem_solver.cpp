@@ -512,31 +512,336 @@ void DemSolver::balance_ranges(const Grains& grains, std::size_t threads) {
 // slots until their grain's turn. Every grain therefore adds the same terms in the same
 // order as a single thread would — its accumulator in ascending order of the other grain, its own
 // pairs in slot order — and the state is bit-identical for any thread count.
+//
+// The sweep's kernels follow: the pairs (grain-grain), the fixed partners (walls, boundary
+// particles, frozen grains), the integration and the thread partition. Each takes the arrays it
+// needs and is inlined by force into the sweep's parallel region, so that the compiler sees the
+// loops of one function. (GCC 12 stopped inlining the pair kernel as the sweep grew, which cost
+// 11 % of a plain-DEM run: docs/performance.md, "The sweep's inlining".)
+namespace {
+
+/// What the kernels share, built once a sweep before its parallel region: the law and the step,
+/// the pair list with its history, the grains as plain arrays, their accumulators.
+struct SweepData {
+  const ContactParams& cp;
+  PairList& pl;
+  Vec3* x;
+  Vec3* v;
+  Vec3* w;
+  const Real* r;
+  const Real* m;
+  const Real* inv_m;
+  const Real* inv_I;
+  const GrainState* st;
+  const GrainId* id;  ///< (for the assertions' messages)
+  /// per grain: the reversed pair results of this step that wait for its turn (acc_t: rolling)
+  Vec3* acc_f;
+  Vec3* acc_q;
+  Vec3* acc_t;
+  const Vec3* x_at_build;
+  const Real* allow2;  ///< per grain: its allowance, squared [m^2]
+  Vec3 gravity;
+  Real dt;
+  Real decay;  ///< what is left of a preload after one step
+};
+
+/// What never moves, as the sweep meets it: the obstacles and the boundary particles, each with
+/// its candidate lists (and their history) and its laws.
+struct FixedPartners {
+  const Geometry& geometry;
+  WallList& walls;
+  const std::vector<ContactParams>& wall_params;  ///< per obstacle
+  WallList& bounds;
+  const BoundaryParticles& boundary;
+  const std::vector<ContactParams>& boundary_params;  ///< per group
+};
+
+/// One thread's tallies: its copies of the sweep's reduction variables, and its energy events.
+struct Tally {
+  std::int64_t& contacts;
+  std::int64_t& wall_contacts;
+  Real& max_ov;
+  std::vector<SlotEnergy>& ev;
+};
+
+// --- fixed partners: walls, boundary particles, frozen grains --------------------------------
+
+/// The normal damping of pair slot s: its own, or, when one grain is frozen, as against a wall.
+/// A frozen partner does not recoil: damped as against a wall, the restitution of a bounce on the
+/// interface is the material's, not that of a grain half the mass.
+[[gnu::always_inline]] inline Real pair_damping(const SweepData& d, std::size_t i, std::uint32_t j,
+                                                std::uint32_t s) {
+  const GrainState* st = d.st;
+  return st[i] == GrainState::Active && st[j] == GrainState::Active
+             ? d.pl.c_n[s]
+             : normal_damping(d.cp, d.m[st[i] == GrainState::Active ? i : j]);
+}
+
+/// A contact of grain i with something that never moves (a wall, a boundary particle): i alone
+/// feels it, into f and torque.
+template <bool kRolling>
+[[gnu::always_inline]] inline void touch_fixed(const SweepData& d, std::size_t i,
+                                               const ContactParams& p, const ContactGeometry& cg,
+                                               Vec3& xi, Vec3& psi, Vec3& f, Vec3& torque,
+                                               Tally& tally) {
+  const Vec3* v = d.v;
+  const Vec3* w = d.w;
+  ContactHistory h{xi, psi};
+  const ContactForce cf = contact_force<kRolling>(p, cg, v[i], w[i], Vec3{}, h, d.dt);
+  SANDFLOW_ASSERT(!(tame(cg.n) && std::isfinite(cg.delta) && tame(v[i]) && tame(w[i]) && tame(xi) &&
+                    (!kRolling || tame(psi))) ||
+                      finite_result(cf, h, kRolling),
+                  fmt::format("grain {}: the contact law gave a non-finite force or history "
+                              "against the geometry from a finite state",
+                              d.id[i]));
+  xi = h.xi;
+  psi = h.psi;
+  f += cf.force_i;
+  torque += cf.torque_i(cg);
+  ++tally.wall_contacts;
+  tally.max_ov = std::max(tally.max_ov, cg.delta / (2 * d.r[i]));
+}
+
+/// Grain i's contacts with the walls, then with the boundary particles, into f and torque.
+template <bool kRolling>
+[[gnu::always_inline]] inline void fixed_forces(const SweepData& d, const FixedPartners& fixed,
+                                                std::size_t i, Vec3& f, Vec3& torque,
+                                                Tally& tally) {
+  const Vec3* x = d.x;
+  const Real r_i = d.r[i];
+  WallList& walls = fixed.walls;
+  WallList& bounds = fixed.bounds;
+  // walls: the same law, the obstacle an immovable body with no radius
+  for (std::uint32_t s = walls.start[i]; s < walls.start[i + 1]; ++s) {
+    const std::uint32_t k = walls.obstacle[s];
+    const SurfacePoint sp = fixed.geometry.obstacles()[k].solid->closest(x[i]);
+    const Real delta = r_i - sp.distance;
+    if (delta <= 0) {
+      walls.xi[s] = {};
+      walls.psi[s] = {};
+      continue;
+    }
+    const ContactParams& wp = fixed.wall_params[k];
+    touch_fixed<kRolling>(d, i, wp, {sp.normal, delta, r_i, 0.0, normal_damping(wp, d.m[i]), r_i},
+                          walls.xi[s], walls.psi[s], f, torque, tally);
+  }
+  // boundary particles: a grain that never moves, damped as against a wall
+  const Real rb = fixed.boundary.radius;
+  for (std::uint32_t s = bounds.start[i]; s < bounds.start[i + 1]; ++s) {
+    const Vec3 dx = x[i] - fixed.boundary.x[bounds.obstacle[s]];
+    const Real dist2 = norm2(dx), rsum = r_i + rb;
+    if (dist2 >= rsum * rsum) {
+      bounds.xi[s] = {};
+      bounds.psi[s] = {};
+      continue;
+    }
+    const ContactParams& bp = fixed.boundary_params[fixed.boundary.group[bounds.obstacle[s]]];
+    const Real dist = std::sqrt(dist2);
+    touch_fixed<kRolling>(
+        d, i, bp,
+        {dx * (1.0 / dist), rsum - dist, r_i, rb, normal_damping(bp, d.m[i]), r_i * rb / rsum},
+        bounds.xi[s], bounds.psi[s], f, torque, tally);
+  }
+}
+
+// --- pairs: grain-grain ----------------------------------------------------------------------
+
+/// Pair slot s, whose grains are apart (centres sqrt(dist2) apart) or both frozen: the contact
+/// and its memory are gone (written only when it just ended); between two frozen grains it goes
+/// inert, and the energy in its springs leaves with it.
+template <bool kRolling>
+[[gnu::always_inline]] inline void end_contact(const SweepData& d, std::uint32_t s, Real rsum,
+                                               Real dist2, Tally& tally) {
+  PairList& pl = d.pl;
+  if (!pl.touch[s]) return;
+  if (dist2 < rsum * rsum) [[unlikely]]
+    tally.ev.push_back({s, inert_energy(d.cp, pl, s, rsum, dist2, kRolling), 0.0});
+  pl.touch[s] = 0;
+  pl.delta0[s] = 0;
+  pl.xi[s] = {};
+  if constexpr (kRolling) pl.psi[s] = {};
+}
+
+/// One pair slot of grain i: the contact law (true, with the results in cf) or the end of a
+/// contact.
+template <bool kRolling>
+[[gnu::always_inline]] inline bool pair_force(const SweepData& d, std::size_t i, std::uint32_t s,
+                                              ContactForce& cf, Tally& tally) {
+  const ContactParams& cp = d.cp;
+  PairList& pl = d.pl;
+  const Vec3* x = d.x;
+  const Vec3* v = d.v;
+  const Vec3* w = d.w;
+  const Real* r = d.r;
+  const std::uint32_t j = pl.j[s];
+  const Vec3 dx = x[i] - x[j];
+  const Real dist2 = norm2(dx);
+  const Real rsum = r[i] + r[j];
+  if (dist2 >= rsum * rsum || (d.st[i] != GrainState::Active && d.st[j] != GrainState::Active)) {
+    end_contact<kRolling>(d, s, rsum, dist2, tally);
+    return false;
+  }
+  const Real dist = std::sqrt(dist2);
+  ContactGeometry g;
+  g.n = dx * (1.0 / dist);
+  g.delta = rsum - dist;
+  g.arm_i = r[i];
+  g.arm_j = r[j];
+  g.c_n = pair_damping(d, i, j, s);
+  g.r_eff = r[i] * r[j] / rsum;
+  // relative overlap; the division only when it may be a new largest one
+  const Real d_small = 2 * std::min(r[i], r[j]);
+  if (g.delta > tally.max_ov * d_small) tally.max_ov = g.delta / d_small;
+  if (pl.touch[s] & kPreloaded) [[unlikely]]
+    tally.ev.push_back({s, 0.0, relax_preload(cp.k_n, d.decay, pl.delta0[s], g.delta)});
+  ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
+  cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, d.dt);
+  SANDFLOW_ASSERT(!(dist > 0 && tame(dx) && tame(v[i] - v[j]) && tame(w[i]) && tame(w[j]) &&
+                    tame(pl.xi[s]) && (!kRolling || tame(pl.psi[s]))) ||
+                      finite_result(cf, h, kRolling),
+                  fmt::format("grains {} and {}: the contact law gave a non-finite force or "
+                              "history from a finite state",
+                              d.id[i], d.id[j]));
+  pl.touch[s] = (pl.touch[s] & kPreloaded) | kTouching | (cf.sliding ? kSlipping : 0);
+  pl.xi[s] = h.xi;
+  if constexpr (kRolling) pl.psi[s] = h.psi;
+  ++tally.contacts;
+  return true;
+}
+
+/// The reversed pair result, into the other grain's accumulator.
+template <bool kRolling>
+[[gnu::always_inline]] inline void scatter(const SweepData& d, std::uint32_t j,
+                                           const ContactForce& cf) {
+  d.acc_f[j] -= cf.force_i;
+  d.acc_q[j] += cf.q;
+  if constexpr (kRolling) d.acc_t[j] -= cf.t_roll;
+}
+
+/// Grain i's pair sums, into f, q and tr: its remaining pairs (computed here, their reverses
+/// scattered), its waiting ones (computed in the thread partition), then its accumulator, which
+/// is cleared.
+template <bool kRolling>
+[[gnu::always_inline]] inline void pair_sums(const SweepData& d, const std::uint32_t* split,
+                                             std::size_t i, Vec3& f, Vec3& q, Vec3& tr,
+                                             Tally& tally) {
+  const PairList& pl = d.pl;
+  for (std::uint32_t s = pl.start[i]; s < split[i]; ++s) {
+    ContactForce cf;
+    if (!pair_force<kRolling>(d, i, s, cf, tally)) continue;
+    f += cf.force_i;
+    q += cf.q;
+    if constexpr (kRolling) tr += cf.t_roll;
+    scatter<kRolling>(d, pl.j[s], cf);
+  }
+  for (std::uint32_t s = split[i]; s < pl.start[i + 1]; ++s) {
+    if (!pl.touch[s]) continue;
+    f += pl.force[s];
+    q += pl.q[s];
+    if constexpr (kRolling) tr += pl.t_roll[s];
+  }
+  f += d.acc_f[i];
+  q += d.acc_q[i];
+  if constexpr (kRolling) tr += d.acc_t[i];
+  d.acc_f[i] = d.acc_q[i] = {};
+  if constexpr (kRolling) d.acc_t[i] = {};
+}
+
+// --- integration -----------------------------------------------------------------------------
+
+/// Grain i moves under force f and torque: symplectic Euler, velocities from the forces, then
+/// positions from the new velocities. Returns whether i has left its allowance.
+[[gnu::always_inline]] inline bool integrate(const SweepData& d, std::size_t i, const Vec3& f,
+                                             const Vec3& torque) {
+  Vec3* x = d.x;
+  Vec3* v = d.v;
+  const Real dt = d.dt;
+  v[i] += (f * d.inv_m[i] + d.gravity) * dt;
+  d.w[i] += torque * (d.inv_I[i] * dt);
+  x[i] += v[i] * dt;
+  return norm2(x[i] - d.x_at_build[i]) > d.allow2[i];
+}
+
+// --- the thread partition --------------------------------------------------------------------
+
+/// Phase 1 of the sweep, called by every thread of its parallel region (the `omp for` binds to
+/// it); thread t's range is [range[t], range[t + 1]), the last one ending at n. The pairs that
+/// reach into a later thread's range, from the state at the start of the step, are computed into
+/// their slots by whichever thread is free (each slot's result depends on its pair alone); then,
+/// after the barrier that ends that loop, each thread takes those that reach into its range into
+/// its accumulators, in grain order. split[i] becomes the first slot of i that reaches a later
+/// range.
+template <bool kRolling>
+[[gnu::always_inline]] inline void cross_range_pairs(const SweepData& d,
+                                                     const std::vector<std::size_t>& range,
+                                                     std::size_t t, std::uint32_t* split,
+                                                     Tally& tally) {
+  PairList& pl = d.pl;
+  const std::size_t threads = range.size() - 1, n = range.back();
+  const std::size_t lo = range[t], hi = range[t + 1];
+#pragma omp for schedule(dynamic, 64)
+  for (std::size_t i = 0; i < range[threads - 1]; ++i) {
+    const std::size_t end_of_range =
+        *std::upper_bound(range.begin(), range.end(), i);  // (i's range ends there)
+    std::uint32_t first = pl.start[i + 1];                 // rows are sorted by j
+    while (first > pl.start[i] && pl.j[first - 1] >= end_of_range) --first;
+    split[i] = first;
+    for (std::uint32_t s = first; s < pl.start[i + 1]; ++s) {
+      ContactForce cf;
+      if (!pair_force<kRolling>(d, i, s, cf, tally)) continue;
+      pl.force[s] = cf.force_i;
+      pl.q[s] = cf.q;
+      if constexpr (kRolling) pl.t_roll[s] = cf.t_roll;
+    }
+  }
+  if (t == threads - 1)  // the last range reaches no later one
+    for (std::size_t i = lo; i < n; ++i) split[i] = pl.start[i + 1];
+  for (std::size_t i = 0; i < lo; ++i)
+    for (std::uint32_t s = split[i]; s < pl.start[i + 1]; ++s) {
+      const std::uint32_t j = pl.j[s];
+      if (!pl.touch[s] || j < lo || j >= hi) continue;
+      d.acc_f[j] -= pl.force[s];
+      d.acc_q[j] += pl.q[s];
+      if constexpr (kRolling) d.acc_t[j] -= pl.t_roll[s];
+    }
+}
+
+}  // namespace
+
 template <bool kRolling>
 bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   const std::size_t n = grains.size();
-  const ContactParams& cp = params_.contact;
-  PairList& pl = pairs_;
-  Vec3* x = grains.x.data();
-  Vec3* v = grains.v.data();
-  Vec3* w = grains.w.data();
-  const Real* r = grains.r.data();
-  const GrainState* st = grains.state.data();
-  const Vec3 gravity = params_.gravity;
-  Vec3* acc_f = acc_f_.data();
-  Vec3* acc_q = acc_q_.data();
-  Vec3* acc_t = acc_t_.data();
+  const Real decay =
+      params_.preload_relax_time > 0 ? std::exp(-dt / params_.preload_relax_time) : 1.0;
+  // (in the order of SweepData's members)
+  const SweepData data{params_.contact,
+                       pairs_,
+                       grains.x.data(),
+                       grains.v.data(),
+                       grains.w.data(),
+                       grains.r.data(),
+                       grains.m.data(),
+                       grains.inv_m.data(),
+                       grains.inv_I.data(),
+                       grains.state.data(),
+                       grains.id.data(),
+                       acc_f_.data(),
+                       acc_q_.data(),
+                       acc_t_.data(),
+                       x_at_build_.data(),
+                       allow2_.data(),
+                       params_.gravity,
+                       dt,
+                       decay};
+  const FixedPartners fixed{geometry, walls_, wall_params_, bounds_, boundary_, boundary_params_};
   std::int64_t contacts = 0, wall_contacts = 0;
   Real max_ov = counters_.max_overlap_rel;
   // the energy of contacts going inert and of preloads relaxing: rare, kept per slot and summed
   // in slot order after the sweep, so that the totals do not depend on the threads
   std::vector<std::vector<SlotEnergy>>& events = energy_events_;
-  const Real decay =
-      params_.preload_relax_time > 0 ? std::exp(-dt / params_.preload_relax_time) : 1.0;
   int moved_out = 0;  // some grain left its allowance
-  const Real* allow2 = allow2_.data();
-  std::vector<std::uint32_t>& split = split_;
-  split.resize(n);
+  split_.resize(n);
+  std::uint32_t* split = split_.data();
 
 #pragma omp parallel if (n >= kParallelMinGrains) \
     reduction(+ : contacts, wall_contacts) reduction(max : max_ov, moved_out)
@@ -545,205 +850,52 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
 #pragma omp single
     events.resize(std::max(events.size(), threads));
-    std::vector<SlotEnergy>& ev = events[t];
-    ev.clear();
-    // defined inside the parallel region, so they update this thread's reduction copies
+    events[t].clear();
+    // made inside the parallel region, so that the kernels update this thread's reduction copies
+    Tally tally{contacts, wall_contacts, max_ov, events[t]};
 
-    // One pair slot: the contact law (true, with the results in cf) or the end of a contact.
-    // (Inlined by force: GCC 12 stopped inlining it as the sweep grew, which cost 11 % of a
-    // plain-DEM run.)
-    auto compute_pair = [&](std::size_t i, std::uint32_t s, ContactForce& cf) __attribute__((always_inline)) {
-      const std::uint32_t j = pl.j[s];
-      const Vec3 d = x[i] - x[j];
-      const Real dist2 = norm2(d);
-      const Real rsum = r[i] + r[j];
-      if (dist2 >= rsum * rsum || (st[i] != GrainState::Active && st[j] != GrainState::Active)) {
-        // apart: the contact and its memory are gone (written only when it just ended); between
-        // two frozen grains it goes inert, and the energy in its springs leaves with it
-        if (pl.touch[s]) {
-          if (dist2 < rsum * rsum) [[unlikely]]
-            ev.push_back({s, inert_energy(cp, pl, s, rsum, dist2, kRolling), 0.0});
-          pl.touch[s] = 0;
-          pl.delta0[s] = 0;
-          pl.xi[s] = {};
-          if constexpr (kRolling) pl.psi[s] = {};
-        }
-        return false;
-      }
-      const Real dist = std::sqrt(dist2);
-      ContactGeometry g;
-      g.n = d * (1.0 / dist);
-      g.delta = rsum - dist;
-      g.arm_i = r[i];
-      g.arm_j = r[j];
-      // a frozen partner does not recoil: damp as against a wall, so that the restitution of a
-      // bounce on the interface is the material's, not that of a grain half the mass
-      g.c_n = st[i] == GrainState::Active && st[j] == GrainState::Active
-                  ? pl.c_n[s]
-                  : normal_damping(cp, grains.m[st[i] == GrainState::Active ? i : j]);
-      g.r_eff = r[i] * r[j] / rsum;
-      // relative overlap; the division only when it may be a new largest one
-      const Real d_small = 2 * std::min(r[i], r[j]);
-      if (g.delta > max_ov * d_small) max_ov = g.delta / d_small;
-      if (pl.touch[s] & kPreloaded) [[unlikely]]
-        ev.push_back({s, 0.0, relax_preload(cp.k_n, decay, pl.delta0[s], g.delta)});
-      ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
-      cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, dt);
-      SANDFLOW_ASSERT(!(dist > 0 && tame(d) && tame(v[i] - v[j]) && tame(w[i]) && tame(w[j]) &&
-                        tame(pl.xi[s]) && (!kRolling || tame(pl.psi[s]))) ||
-                          finite_result(cf, h, kRolling),
-                      fmt::format("grains {} and {}: the contact law gave a non-finite force or "
-                                  "history from a finite state",
-                                  grains.id[i], grains.id[j]));
-      pl.touch[s] = (pl.touch[s] & kPreloaded) | kTouching | (cf.sliding ? kSlipping : 0);
-      pl.xi[s] = h.xi;
-      if constexpr (kRolling) pl.psi[s] = h.psi;
-      ++contacts;
-      return true;
-    };
-    // the reversed pair result, into the other grain's accumulator
-    auto scatter = [&](std::uint32_t j, const ContactForce& cf) __attribute__((always_inline)) {
-      acc_f[j] -= cf.force_i;
-      acc_q[j] += cf.q;
-      if constexpr (kRolling) acc_t[j] -= cf.t_roll;
-    };
-
-    // 1. pairs that reach into a later thread's range, from the state at the start of the step:
-    // computed into their slots by whichever thread is free (each slot's result depends on its
-    // pair alone), then each thread takes those that reach into its range into its accumulators,
-    // in grain order
-    const std::vector<std::size_t>& range = range_start_;
+    // 1. the threads' ranges (cut again after a rebuild), and the pairs that reach into a later
+    // thread's range
 #pragma omp single
-    if (ranges_stale_ || range.size() != threads + 1 || range.back() != n)
+    if (ranges_stale_ || range_start_.size() != threads + 1 || range_start_.back() != n)
       balance_ranges(grains, threads);
-    const std::size_t lo = range[t], hi = range[t + 1];
-#pragma omp for schedule(dynamic, 64)
-    for (std::size_t i = 0; i < range[threads - 1]; ++i) {
-      const std::size_t end_of_range =
-          *std::upper_bound(range.begin(), range.end(), i);  // (i's range ends there)
-      std::uint32_t first = pl.start[i + 1];  // rows are sorted by j
-      while (first > pl.start[i] && pl.j[first - 1] >= end_of_range) --first;
-      split[i] = first;
-      for (std::uint32_t s = first; s < pl.start[i + 1]; ++s) {
-        ContactForce cf;
-        if (!compute_pair(i, s, cf)) continue;
-        pl.force[s] = cf.force_i;
-        pl.q[s] = cf.q;
-        if constexpr (kRolling) pl.t_roll[s] = cf.t_roll;
-      }
-    }
-    if (t == threads - 1)  // the last range reaches no later one
-      for (std::size_t i = lo; i < n; ++i) split[i] = pl.start[i + 1];
-    for (std::size_t i = 0; i < lo; ++i)
-      for (std::uint32_t s = split[i]; s < pl.start[i + 1]; ++s) {
-        const std::uint32_t j = pl.j[s];
-        if (!pl.touch[s] || j < lo || j >= hi) continue;
-        acc_f[j] -= pl.force[s];
-        acc_q[j] += pl.q[s];
-        if constexpr (kRolling) acc_t[j] -= pl.t_roll[s];
-      }
+    const std::size_t lo = range_start_[t], hi = range_start_[t + 1];
+    cross_range_pairs<kRolling>(data, range_start_, t, split, tally);
 
     // 2. the sweep: i's remaining pairs, its waiting ones, then i moves
     const double sweep_start = omp_get_wtime();
     for (std::size_t i = lo; i < hi; ++i) {
       Vec3 f{}, q{}, tr{};
-      for (std::uint32_t s = pl.start[i]; s < split[i]; ++s) {
-        ContactForce cf;
-        if (!compute_pair(i, s, cf)) continue;
-        f += cf.force_i;
-        q += cf.q;
-        if constexpr (kRolling) tr += cf.t_roll;
-        scatter(pl.j[s], cf);
-      }
-      for (std::uint32_t s = split[i]; s < pl.start[i + 1]; ++s) {
-        if (!pl.touch[s]) continue;
-        f += pl.force[s];
-        q += pl.q[s];
-        if constexpr (kRolling) tr += pl.t_roll[s];
-      }
-      f += acc_f[i];
-      q += acc_q[i];
-      if constexpr (kRolling) tr += acc_t[i];
-      acc_f[i] = acc_q[i] = {};
-      if constexpr (kRolling) acc_t[i] = {};
-      if (st[i] != GrainState::Active) continue;
-
-      const Real r_i = r[i];
-      Vec3 torque = tr + q * (-r_i);
-      // a contact with something that never moves (a wall, a boundary particle): i alone feels it
-      auto touch_fixed = [&](const ContactParams& p, const ContactGeometry& cg, Vec3& xi, Vec3& psi) {
-        ContactHistory h{xi, psi};
-        const ContactForce cf = contact_force<kRolling>(p, cg, v[i], w[i], Vec3{}, h, dt);
-        SANDFLOW_ASSERT(!(tame(cg.n) && std::isfinite(cg.delta) && tame(v[i]) && tame(w[i]) &&
-                          tame(xi) && (!kRolling || tame(psi))) ||
-                            finite_result(cf, h, kRolling),
-                        fmt::format("grain {}: the contact law gave a non-finite force or history "
-                                    "against the geometry from a finite state",
-                                    grains.id[i]));
-        xi = h.xi;
-        psi = h.psi;
-        f += cf.force_i;
-        torque += cf.torque_i(cg);
-        ++wall_contacts;
-        max_ov = std::max(max_ov, cg.delta / (2 * r_i));
-      };
-      // walls: the same law, the obstacle an immovable body with no radius
-      for (std::uint32_t s = walls_.start[i]; s < walls_.start[i + 1]; ++s) {
-        const std::uint32_t k = walls_.obstacle[s];
-        const SurfacePoint sp = geometry.obstacles()[k].solid->closest(x[i]);
-        const Real delta = r_i - sp.distance;
-        if (delta <= 0) {
-          walls_.xi[s] = {};
-          walls_.psi[s] = {};
-          continue;
-        }
-        const ContactParams& wp = wall_params_[k];
-        touch_fixed(wp, {sp.normal, delta, r_i, 0.0, normal_damping(wp, grains.m[i]), r_i},
-                    walls_.xi[s], walls_.psi[s]);
-      }
-      // boundary particles: a grain that never moves, damped as against a wall
-      const Real rb = boundary_.radius;
-      for (std::uint32_t s = bounds_.start[i]; s < bounds_.start[i + 1]; ++s) {
-        const Vec3 d = x[i] - boundary_.x[bounds_.obstacle[s]];
-        const Real dist2 = norm2(d), rsum = r_i + rb;
-        if (dist2 >= rsum * rsum) {
-          bounds_.xi[s] = {};
-          bounds_.psi[s] = {};
-          continue;
-        }
-        const ContactParams& bp = boundary_params_[boundary_.group[bounds_.obstacle[s]]];
-        const Real dist = std::sqrt(dist2);
-        touch_fixed(bp, {d * (1.0 / dist), rsum - dist, r_i, rb, normal_damping(bp, grains.m[i]),
-                         r_i * rb / rsum},
-                    bounds_.xi[s], bounds_.psi[s]);
-      }
-      // symplectic Euler: velocities from the forces, then positions from the new velocities
-      v[i] += (f * grains.inv_m[i] + gravity) * dt;
-      w[i] += torque * (grains.inv_I[i] * dt);
-      x[i] += v[i] * dt;
-      if (norm2(x[i] - x_at_build_[i]) > allow2[i]) moved_out = 1;
+      pair_sums<kRolling>(data, split, i, f, q, tr, tally);
+      if (data.st[i] != GrainState::Active) continue;
+      Vec3 torque = tr + q * (-data.r[i]);
+      fixed_forces<kRolling>(data, fixed, i, f, torque, tally);
+      if (integrate(data, i, f, torque)) moved_out = 1;
     }
     busy_[t] += omp_get_wtime() - sweep_start;
   }
   counters_.contacts = contacts;
   counters_.wall_contacts = wall_contacts;
   counters_.max_overlap_rel = max_ov;
+  add_energy_events();
+  return moved_out != 0;
+}
+
+void DemSolver::add_energy_events() {
   std::vector<SlotEnergy>& all = events_merged_;
   all.clear();
-  for (auto& e : events) {
+  for (auto& e : energy_events_) {
     all.insert(all.end(), e.begin(), e.end());
     e.clear();  // (a sweep on fewer threads leaves the others' empty)
   }
-  if (!all.empty()) {
-    // (a slot is computed once a step: one event each)
-    std::sort(all.begin(), all.end(),
-              [](const SlotEnergy& a, const SlotEnergy& b) { return a.slot < b.slot; });
-    for (const SlotEnergy& e : all) {
-      counters_.energy_inert += e.inert;
-      counters_.energy_released += e.relaxed;
-    }
+  if (all.empty()) return;
+  // (a slot is computed once a step: one event each)
+  std::sort(all.begin(), all.end(),
+            [](const SlotEnergy& a, const SlotEnergy& b) { return a.slot < b.slot; });
+  for (const SlotEnergy& e : all) {
+    counters_.energy_inert += e.inert;
+    counters_.energy_released += e.relaxed;
   }
-  return moved_out != 0;
 }
 
 }  // namespace sandflow

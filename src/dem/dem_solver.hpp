@@ -85,6 +85,13 @@ struct DeepestOverlap {
   std::uint32_t other = 0;   ///< the other grain's slot, the obstacle or the boundary particle
 };
 
+/// Energy of one pair slot in one step of the sweep: its contact going inert, or its preload
+/// relaxing [J] (DemSolver keeps them per thread and adds them in slot order).
+struct SlotEnergy {
+  std::uint32_t slot;
+  Real inert, relaxed;
+};
+
 class DemSolver {
  public:
   explicit DemSolver(const DemParams& params);
@@ -165,10 +172,12 @@ class DemSolver {
   /// Boundary particles within reach of each ACTIVE grain, history carried by grain id.
   void build_boundary_list(const Grains& grains);
   void sort_by_cell(Grains& grains);
-  /// Forces and integration in one sweep; returns whether some grain has moved further than its
-  /// allowance since the last rebuild.
+  /// Forces and integration in one sweep (its kernels: dem_solver.cpp); returns whether some
+  /// grain has moved further than its allowance since the last rebuild.
   template <bool kRolling>
   bool sweep(Grains& grains, const Geometry& geometry, Real dt);
+  /// After a sweep: the energy events of its threads, added to the counters in slot order.
+  void add_energy_events();
   /// Splits the grains into `threads` contiguous ranges of about equal time for the sweep: each
   /// thread's share of the estimated work follows the speed it showed since the last split.
   void balance_ranges(const Grains& grains, std::size_t threads);
@@ -196,11 +205,6 @@ class DemSolver {
   bool need_rebuild_ = true;
   std::int64_t rebuild_count_ = 0;
   std::vector<GrainId> released_;  ///< since the last rebuild (always empty between steps)
-  /// Energy of one pair slot in one step: its contact going inert, or its preload relaxing [J].
-  struct SlotEnergy {
-    std::uint32_t slot;
-    Real inert, relaxed;
-  };
   std::vector<std::vector<SlotEnergy>> energy_events_;  ///< per thread, in one sweep
   std::vector<SlotEnergy> events_merged_;
   DemCounters counters_;
