@@ -102,59 +102,6 @@ void DemSolver::set_boundary(BoundaryParticles boundary) {
   need_rebuild_ = true;
 }
 
-void DemSolver::build_boundary_list(const Grains& grains) {
-  const std::size_t n = grains.size();
-  std::swap(bounds_, old_bounds_);
-  bounds_.start.assign(n + 1, 0);
-  bounds_.obstacle.clear();
-  if (boundary_.size() == 0) return;
-  const Real rb = boundary_.radius;
-  auto each_near = [&](std::size_t i, auto&& f) {
-    if (grains.state[i] != GrainState::Active) return;
-    const Real reach = grains.r[i] + rb + 2 * allow_[i];  // (a particle does not move: spare)
-    boundary_grid_.for_each_in_ball(grains.x[i], reach, [&](std::uint32_t b) {
-      if (norm2(grains.x[i] - boundary_.x[b]) < reach * reach) f(b);
-    });
-  };
-  std::vector<std::vector<std::uint32_t>> buffers;
-#pragma omp parallel if (n >= kParallelMinGrains)
-  {
-#pragma omp single
-    buffers.resize(omp_get_num_threads());
-    std::vector<std::uint32_t>& buf = buffers[omp_get_thread_num()];
-    buf.clear();
-#pragma omp for schedule(static)
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t first = buf.size();
-      each_near(i, [&](std::uint32_t b) { buf.push_back(b); });
-      std::sort(buf.begin() + first, buf.end());
-      bounds_.start[i + 1] = static_cast<std::uint32_t>(buf.size() - first);
-    }
-  }
-  for (std::size_t i = 0; i < n; ++i) bounds_.start[i + 1] += bounds_.start[i];
-  for (const auto& buf : buffers) bounds_.obstacle.insert(bounds_.obstacle.end(), buf.begin(), buf.end());
-  const std::size_t slots = bounds_.obstacle.size();
-  bounds_.xi.assign(slots, Vec3{});
-  bounds_.psi.assign(slots, Vec3{});
-  // history by grain id: both rows ascending
-#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
-  for (std::size_t i = 0; i < n; ++i) {
-    const GrainId id = grains.id[i];
-    const std::uint32_t oi =
-        old_bounds_.start.empty() || id >= slot_of_id_.size() ? kNoSlot : slot_of_id_[id];
-    if (oi == kNoSlot || oi + 1 >= old_bounds_.start.size()) continue;
-    std::uint32_t os = old_bounds_.start[oi];
-    const std::uint32_t oe = old_bounds_.start[oi + 1];
-    for (std::uint32_t s = bounds_.start[i]; s < bounds_.start[i + 1]; ++s) {
-      while (os < oe && old_bounds_.obstacle[os] < bounds_.obstacle[s]) ++os;
-      if (os < oe && old_bounds_.obstacle[os] == bounds_.obstacle[s]) {
-        bounds_.xi[s] = old_bounds_.xi[os];
-        bounds_.psi[s] = old_bounds_.psi[os];
-      }
-    }
-  }
-}
-
 void DemSolver::contacts_of(const Grains& grains, const Geometry& geometry,
                             std::vector<std::uint8_t>& out) const {
   out.assign(grains.size(), 0);
@@ -335,6 +282,7 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
 
   std::swap(pairs_, old_pairs_);
   std::swap(walls_, old_walls_);
+  std::swap(bounds_, old_bounds_);
   build_pair_list(grains, allow_, rolling_, grid_, old_pairs_, slot_of_id_, pairs_);
   // (assertions) the grid found every pair the brute-force reference finds, in small runs
   if constexpr (kAssertions) {
@@ -351,45 +299,11 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
       pairs_.c_n[s] = normal_damping(cp, grains.m[i] * grains.m[j] / (grains.m[i] + grains.m[j]));
     }
 
-  // wall candidates: obstacles within reach of each grain (twice its allowance: an obstacle
-  // does not move, the margin is spare), history carried by grain id
-  const std::size_t n_obs = geometry.size();
-  auto near = [&](std::size_t i, std::size_t k) {
-    return geometry.obstacles()[k].solid->closest(grains.x[i]).distance <
-           grains.r[i] + 2 * allow_[i];
-  };
-  walls_.start.assign(n + 1, 0);
-#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
-  for (std::size_t i = 0; i < n; ++i) {
-    std::uint32_t c = 0;
-    for (std::size_t k = 0; k < n_obs; ++k) c += near(i, k);
-    walls_.start[i + 1] = c;
-  }
-  for (std::size_t i = 0; i < n; ++i) walls_.start[i + 1] += walls_.start[i];
-  const std::size_t wslots = walls_.start[n];
-  walls_.obstacle.resize(wslots);
-  walls_.xi.assign(wslots, Vec3{});
-  walls_.psi.assign(wslots, Vec3{});
-#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
-  for (std::size_t i = 0; i < n; ++i) {
-    std::uint32_t s = walls_.start[i];
-    const GrainId id = grains.id[i];
-    const std::uint32_t oi =
-        old_walls_.start.empty() || id >= slot_of_id_.size() ? kNoSlot : slot_of_id_[id];
-    for (std::uint32_t k = 0; k < n_obs; ++k) {
-      if (!near(i, k)) continue;
-      walls_.obstacle[s] = k;
-      if (oi != kNoSlot)
-        for (std::uint32_t os = old_walls_.start[oi]; os < old_walls_.start[oi + 1]; ++os)
-          if (old_walls_.obstacle[os] == k) {
-            walls_.xi[s] = old_walls_.xi[os];
-            walls_.psi[s] = old_walls_.psi[os];
-          }
-      ++s;
-    }
-  }
-
-  build_boundary_list(grains);
+  // the candidates of the geometry, beside the pairs: obstacles and boundary particles within
+  // reach
+  build_wall_list(grains, allow_, geometry, old_walls_, slot_of_id_, walls_);
+  build_boundary_list(grains, allow_, boundary_.x, boundary_.radius, boundary_grid_, old_bounds_,
+                      slot_of_id_, bounds_);
   if (!released_.empty()) open_released_contacts(grains, dt);
 
   // remember where each id was, for the next carry-over

@@ -169,8 +169,6 @@ class DemSolver {
   /// grain.
   void open_released_contacts(const Grains& grains, Real dt);
   void set_wall_params(const Geometry& geometry);
-  /// Boundary particles within reach of each ACTIVE grain, history carried by grain id.
-  void build_boundary_list(const Grains& grains);
   void sort_by_cell(Grains& grains);
   /// Forces and integration in one sweep (its kernels: dem_solver.cpp); returns whether some
   /// grain has moved further than its allowance since the last rebuild.

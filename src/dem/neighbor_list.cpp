@@ -277,6 +277,102 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   out.c_n.resize(slots);
 }
 
+void build_wall_list(const Grains& grains, const std::vector<Real>& allow, const Geometry& geometry,
+                     const WallList& old, const std::vector<std::uint32_t>& old_slot_of_id,
+                     WallList& out) {
+  // obstacles within reach of each grain (twice its allowance: an obstacle does not move, the
+  // margin is spare), history carried by grain id
+  const std::size_t n = grains.size(), n_obs = geometry.size();
+  auto near = [&](std::size_t i, std::size_t k) {
+    return geometry.obstacles()[k].solid->closest(grains.x[i]).distance <
+           grains.r[i] + 2 * allow[i];
+  };
+  out.start.assign(n + 1, 0);
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint32_t c = 0;
+    for (std::size_t k = 0; k < n_obs; ++k) c += near(i, k);
+    out.start[i + 1] = c;
+  }
+  for (std::size_t i = 0; i < n; ++i) out.start[i + 1] += out.start[i];
+  const std::size_t slots = out.start[n];
+  out.obstacle.resize(slots);
+  out.xi.assign(slots, Vec3{});
+  out.psi.assign(slots, Vec3{});
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint32_t s = out.start[i];
+    const GrainId id = grains.id[i];
+    const std::uint32_t oi =
+        old.start.empty() || id >= old_slot_of_id.size() ? kNoSlot : old_slot_of_id[id];
+    for (std::uint32_t k = 0; k < n_obs; ++k) {
+      if (!near(i, k)) continue;
+      out.obstacle[s] = k;
+      if (oi != kNoSlot)
+        for (std::uint32_t os = old.start[oi]; os < old.start[oi + 1]; ++os)
+          if (old.obstacle[os] == k) {
+            out.xi[s] = old.xi[os];
+            out.psi[s] = old.psi[os];
+          }
+      ++s;
+    }
+  }
+}
+
+void build_boundary_list(const Grains& grains, const std::vector<Real>& allow,
+                         const std::vector<Vec3>& centres, Real radius, const CellGrid& grid,
+                         const WallList& old, const std::vector<std::uint32_t>& old_slot_of_id,
+                         WallList& out) {
+  const std::size_t n = grains.size();
+  out.start.assign(n + 1, 0);
+  out.obstacle.clear();
+  if (centres.empty()) return;
+  auto each_near = [&](std::size_t i, auto&& f) {
+    if (grains.state[i] != GrainState::Active) return;
+    const Real reach = grains.r[i] + radius + 2 * allow[i];  // (a particle does not move: spare)
+    grid.for_each_in_ball(grains.x[i], reach, [&](std::uint32_t b) {
+      if (norm2(grains.x[i] - centres[b]) < reach * reach) f(b);
+    });
+  };
+  std::vector<std::vector<std::uint32_t>> buffers;
+#pragma omp parallel if (n >= kParallelMinGrains)
+  {
+#pragma omp single
+    buffers.resize(omp_get_num_threads());
+    std::vector<std::uint32_t>& buf = buffers[omp_get_thread_num()];
+    buf.clear();
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t first = buf.size();
+      each_near(i, [&](std::uint32_t b) { buf.push_back(b); });
+      std::sort(buf.begin() + first, buf.end());
+      out.start[i + 1] = static_cast<std::uint32_t>(buf.size() - first);
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) out.start[i + 1] += out.start[i];
+  for (const auto& buf : buffers) out.obstacle.insert(out.obstacle.end(), buf.begin(), buf.end());
+  const std::size_t slots = out.obstacle.size();
+  out.xi.assign(slots, Vec3{});
+  out.psi.assign(slots, Vec3{});
+  // history by grain id: both rows ascending
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
+  for (std::size_t i = 0; i < n; ++i) {
+    const GrainId id = grains.id[i];
+    const std::uint32_t oi =
+        old.start.empty() || id >= old_slot_of_id.size() ? kNoSlot : old_slot_of_id[id];
+    if (oi == kNoSlot || oi + 1 >= old.start.size()) continue;
+    std::uint32_t os = old.start[oi];
+    const std::uint32_t oe = old.start[oi + 1];
+    for (std::uint32_t s = out.start[i]; s < out.start[i + 1]; ++s) {
+      while (os < oe && old.obstacle[os] < out.obstacle[s]) ++os;
+      if (os < oe && old.obstacle[os] == out.obstacle[s]) {
+        out.xi[s] = old.xi[os];
+        out.psi[s] = old.psi[os];
+      }
+    }
+  }
+}
+
 std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(
     const Grains& grains, const std::vector<Real>& allow) {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;

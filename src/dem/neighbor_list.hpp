@@ -1,10 +1,12 @@
-// Neighbour search (docs/design.md §3): a uniform cell grid over the grains' extent builds Verlet half
-// lists. Each grain i has an allowance a_i, how far it may move before the lists are rebuilt; a
-// pair i < j is listed when closer than r_i + r_j + a_i + a_j, so no unlisted pair can touch
+// Neighbour search (docs/design.md §3): a uniform cell grid over the grains' extent builds Verlet
+// half lists. Each grain i has an allowance a_i, how far it may move before the lists are rebuilt;
+// a pair i < j is listed when closer than r_i + r_j + a_i + a_j, so no unlisted pair can touch
 // before some grain has used up its allowance. With one allowance for all (half the skin) these
 // are the usual Verlet lists; a larger allowance for the few fast grains (a falling stream) keeps
 // them from forcing a rebuild every few steps. Contact history lives beside the list, one entry
-// per pair slot, and is carried across rebuilds by grain id.
+// per pair slot, and is carried across rebuilds by grain id. The candidate contacts with the
+// geometry, obstacles and boundary particles within reach, are listed beside the pairs at each
+// rebuild, their history carried the same way.
 //
 // How the forces of the pairs reach both grains without atomics, identically for any thread
 // count, is told in dem_solver.cpp (DemSolver::sweep).
@@ -18,6 +20,7 @@
 
 #include "core/vec3.hpp"
 #include "dem/grains.hpp"
+#include "geometry/shapes.hpp"
 
 namespace sandflow {
 
@@ -111,6 +114,21 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
 void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& grid,
                      const PairList& old, const std::vector<std::uint32_t>& old_slot_of_id,
                      PairList& out);
+
+/// Builds the wall candidates of `grains`: per grain, the obstacles of `geometry` closer than
+/// r_i + 2 a_i (twice its allowance: an obstacle does not move, the margin is spare), in obstacle
+/// order, with their history carried over from `old` by grain id (old_slot_of_id as above).
+void build_wall_list(const Grains& grains, const std::vector<Real>& allow, const Geometry& geometry,
+                     const WallList& old, const std::vector<std::uint32_t>& old_slot_of_id,
+                     WallList& out);
+/// Builds the boundary candidates of `grains`: per ACTIVE grain, the boundary particles (of
+/// radius `radius`, centred at `centres`, filed in `grid`) closer than r_i + radius + 2 a_i,
+/// ascending, with their history carried over from `old` by grain id. Without particles the rows
+/// are empty (and the history arrays are left as they are).
+void build_boundary_list(const Grains& grains, const std::vector<Real>& allow,
+                         const std::vector<Vec3>& centres, Real radius, const CellGrid& grid,
+                         const WallList& old, const std::vector<std::uint32_t>& old_slot_of_id,
+                         WallList& out);
 
 /// The reference: all pairs i < j with |x_i - x_j| < r_i + r_j + a_i + a_j (at least one of them
 /// ACTIVE), by brute force.
