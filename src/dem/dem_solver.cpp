@@ -434,8 +434,8 @@ void DemSolver::balance_ranges(const Grains& grains, std::size_t threads) {
 // 11 % of a plain-DEM run: docs/performance.md, "The sweep's inlining".)
 namespace {
 
-/// What the kernels share, built once a sweep before its parallel region: the law and the step,
-/// the pair list with its history, the grains as plain arrays, their accumulators.
+/// What the kernels share (sweep_data; each thread of a sweep builds its own copy): the law and
+/// the step, the pair list with its history, the grains as plain arrays, their accumulators.
 struct SweepData {
   const ContactParams& cp;
   PairList& pl;
@@ -469,6 +469,33 @@ struct FixedPartners {
   const BoundaryParticles& boundary;
   const std::vector<ContactParams>& boundary_params;  ///< per group
 };
+
+/// The kernels' data for a step of dt: the grains' arrays, and the solver's pair list,
+/// accumulators, positions at the last rebuild and squared allowances.
+SweepData sweep_data(const DemParams& p, PairList& pairs, Grains& grains, std::vector<Vec3>& acc_f,
+                     std::vector<Vec3>& acc_q, std::vector<Vec3>& acc_t,
+                     const std::vector<Vec3>& x_at_build, const std::vector<Real>& allow2,
+                     Real dt) {
+  return {.cp = p.contact,
+          .pl = pairs,
+          .x = grains.x.data(),
+          .v = grains.v.data(),
+          .w = grains.w.data(),
+          .r = grains.r.data(),
+          .m = grains.m.data(),
+          .inv_m = grains.inv_m.data(),
+          .inv_I = grains.inv_I.data(),
+          .st = grains.state.data(),
+          .id = grains.id.data(),
+          .acc_f = acc_f.data(),
+          .acc_q = acc_q.data(),
+          .acc_t = acc_t.data(),
+          .x_at_build = x_at_build.data(),
+          .allow2 = allow2.data(),
+          .gravity = p.gravity,
+          .dt = dt,
+          .decay = p.preload_relax_time > 0 ? std::exp(-dt / p.preload_relax_time) : 1.0};
+}
 
 /// One thread's tallies: its copies of the sweep's reduction variables, and its energy events.
 struct Tally {
@@ -725,29 +752,6 @@ template <bool kRolling>
 template <bool kRolling>
 bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   const std::size_t n = grains.size();
-  const Real decay =
-      params_.preload_relax_time > 0 ? std::exp(-dt / params_.preload_relax_time) : 1.0;
-  // (in the order of SweepData's members)
-  const SweepData data{params_.contact,
-                       pairs_,
-                       grains.x.data(),
-                       grains.v.data(),
-                       grains.w.data(),
-                       grains.r.data(),
-                       grains.m.data(),
-                       grains.inv_m.data(),
-                       grains.inv_I.data(),
-                       grains.state.data(),
-                       grains.id.data(),
-                       acc_f_.data(),
-                       acc_q_.data(),
-                       acc_t_.data(),
-                       x_at_build_.data(),
-                       allow2_.data(),
-                       params_.gravity,
-                       dt,
-                       decay};
-  const FixedPartners fixed{geometry, walls_, wall_params_, bounds_, boundary_, boundary_params_};
   std::int64_t contacts = 0, wall_contacts = 0;
   Real max_ov = counters_.max_overlap_rel;
   // the energy of contacts going inert and of preloads relaxing: rare, kept per slot and summed
@@ -762,6 +766,11 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   {
     const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    // each thread's own copy: no store through the arrays can change it, so the compiler need
+    // not load the pointers again after each store
+    const SweepData data =
+        sweep_data(params_, pairs_, grains, acc_f_, acc_q_, acc_t_, x_at_build_, allow2_, dt);
+    const FixedPartners fixed{geometry, walls_, wall_params_, bounds_, boundary_, boundary_params_};
 #pragma omp single
     events.resize(std::max(events.size(), threads));
     events[t].clear();
