@@ -241,7 +241,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
                                                               : scene.surface.angles_source},
         {"exchange_rate", hf.params().gamma},
         {"rolling_min", hf.params().rolling_min},
-        {"flowing_min", std::max(hf.params().flowing_min, hf.params().rolling_min)},
+        {"flowing_min", hf.params().flowing_floor()},
         {"interface_thickness", sf->params().interface.thickness},
         // as speeds of a grain of the mean size without rotation (seat.hpp)
         {"trap_speed", std::sqrt(2 * seat.hold_energy(scene.material.diameter / 2))},

@@ -251,7 +251,7 @@ void HeightField::exchange(Real dt, const std::vector<std::uint8_t>& flowing) {
       h_new[c] = std::max(h_[c] + dh, L_[c]);  // erosion never digs below the terrain
       Gamma_[c] = -(h_new[c] - h_[c]) / dt;
     }
-  const Real flowing_min = std::max(p_.flowing_min, p_.rolling_min);
+  const Real flowing_min = p_.flowing_floor();
   for (std::size_t c = 0; c < h_.size(); ++c) {
     // R_min: the visible surface is always made of grains that can move. Where grains flow, DEM
     // shears a layer several grains deep (docs/physics.md, "The flowing layer"): a static top one

@@ -30,6 +30,9 @@ struct HeightFieldParams {
   Real flowing_min = 0;       ///< R_min under a flowing layer [m] (never below rolling_min)
   Real avalanche_depth = 0.01;///< thickness that rolls where theta > theta_max [m]
   Real gap = 0.01;            ///< a grain separated from the pile below by more is airborne [m]
+
+  /// R_min under a flowing layer as used: never below rolling_min [m].
+  Real flowing_floor() const { return std::max(flowing_min, rolling_min); }
 };
 
 /// The solid intervals [bottom, top] crossed by the vertical line through each column centre,

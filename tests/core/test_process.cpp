@@ -12,35 +12,27 @@
 #include <unistd.h>
 
 #include "core/error.hpp"
+#include "support/scratch.hpp"
 
 namespace sandflow {
 namespace {
 
 namespace fs = std::filesystem;
 
-class ProcessTest : public ::testing::Test {
+class ProcessTest : public test::ScratchTest {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("sandflow_process_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
     sh_ = find_program("sh");
     ASSERT_FALSE(sh_.empty()) << "sh is not on PATH";
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   // Runs `sh -c script` in dir_, its output to dir_/log.
   std::string run_sh(const std::string& script) const {
     return run_logged({sh_, "-c", script}, dir_.string(), log(), "sh");
   }
   std::string log() const { return (dir_ / "log").string(); }
-  std::string log_text() const {
-    std::ifstream in(log(), std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  }
+  std::string log_text() const { return test::read_bytes(log()); }
 
-  fs::path dir_;
   std::string sh_;
 };
 

@@ -33,29 +33,18 @@
 #include "sim/world.hpp"
 #include "support/xml_tags.hpp"
 #include "surface/surface_params.hpp"
+#include "support/scratch.hpp"
 
 namespace sandflow {
 namespace {
 
 namespace fs = std::filesystem;
 
-class ExportTest : public ::testing::Test {
+class ExportTest : public test::ScratchTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("sandflow_export_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
 };
 
-std::string read_bytes(const std::string& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using test::read_bytes;
 
 // Three grains with distinct values in every field, and one frame velocity that is not axial.
 FrameData sample_frame() {

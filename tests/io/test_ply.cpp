@@ -11,33 +11,19 @@
 
 #include "core/error.hpp"
 #include "core/rng.hpp"
+#include "support/scratch.hpp"
 
 namespace sandflow {
 namespace {
 
 namespace fs = std::filesystem;
 
-class PlyTest : public ::testing::Test {
+class PlyTest : public test::ScratchTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("sandflow_ply_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
+  static void write_bytes(const std::string& p, const std::string& bytes) {
+    test::write_bytes(p, bytes);
   }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-  void write_bytes(const std::string& p, const std::string& bytes) const {
-    std::ofstream out(p, std::ios::binary);
-    out << bytes;
-  }
-
-  static std::string read_bytes(const std::string& p) {
-    std::ifstream in(p, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  }
+  static std::string read_bytes(const std::string& p) { return test::read_bytes(p); }
 
   // Expects read_ply to throw InputError whose message names the file and contains `what`.
   void expect_input_error(const std::string& p, const std::string& what) const {

@@ -15,6 +15,7 @@
 
 #include "core/error.hpp"
 #include "core/rng.hpp"
+#include "support/scratch.hpp"
 
 namespace sandflow {
 namespace {
@@ -49,23 +50,8 @@ bool is_sand(const unsigned char* p) {
   return p[0] > p[2] + 40;
 }
 
-class PovTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("sandflow_pov_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
-};
-
-std::string read_text(const std::string& p) {
-  std::ifstream in(p);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using PovTest = test::ScratchTest;
+using test::read_bytes;
 
 // ~200 grains in a small mound on the floor z = 0.
 FrameData small_mound() {
@@ -110,7 +96,7 @@ TEST_F(PovTest, SceneTextHasGrainsAndGeometry) {
   const std::string p = path("scene.pov");
   write_pov_scene(p, f, geometry, PovOptions{});
   EXPECT_FALSE(fs::exists(p + ".tmp"));
-  const std::string text = read_text(p);
+  const std::string text = read_bytes(p);
   EXPECT_NE(text.find("#version 3.7;"), std::string::npos);
   EXPECT_NE(text.find("assumed_gamma 1.0"), std::string::npos);
   EXPECT_NE(text.find("sky <0,0,1>"), std::string::npos);
@@ -140,7 +126,7 @@ TEST_F(PovTest, RotationMatchesRotationXyzDeg) {
   box.name = "tilted";
   box.rotation_deg = {10, 20, 30};
   write_pov_scene(path("rot.pov"), FrameData{}, {box}, PovOptions{});
-  const std::string text = read_text(path("rot.pov"));
+  const std::string text = read_bytes(path("rot.pov"));
   // The matrix lists the images of the local axes: the columns of rotation_xyz_deg.
   const Mat3 m = rotation_xyz_deg(box.rotation_deg);
   const std::size_t at = text.find("matrix <", text.find("// tilted"));
@@ -265,16 +251,16 @@ TEST_F(PovTest, GivenBoundsFixTheCameraAndLightsAcrossFrames) {
   write_pov_scene(path("a.pov"), a, {floor_plane()}, opt);
   write_pov_scene(path("b.pov"), b, {floor_plane()}, opt);
   // each frame framed alone: the camera follows the grains
-  EXPECT_NE(camera_and_lights(read_text(path("a.pov"))),
-            camera_and_lights(read_text(path("b.pov"))));
+  EXPECT_NE(camera_and_lights(read_bytes(path("a.pov"))),
+            camera_and_lights(read_bytes(path("b.pov"))));
   // framed on the bounds of both: one camera, one light
   opt.bounds = grain_bounds(a);
   opt.bounds.add(grain_bounds(b));
   write_pov_scene(path("a.pov"), a, {floor_plane()}, opt);
   write_pov_scene(path("b.pov"), b, {floor_plane()}, opt);
-  const std::string ca = camera_and_lights(read_text(path("a.pov")));
+  const std::string ca = camera_and_lights(read_bytes(path("a.pov")));
   ASSERT_FALSE(ca.empty());
-  EXPECT_EQ(ca, camera_and_lights(read_text(path("b.pov"))));
+  EXPECT_EQ(ca, camera_and_lights(read_bytes(path("b.pov"))));
 }
 
 TEST(PovCamera, AutoCameraFitsTheBoundsTightly) {
@@ -321,8 +307,8 @@ TEST_F(PovTest, DraftHasAPointLightFinalAnAreaLight) {
   write_pov_scene(path("final.pov"), small_mound(), {floor_plane()}, opt);
   opt.soft_light = false;
   write_pov_scene(path("draft.pov"), small_mound(), {floor_plane()}, opt);
-  EXPECT_NE(read_text(path("final.pov")).find("area_light"), std::string::npos);
-  EXPECT_EQ(read_text(path("draft.pov")).find("area_light"), std::string::npos);
+  EXPECT_NE(read_bytes(path("final.pov")).find("area_light"), std::string::npos);
+  EXPECT_EQ(read_bytes(path("draft.pov")).find("area_light"), std::string::npos);
 }
 
 TEST_F(PovTest, AFloorIsAddedOnlyWhenTheSceneHasNone) {
@@ -335,9 +321,9 @@ TEST_F(PovTest, AFloorIsAddedOnlyWhenTheSceneHasNone) {
   };
   const FrameData f = small_mound();
   write_pov_scene(path("with.pov"), f, {floor_plane()}, PovOptions{});
-  EXPECT_EQ(planes(read_text(path("with.pov"))), 1);  // the scene's own
+  EXPECT_EQ(planes(read_bytes(path("with.pov"))), 1);  // the scene's own
   write_pov_scene(path("without.pov"), f, {}, PovOptions{});
-  const std::string text = read_text(path("without.pov"));
+  const std::string text = read_bytes(path("without.pov"));
   ASSERT_EQ(planes(text), 1);
   // just under the lowest grain's bottom (z = 0 here), by a thousandth of the scene's size
   const std::size_t at = text.find("plane { z, ");
@@ -347,7 +333,7 @@ TEST_F(PovTest, AFloorIsAddedOnlyWhenTheSceneHasNone) {
   PovOptions no_floor;
   no_floor.floor = false;
   write_pov_scene(path("none.pov"), f, {}, no_floor);
-  EXPECT_EQ(planes(read_text(path("none.pov"))), 0);
+  EXPECT_EQ(planes(read_bytes(path("none.pov"))), 0);
 }
 
 TEST_F(PovTest, FixedCameraWritesItsUpDirection) {
@@ -358,7 +344,7 @@ TEST_F(PovTest, FixedCameraWritesItsUpDirection) {
   opt.camera_up = {0, 1, 1};
   opt.fov_deg = 30;
   write_pov_scene(path("fixed.pov"), small_mound(), {floor_plane()}, opt);
-  const std::string text = read_text(path("fixed.pov"));
+  const std::string text = read_bytes(path("fixed.pov"));
   EXPECT_NE(text.find("location <1,-2,0.5>"), std::string::npos);
   EXPECT_NE(text.find("sky <0,1,1>"), std::string::npos);
   EXPECT_NE(text.find("angle 30"), std::string::npos);

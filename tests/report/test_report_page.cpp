@@ -16,6 +16,7 @@
 #include "io/png_gray.hpp"
 #include "report/html.hpp"
 #include "report/report.hpp"
+#include "support/scratch.hpp"
 
 using namespace sandflow;
 using sandflow_test::html_problem;
@@ -26,16 +27,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct TempDir {
-  fs::path dir;
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir = fs::temp_directory_path() / (std::string("sandflow_page_") + info->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  ~TempDir() { fs::remove_all(dir); }
-};
+using TempDir = sandflow::test::ScratchFolder;
 
 std::string fmt_frame(int f) {
   char buf[16];
@@ -80,8 +72,8 @@ void write_run(const fs::path& dir, const std::string& mode, int frames, bool su
 
 TEST(ReportPage, RunHasEverySectionAndAPolylinePerSeries) {
   TempDir t;
-  write_run(t.dir, "surface", 5);
-  RunReportData run = load_run_report_data(t.dir.string());
+  write_run(t.dir(), "surface", 5);
+  RunReportData run = load_run_report_data(t.dir().string());
   run.sheet_note = "No frame is rendered yet.";
   const std::string html = run_report_html(run);
   EXPECT_EQ(html_problem(html), "");
@@ -105,11 +97,11 @@ TEST(ReportPage, RunHasEverySectionAndAPolylinePerSeries) {
 
 TEST(ReportPage, PicturesAreEmbeddedAsDataUris) {
   TempDir t;
-  write_run(t.dir, "surface", 4);
-  fs::create_directories(t.dir / "render");
-  const std::string png = (t.dir / "render" / "0004.png").string();
+  write_run(t.dir(), "surface", 4);
+  fs::create_directories(t.dir() / "render");
+  const std::string png = (t.dir() / "render" / "0004.png").string();
   write_gray_png(png, 8, 6, std::vector<double>(48, 0.25), 8);
-  RunReportData run = load_run_report_data(t.dir.string());
+  RunReportData run = load_run_report_data(t.dir().string());
   run.sheet.push_back({4, png});
   const std::string html = run_report_html(run);
   EXPECT_EQ(html_problem(html), "");
@@ -121,14 +113,14 @@ TEST(ReportPage, PicturesAreEmbeddedAsDataUris) {
   EXPECT_NE(sheet.find("width=\"8\" height=\"6\""), std::string::npos);
   EXPECT_NE(sheet.find("frame 4, t = 0.13 s"), std::string::npos);  // its stats row
   // a picture that vanished is said, not crashed on
-  run.sheet = {{3, (t.dir / "render" / "0003.png").string()}};
+  run.sheet = {{3, (t.dir() / "render" / "0003.png").string()}};
   EXPECT_NE(run_report_html(run).find("0003.png: cannot be read"), std::string::npos);
 }
 
 TEST(ReportPage, EveryStringIsEscaped) {
   TempDir t;
-  write_run(t.dir, "dem", 2, true, "<script>alert('x')</script> & co");
-  const std::string html = run_report_html(load_run_report_data(t.dir.string()));
+  write_run(t.dir(), "dem", 2, true, "<script>alert('x')</script> & co");
+  const std::string html = run_report_html(load_run_report_data(t.dir().string()));
   EXPECT_EQ(html_problem(html), "");
   EXPECT_EQ(html.find("<script"), std::string::npos);
   EXPECT_NE(html.find("&lt;script&gt;alert(&#39;x&#39;)&lt;/script&gt; &amp; co"),
@@ -137,39 +129,39 @@ TEST(ReportPage, EveryStringIsEscaped) {
 
 TEST(ReportPage, AMissingSummaryOrNoFramesIsSaid) {
   TempDir t;
-  write_run(t.dir / "a", "surface", 3, false);
-  std::string html = run_report_html(load_run_report_data((t.dir / "a").string()));
+  write_run(t.dir() / "a", "surface", 3, false);
+  std::string html = run_report_html(load_run_report_data((t.dir() / "a").string()));
   EXPECT_EQ(html_problem(html), "");
   EXPECT_NE(html.find("summary.json is missing"), std::string::npos);
   EXPECT_EQ(polylines(html).size(), 10u);
   // a run that stopped before its first frame: axes and "no data", no crash
-  write_run(t.dir / "b", "surface", 0);
-  html = run_report_html(load_run_report_data((t.dir / "b").string()));
+  write_run(t.dir() / "b", "surface", 0);
+  html = run_report_html(load_run_report_data((t.dir() / "b").string()));
   EXPECT_EQ(html_problem(html), "");
   EXPECT_NE(html.find("no frames recorded"), std::string::npos);
   EXPECT_EQ(occurrences(html, "no data</text>"), 4u);
   // no stats.csv at all: an error naming it
-  fs::create_directories(t.dir / "c");
+  fs::create_directories(t.dir() / "c");
   try {
-    load_run_report_data((t.dir / "c").string());
+    load_run_report_data((t.dir() / "c").string());
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find((t.dir / "c" / "stats.csv").string()), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find((t.dir() / "c" / "stats.csv").string()), std::string::npos);
   }
 }
 
 TEST(ReportPage, CompareShowsBothModesOnSharedAxes) {
   TempDir t;
-  write_run(t.dir / "surface", "surface", 6);
-  write_run(t.dir / "dem", "dem", 6);
+  write_run(t.dir() / "surface", "surface", 6);
+  write_run(t.dir() / "dem", "dem", 6);
   const nlohmann::json c = {{"scene", "tiny"},         {"frames", 6},
                             {"n_total", 400},          {"speedup", 2.5},
                             {"dt_dem", 6e-5},          {"dt_surface", 1e-4},
                             {"n_simulated_mean", 200}, {"n_simulated_mean_dem", 400},
                             {"surface_rms_rel", 0.04}, {"seconds_per_frame_dem", 0.05},
                             {"seconds_per_frame_surface", 0.02}};
-  std::ofstream(t.dir / "compare.json") << c.dump();
-  CompareReportData data = load_compare_report_data(t.dir.string());
+  std::ofstream(t.dir() / "compare.json") << c.dump();
+  CompareReportData data = load_compare_report_data(t.dir().string());
   data.final_note = "not rendered";
   const std::string html = compare_report_html(data);
   EXPECT_EQ(html_problem(html), "");

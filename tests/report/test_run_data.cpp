@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "io/png_gray.hpp"
 #include "report/run_data.hpp"
+#include "support/scratch.hpp"
 
 using namespace sandflow;
 namespace fs = std::filesystem;
@@ -25,21 +26,7 @@ std::string row(int frame, int n_total) {
          ",150,50,100,400,20,1.0e-02,1.0e-03,3,5,1,2,0,10,0.0123\n";
 }
 
-struct TempDir {
-  fs::path dir;
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir = fs::temp_directory_path() / (std::string("sandflow_report_") + info->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  ~TempDir() { fs::remove_all(dir); }
-  std::string write(const std::string& name, const std::string& text) const {
-    fs::create_directories((dir / name).parent_path());
-    std::ofstream(dir / name, std::ios::binary) << text;
-    return (dir / name).string();
-  }
-};
+using TempDir = sandflow::test::ScratchFolder;
 
 /// The message of the InputError `f` throws ("" when it throws none).
 template <class F>
@@ -95,7 +82,7 @@ TEST(StatsCsv, MalformedFilesNameTheFileAndLine) {
   path = t.write("d/stats.csv", "");
   EXPECT_NE(input_error([&] { read_stats_csv(path); }).find(path + ":1: empty file"),
             std::string::npos);
-  path = (t.dir / "e" / "stats.csv").string();
+  path = (t.dir() / "e" / "stats.csv").string();
   EXPECT_NE(input_error([&] { read_stats_csv(path); }).find(path + ": cannot read"),
             std::string::npos);
 }
@@ -143,20 +130,20 @@ TEST(ContactSheet, FramesAndPicturesOfAFolder) {
   for (const char* f : {"frames/0002.ply", "frames/0010.ply", "frames/0001.ply", "frames/x.ply",
                         "frames/0003.txt", "render/0010.png", "render/0010.pov"})
     t.write(f, "x");
-  EXPECT_EQ(list_frames(t.dir.string()), (std::vector<int>{1, 2, 10}));
-  EXPECT_EQ(list_renders(t.dir.string()), (std::vector<int>{10}));
-  EXPECT_EQ(render_path(t.dir.string(), 7), (t.dir / "render" / "0007.png").string());
-  EXPECT_TRUE(list_frames((t.dir / "none").string()).empty());
+  EXPECT_EQ(list_frames(t.dir().string()), (std::vector<int>{1, 2, 10}));
+  EXPECT_EQ(list_renders(t.dir().string()), (std::vector<int>{10}));
+  EXPECT_EQ(render_path(t.dir().string(), 7), (t.dir() / "render" / "0007.png").string());
+  EXPECT_TRUE(list_frames((t.dir() / "none").string()).empty());
 }
 
 TEST(ContactSheet, PngSizeFromTheHeader) {
   TempDir t;
-  const std::string png = (t.dir / "g.png").string();
+  const std::string png = (t.dir() / "g.png").string();
   write_gray_png(png, 37, 21, std::vector<double>(37 * 21, 0.5), 8);
   const auto s = png_size(png);
   ASSERT_TRUE(s.has_value());
   EXPECT_EQ(s->width, 37);
   EXPECT_EQ(s->height, 21);
   EXPECT_FALSE(png_size(t.write("not.png", "GIF89a, not a PNG at all")).has_value());
-  EXPECT_FALSE(png_size((t.dir / "missing.png").string()).has_value());
+  EXPECT_FALSE(png_size((t.dir() / "missing.png").string()).has_value());
 }

@@ -13,6 +13,7 @@
 #include "io/png_gray.hpp"
 #include "scene/scene_loader.hpp"
 #include "support/scene_errors.hpp"
+#include "support/scratch.hpp"
 
 namespace sandflow {
 namespace {
@@ -24,25 +25,7 @@ constexpr const char* kEmitter = "[[emitter]]\ncount = 10\n";  // lines 1-2
 using test::error_of;
 using test::expect_error;
 
-// A scratch folder for scene files and images, removed afterwards.
-class TempDir {
- public:
-  TempDir() : dir_(fs::temp_directory_path() / ("sandflow_geometry_keys_" + std::to_string(::getpid()))) {
-    fs::create_directories(dir_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string write(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name)) << text;
-    return path(name);
-  }
-
- private:
-  fs::path dir_;
-};
+using TempDir = test::ScratchFolder;
 
 TEST(GeometryKeys, BowlReadsEveryKey) {
   const SceneConfig c = load_scene_from_string(std::string(kEmitter) +
