@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <system_error>
 
 #include <fmt/format.h>
 
@@ -54,6 +55,8 @@ inline int sandflow(const std::string& args, std::string* output = nullptr,
     ss << std::ifstream(log).rdbuf();
     *output = ss.str();
   }
+  std::error_code ec;
+  fs::remove(log, ec);  // leave nothing behind in the system's temporary folder
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 
