@@ -22,6 +22,15 @@ using namespace sandflow;
 namespace {
 
 constexpr Real kD = 0.002, kRho = 2500, kKn = 500, kE = 0.5, kMu = 0.5, kDt = 1e-5;
+// A settled random bed of equal frictional spheres touches 4-6 neighbours a grain; below 3 it is
+// still falling or loose.
+constexpr double kMinContactsPerGrain = 3.0;
+// What the cached bed depends on: a cache written with other values, or by another version of
+// this file's bed, is built again rather than reused.
+std::string bed_key(std::int64_t n) {
+  return fmt::format("SFBED002 n={} d={} rho={} kn={} e={} mu={} dt={} lattice=1.1,jitter=1", n,
+                     kD, kRho, kKn, kE, kMu, kDt);
+}
 
 struct Bed {
   Real side = 0;  ///< box footprint side [m]
@@ -62,6 +71,7 @@ Bed make_bed(std::int64_t n, int settle_frames) {
   scene.path = "bench_bed";
   scene.name = "bed";
   scene.material = bed_material();
+  scene.simulation.mode = Mode::Dem;  // every grain simulated: a surface run would put some to sleep
   scene.simulation.dt = kDt;
   scene.output.fps = 100;  // a frame = 1,000 steps
   // footprint: about 1/1000 of N grains per layer, at least 20 x 20
@@ -80,13 +90,30 @@ Bed make_bed(std::int64_t n, int settle_frames) {
   scene.emitters = {e};
   World world(scene);
   // settle until the grains are nearly still (mean speed ~ 4 mm/s) or the frames run out
-  for (int f = 0; f < settle_frames; ++f) {
+  bool still = false;
+  double contacts_per_grain = 0;
+  for (int f = 0; f < settle_frames && !still; ++f) {
     const FrameStats st = world.advance_frame();
-    std::fprintf(stderr, "settling: t = %.2f s, kinetic energy %.3e J, contacts/grain %.2f\n",
-                 st.time, st.kinetic_energy, 2.0 * st.contacts / static_cast<double>(st.n_total));
-    if (f >= 10 && st.kinetic_energy < 1e-10 * static_cast<double>(st.n_total)) break;
+    std::fprintf(stderr,
+                 "settling: t = %.2f s, grains %lld (%lld left the domain), kinetic energy %.3e J, "
+                 "contacts/grain %.2f\n",
+                 st.time, static_cast<long long>(st.n_total),
+                 static_cast<long long>(world.left_domain()), st.kinetic_energy,
+                 2.0 * st.contacts / static_cast<double>(st.n_total));
+    contacts_per_grain = 2.0 * st.contacts / static_cast<double>(st.n_total);
+    still = f >= 10 && st.kinetic_energy < 1e-10 * static_cast<double>(st.n_total);
   }
   bed.grains = world.grains();
+  // a bed that is not whole, not still or not packed is never timed nor cached
+  const auto held = static_cast<std::int64_t>(bed.grains.size());
+  if (held != n || !still || contacts_per_grain < kMinContactsPerGrain) {
+    std::fprintf(stderr,
+                 "bench_bed: the bed is not settled after %d frames: %lld of %lld grains, %s, "
+                 "%.2f contacts per grain (at least %.1f wanted); raise --settle-frames\n",
+                 settle_frames, static_cast<long long>(held), static_cast<long long>(n),
+                 still ? "still" : "still moving", contacts_per_grain, kMinContactsPerGrain);
+    std::exit(1);
+  }
   return bed;
 }
 
@@ -104,7 +131,10 @@ void save_bed(const std::string& path, const Bed& b) {
   std::filesystem::create_directories(std::filesystem::path(path).parent_path());
   std::ofstream o(path + ".tmp", std::ios::binary);
   const std::uint64_t n = b.grains.size();
-  o.write("SFBED001", 8);
+  const std::string key = bed_key(static_cast<std::int64_t>(n));
+  const std::uint64_t key_size = key.size();
+  o.write(reinterpret_cast<const char*>(&key_size), 8);
+  o.write(key.data(), static_cast<std::streamsize>(key.size()));
   o.write(reinterpret_cast<const char*>(&n), 8);
   o.write(reinterpret_cast<const char*>(&b.side), 8);
   put(o, b.grains.id), put(o, b.grains.x), put(o, b.grains.v), put(o, b.grains.w), put(o, b.grains.r);
@@ -112,12 +142,16 @@ void save_bed(const std::string& path, const Bed& b) {
   std::filesystem::rename(path + ".tmp", path);
 }
 
-bool load_bed(const std::string& path, Bed& b) {
+// Reads a cached bed of `expected` grains; false when there is none, or it was built otherwise.
+bool load_bed(const std::string& path, std::int64_t expected, Bed& b) {
   std::ifstream i(path, std::ios::binary);
-  char magic[8];
-  std::uint64_t n = 0;
-  if (!i.read(magic, 8) || std::memcmp(magic, "SFBED001", 8) != 0) return false;
+  const std::string want = bed_key(expected);
+  std::uint64_t key_size = 0, n = 0;
+  if (!i.read(reinterpret_cast<char*>(&key_size), 8) || key_size != want.size()) return false;
+  std::string key(key_size, '\0');
+  if (!i.read(key.data(), static_cast<std::streamsize>(key_size)) || key != want) return false;
   i.read(reinterpret_cast<char*>(&n), 8);
+  if (static_cast<std::int64_t>(n) != expected) return false;
   i.read(reinterpret_cast<char*>(&b.side), 8);
   std::vector<GrainId> id;
   std::vector<Vec3> x, v, w;
@@ -184,7 +218,8 @@ int main(int argc, char** argv) {
   }
   omp_set_num_threads(std::max(2, threads));  // settle with both cores
   Bed bed;
-  if (bed_path.empty() || !load_bed(bed_path, bed)) {
+  if (bed_path.empty() || !load_bed(bed_path, n, bed)) {
+    if (!bed_path.empty()) std::fprintf(stderr, "no cached bed for this build of it: settling one\n");
     bed = make_bed(n, settle_frames);
     if (!bed_path.empty()) save_bed(bed_path, bed);
   }
