@@ -6,7 +6,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -94,13 +93,13 @@ Bed make_bed(std::int64_t n, int settle_frames) {
   double contacts_per_grain = 0;
   for (int f = 0; f < settle_frames && !still; ++f) {
     const FrameStats st = world.advance_frame();
+    contacts_per_grain = 2.0 * st.contacts / static_cast<double>(st.n_total);
     std::fprintf(stderr,
                  "settling: t = %.2f s, grains %lld (%lld left the domain), kinetic energy %.3e J, "
                  "contacts/grain %.2f\n",
                  st.time, static_cast<long long>(st.n_total),
                  static_cast<long long>(world.left_domain()), st.kinetic_energy,
-                 2.0 * st.contacts / static_cast<double>(st.n_total));
-    contacts_per_grain = 2.0 * st.contacts / static_cast<double>(st.n_total);
+                 contacts_per_grain);
     still = f >= 10 && st.kinetic_energy < 1e-10 * static_cast<double>(st.n_total);
   }
   bed.grains = world.grains();

@@ -22,10 +22,7 @@ namespace fs = std::filesystem;
 
 class AtomicFileTest : public test::ScratchTest {
  protected:
-  static std::string read_text(const std::string& p) {
-    std::ifstream in(p, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  }
+  static std::string read_text(const std::string& p) { return test::read_bytes(p); }
 
   // Expects `f` to throw OutputError whose message contains `what`.
   template <class F>

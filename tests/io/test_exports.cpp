@@ -40,9 +40,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class ExportTest : public test::ScratchTest {
- protected:
-};
+using ExportTest = test::ScratchTest;
 
 using test::read_bytes;
 

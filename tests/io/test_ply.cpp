@@ -18,13 +18,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
+using test::read_bytes;
+using test::write_bytes;
+
 class PlyTest : public test::ScratchTest {
  protected:
-  static void write_bytes(const std::string& p, const std::string& bytes) {
-    test::write_bytes(p, bytes);
-  }
-  static std::string read_bytes(const std::string& p) { return test::read_bytes(p); }
-
   // Expects read_ply to throw InputError whose message names the file and contains `what`.
   void expect_input_error(const std::string& p, const std::string& what) const {
     try {
