@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The Blender loader (tools/blender/sandflow_blender.py), headless, on a 40-frame run made here:
 # every frame's grains and their radius, velocity, id and state checked against the PLY files
-# (check_blender_load.py), the same run written y up, then bad run folders, each refused with a
-# message naming the file.
+# (check_blender_load.py), loaded by the script and by the add-on, the same run written y up, then
+# bad run folders, each refused with a message naming the file.
 #   tests/blender/test_blender.sh SANDFLOW_BINARY SOURCE_DIR WORK_DIR
 # Exits 77 (CTest's SKIP_RETURN_CODE) where Blender is not installed.
 set -euo pipefail
@@ -24,6 +24,13 @@ blender() { command blender -b --factory-startup --python-exit-code 1 "$@"; }
   { cat "$work/sandflow.log"; exit 1; }
 
 blender --python "$loader" --python "$src/tests/blender/check_blender_load.py" -- "$work/run"
+
+# The add-on: registered, its File > Import operator run on the same folder
+blender --python-expr "import sys; sys.path.insert(0, '$src/tools/blender')
+import bpy, sandflow_blender
+sandflow_blender.register()
+assert bpy.ops.import_scene.sandflow_run(directory='$work/run') == {'FINISHED'}" \
+  --python "$src/tests/blender/check_blender_load.py" -- "$work/run"
 
 # The same run's first 5 frames written y up, the height field as OBJ only: loaded back z up,
 # equal to the z-up files (the rotation and its inverse only swap and negate: exact)
