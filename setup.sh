@@ -2,7 +2,7 @@
 # sandflow set-up: installs what is missing (Debian 12 packages), builds in Release, then
 #   ./setup.sh demo   runs the default scene (floor, 20,000 grains), renders its last frame and
 #                     writes its report (out/floor-demo/report.html)
-#   ./setup.sh test   runs the whole test suite
+#   ./setup.sh test   runs the whole test suite (and installs Blender for tests/blender)
 # Options (environment): SANDFLOW_DEMO_GRAINS (default 20000; the full scene has 107687),
 #   SANDFLOW_BUILD (build folder, default build), SANDFLOW_SANITIZE=1 (ASan + UBSan build, with
 #   the assertions of src/core/assert.hpp).
@@ -15,6 +15,9 @@ case "$what" in demo|test|build) ;; *) echo "usage: ./setup.sh demo|test|build" 
 # 1. Debian packages (only the missing ones are installed)
 packages=(g++ cmake make pkg-config libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev
           libgtest-dev libpng-dev zlib1g-dev povray ffmpeg)
+# Blender runs one test, the loader's (tests/blender); it is large (190 MB installed, with its data,
+# and some 70 libraries), so only `test` installs it
+if [ "$what" = test ]; then packages+=(blender); fi
 scripts/install_packages.sh "${packages[@]}"
 
 # 2. Build (Release, or the sanitizer build; RelWithDebInfo and the sanitizers turn the assertions on)
