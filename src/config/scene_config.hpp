@@ -86,7 +86,7 @@ struct SimulationConfig {
 };
 
 /// The files a run writes each frame (output.export, --export; docs/scenes.md "Exports").
-enum class ExportFormat { Ply, Vtk, Geo, Pov, Csv, Height, HeightObj };
+enum class ExportFormat { Ply, Vtk, Geo, Pov, Csv, Height, HeightObj, Vdb };
 /// The up axis of exported coordinates: the scene's z, or y (the scene's z becomes y).
 enum class UpAxis { Z, Y };
 
@@ -98,7 +98,8 @@ struct OutputConfig {
   bool write_frames = true;         ///< write the per-frame files of `exports`
   /// unset: the default, ply (and height in surface mode); empty: no per-frame files
   std::optional<std::vector<ExportFormat>> exports;
-  UpAxis up_axis = UpAxis::Z;       ///< of PLY, VTK, geo, CSV and OBJ files
+  UpAxis up_axis = UpAxis::Z;          ///< of PLY, VTK, geo, CSV, OBJ and VDB files
+  std::optional<Real> vdb_voxel_size;  ///< of the VDB level set [m]; unset: a third of d_min
 };
 
 /// The camera of `sandflow render`: a fixed one when position and look_at are set, else the

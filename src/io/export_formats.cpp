@@ -16,7 +16,7 @@
 namespace sandflow {
 namespace {
 
-constexpr std::array<std::pair<std::string_view, ExportFormat>, 7> kNames = {{
+constexpr std::array<std::pair<std::string_view, ExportFormat>, 8> kNames = {{
     {"ply", ExportFormat::Ply},
     {"vtk", ExportFormat::Vtk},
     {"geo", ExportFormat::Geo},
@@ -24,6 +24,7 @@ constexpr std::array<std::pair<std::string_view, ExportFormat>, 7> kNames = {{
     {"csv", ExportFormat::Csv},
     {"height", ExportFormat::Height},
     {"height_obj", ExportFormat::HeightObj},
+    {"vdb", ExportFormat::Vdb},  // io/vdb_export.hpp
 }};
 
 void check_sizes(const FrameData& f, const char* who) {

@@ -29,7 +29,7 @@ namespace sandflow {
 
 // ---- Choosing exports ----
 
-/// "ply", "vtk", "geo", "pov", "csv", "height", "height_obj": the names of scene files and
+/// "ply", "vtk", "geo", "pov", "csv", "height", "height_obj", "vdb": the names of scene files and
 /// --export.
 std::string_view export_name(ExportFormat f);
 /// The format of a name, or nullopt.

@@ -10,6 +10,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/ply.hpp"
+#include "io/vdb_export.hpp"
 #include "surface/surface_params.hpp"
 
 namespace sandflow {
@@ -172,6 +173,14 @@ void FrameExporter::write(const World& world) {
                     "#include \"{}\"\n",
                     world.scene().name, n, t, f.size(), frame_name(n, ".pov"), kPovInclude) +
             pov_grain_lines(f));
+  if (has(ExportFormat::Vdb)) {
+    const FrameData vdb_grains = grains ? FrameData{} : world.visible_frame();
+    const SceneConfig& scene = world.scene();
+    const bool surface = scene.simulation.mode == Mode::Surface && world.surface();
+    write_vdb(frame_file(".vdb"), grains ? f : vdb_grains,
+              surface ? &world.surface()->height_field() : nullptr,
+              {scene.name, n, t, up_, vdb_points_voxel(scene.material), vdb_surface_voxel(scene)});
+  }
   if (has(ExportFormat::Height) || has(ExportFormat::HeightObj)) {
     const HeightField& hf = world.surface()->height_field();
     const fs::path hdir = fs::path(dir_) / "heightfield";

@@ -147,6 +147,7 @@ void read_output(TableReader r, OutputConfig& o) {
   std::optional<std::vector<TableReader::Word>> exports;
   r.read("export", exports);
   r.read("up_axis", o.up_axis, kUpAxes);
+  r.read("vdb_voxel_size", o.vdb_voxel_size, kPositive);
   r.finish("[output]");
   if (exports) {
     o.exports.emplace();
