@@ -18,7 +18,8 @@ packages=(g++ cmake make pkg-config libtomlplusplus-dev libcli11-dev libfmt-dev 
 # (OpenVDB's find module asks for Boost's iostreams, which libopenvdb-dev does not pull in)
 # Blender runs one test, the loader's (tests/blender); it is large (190 MB installed, with its data,
 # and some 70 libraries), so only `test` installs it
-if [ "$what" = test ]; then packages+=(blender); fi
+# vdb_print (libopenvdb-tools, 23 MB) reads the `vdb` export back in tests/vdb
+if [ "$what" = test ]; then packages+=(blender libopenvdb-tools); fi
 scripts/install_packages.sh "${packages[@]}"
 
 # 2. Build (Release, or the sanitizer build; RelWithDebInfo and the sanitizers turn the assertions on)
