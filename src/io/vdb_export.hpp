@@ -6,7 +6,8 @@
 // - "grains", a PointDataGrid of the visible grains (ACTIVE and INTERFACE) with the attributes P,
 //   pscale (the radius, float), v (velocity, vec3f), id (int64, so that every uint32 id fits) and
 //   state (int8: 0 ACTIVE, 1 INTERFACE). P is stored as a 16-bit offset from its voxel's centre,
-//   Houdini's default compression: within 2^-17 of a voxel, 0.15 um for 1 cm grains.
+//   the default of Houdini's Convert VDB Points: OpenVDB truncates it to a step of 2^-16 of a
+//   voxel, 0.3 um for 1 cm grains.
 //   Its voxel is 2 mean diameters: a packed heap (solid fraction 0.6) then holds 9.2 grains a
 //   voxel, near the 8 points a voxel that OpenVDB's and Houdini's point conversion aim at by
 //   default; a fixed size (rather than points::computeVoxelSize, frame by frame) keeps every
