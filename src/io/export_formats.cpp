@@ -12,6 +12,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "io/sand_colour.hpp"
 
 namespace sandflow {
 namespace {
@@ -283,27 +284,33 @@ void write_houdini_geo(const std::string& path, const FrameData& f, UpAxis up) {
   const std::size_t n = f.size();
   const int prims = n > 0 ? 1 : 0;
   std::string s;
-  s.reserve(512 + 96 * n);
+  s.reserve(512 + 144 * n);
   fmt::format_to(std::back_inserter(s),
                  "PGEOMETRY V5\n"
                  "NPoints {} NPrims {}\n"
                  "NPointGroups 0 NPrimGroups 0\n"
-                 "NPointAttrib 4 NVertexAttrib 0 NPrimAttrib {} NAttrib 0\n"
+                 "NPointAttrib 6 NVertexAttrib 0 NPrimAttrib {} NAttrib 0\n"
                  "PointAttrib\n"
+                 "Cd 3 float 1 1 1\n"
                  "v 3 vector 0 0 0\n"
                  "pscale 1 float 0\n"
+                 "orient 4 float 0 0 0 1\n"
                  "id 1 int 0\n"
                  "state 1 int 0\n",
                  n, prims, prims);
-  // each point: x y z w (v pscale id state)
+  std::array<std::string, kSandShades> colour;  // each shade's Cd, as text
+  for (int k = 0; k < kSandShades; ++k) put_text3(colour[k], srgb_to_linear(sand_srgb(k)));
+  // each point: x y z w (Cd v pscale orient id state)
   for (std::size_t i = 0; i < n; ++i) {
     const Grain g = grain(f, i, up);
     put_text3(s, g.x);
     s += " 1 (";
+    s += colour[static_cast<std::size_t>(sand_shade(g.id))];
+    s += ' ';
     put_text3(s, g.v);
     s += ' ';
     put_text(s, g.r);
-    fmt::format_to(std::back_inserter(s), " {} {})\n", g.id, g.state);
+    fmt::format_to(std::back_inserter(s), " 0 0 0 1 {} {})\n", g.id, g.state);
   }
   if (n > 0) {
     // one particle system holding every point, with the attribute Houdini gives its particles

@@ -6,6 +6,12 @@
 // Every file is written whole to `path + ".tmp"` and renamed over `path` (write_file_atomic), so a
 // reader never sees half a frame; a failure throws OutputError naming the path.
 //
+// The grains are spheres and the simulation tracks their spin (angular velocity), not how far
+// they have turned (src/dem/grains.hpp): there is no orientation to export. `orient` is the
+// identity for every grain, in the exported frame, so a shape copied onto the points stands as it
+// was modelled. A random turn per grain drawn from its id was tried: the gzipped frames grew from
+// 37 to 57 bytes a grain for a number the simulation does not know.
+//
 // The up axis. The scene is right-handed with z up. With UpAxis::Y every position and velocity is
 // written rotated by -90 degrees about x, (x, y, z) -> (x, z, -y): the scene's z becomes y and the
 // frame stays right-handed (what Houdini, Maya, Blender's glTF and Unity-side tools expect).
@@ -81,7 +87,8 @@ struct SeriesEntry {
 void write_pvd(const std::string& path, const std::vector<SeriesEntry>& entries);
 
 /// Houdini classic ASCII geometry (PGEOMETRY V5): one point per grain with P (its position) and
-/// the point attributes v (vector), pscale (the radius, float), id and state (int), held by one
+/// the point attributes Cd (its colour, linear RGB: sand_colour.hpp), v (vector), pscale (the
+/// radius, float), orient (the identity: see above), id and state (int), held by one
 /// particle-system primitive (Part), as Houdini writes particles. No primitive when f is empty.
 void write_houdini_geo(const std::string& path, const FrameData& f, UpAxis up);
 

@@ -1,0 +1,99 @@
+// The Houdini export (`geo`): orient is the identity and each grain's Cd is the colour
+// `sandflow render` gives it, as linear light. Files are read back by the reader of
+// tests/support/houdini_geo.hpp (a parser written from the format's documentation).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "io/export_formats.hpp"
+#include "io/pov_writer.hpp"
+#include "support/houdini_geo.hpp"
+#include "support/scratch.hpp"
+
+namespace sandflow {
+namespace {
+
+using HoudiniTest = test::ScratchTest;
+using test::read_bytes;
+
+// n grains on a jittered lattice with distinct ids, radii and velocities.
+FrameData lattice_frame(std::size_t n) {
+  FrameData f;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double j = std::sin(1.7 * static_cast<double>(i)) * 1e-4;
+    f.position.push_back({0.01 * static_cast<double>(i % 20) + j,
+                          0.01 * static_cast<double>(i / 20 % 20) - j,
+                          0.005 + 0.01 * static_cast<double>(i / 400)});
+    f.radius.push_back(0.005 * (1 + 0.1 * std::cos(static_cast<double>(i))));
+    f.velocity.push_back({0.1 * j, -0.2, 0.3 * std::cos(static_cast<double>(i))});
+    f.id.push_back(static_cast<std::uint32_t>(3 * i + 11));
+    f.state.push_back(static_cast<std::uint8_t>(i % 2));
+  }
+  return f;
+}
+
+// ---- orient -------------------------------------------------------------------------------------
+
+TEST_F(HoudiniTest, OrientIsTheIdentityForEveryGrainWhateverTheUpAxis) {
+  // the simulation tracks no orientation (export_formats.hpp): a shape copied onto the points
+  // stands as it was modelled, in Houdini's frame, z up or y up
+  const FrameData f = lattice_frame(50);
+  for (const UpAxis up : {UpAxis::Z, UpAxis::Y}) {
+    write_houdini_geo(path("f.geo"), f, up);
+    const test::Geo g = test::parse_geo(read_bytes(path("f.geo")));
+    ASSERT_EQ(g.points.size(), f.size());
+    for (const test::GeoPoint& p : g.points)
+      EXPECT_EQ(p.attr.at("orient"), (std::vector<double>{0, 0, 0, 1}));
+  }
+}
+
+// ---- Cd -----------------------------------------------------------------------------------------
+
+// sRGB-encoded to linear light, IEC 61966-2-1.
+double linear(double v) {
+  return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+}
+
+TEST_F(HoudiniTest, CdIsTheColourOfTheGrainInPovRayAsLinearLight) {
+  const FrameData f = lattice_frame(64);
+  write_houdini_geo(path("f.geo"), f, UpAxis::Z);
+  write_pov_scene(path("f.pov"), f, {}, PovOptions{});
+  // the POV-Ray scene: the sand textures' sRGB colours, then each grain's texture
+  std::vector<Vec3> srgb;
+  std::vector<int> texture;
+  std::istringstream pov(read_bytes(path("f.pov")));
+  for (std::string line; std::getline(pov, line);) {
+    Vec3 c;
+    int k = 0;
+    double x, y, z, r;
+    if (std::sscanf(line.c_str(), "  texture { pigment { srgb <%lf,%lf,%lf>", &c.x, &c.y, &c.z) ==
+        3)
+      srgb.push_back(c);
+    else if (std::sscanf(line.c_str(), "G(%lf,%lf,%lf,%lf,%d)", &x, &y, &z, &r, &k) == 5)
+      texture.push_back(k);
+  }
+  ASSERT_EQ(srgb.size(), 8u);
+  ASSERT_EQ(texture.size(), f.size());
+  const test::Geo g = test::parse_geo(read_bytes(path("f.geo")));
+  ASSERT_EQ(g.points.size(), f.size());
+  std::set<int> shades;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const std::vector<double>& cd = g.points[i].attr.at("Cd");
+    ASSERT_EQ(cd.size(), 3u);
+    const Vec3 want = srgb.at(static_cast<std::size_t>(texture[i]));
+    // POV-Ray's colours are printed to 7 digits
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(cd[c], linear(want[c]), 1e-6) << i;
+    EXPECT_TRUE(cd[0] > cd[1] && cd[1] > cd[2] && cd[2] > 0 && cd[0] < 1) << i;  // sand
+    shades.insert(texture[i]);
+  }
+  EXPECT_GE(shades.size(), 6u);  // 64 grains show (nearly) every shade
+}
+
+}  // namespace
+}  // namespace sandflow
