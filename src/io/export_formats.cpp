@@ -279,6 +279,10 @@ void write_pvd(const std::string& path, const std::vector<SeriesEntry>& entries)
   write_file_atomic(path, s);
 }
 
+std::string houdini_frame_name(int frame) {
+  return fmt::format("sand.{:04d}.geo", frame + 1);
+}
+
 void write_houdini_geo(const std::string& path, const FrameData& f, UpAxis up) {
   check_sizes(f, "write_houdini_geo");
   const std::size_t n = f.size();

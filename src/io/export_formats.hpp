@@ -6,6 +6,11 @@
 // Every file is written whole to `path + ".tmp"` and renamed over `path` (write_file_atomic), so a
 // reader never sees half a frame; a failure throws OutputError naming the path.
 //
+// Houdini's frames are numbered on Houdini's time line, not as the other exports: Houdini puts
+// frame 1 at t = 0 ($T = ($F - 1) / $FPS), so sand.0001.geo holds the state the run starts from
+// and sand.NNNN.geo the state at t = (NNNN - 1) / fps, the state of the other exports' frame
+// NNNN - 1. A File SOP on sand.$F4.geo then shows at each frame the grains of that moment.
+//
 // The grains are spheres and the simulation tracks their spin (angular velocity), not how far
 // they have turned (src/dem/grains.hpp): there is no orientation to export. `orient` is the
 // identity for every grain, in the exported frame, so a shape copied onto the points stands as it
@@ -85,6 +90,10 @@ struct SeriesEntry {
 };
 /// A ParaView collection (.pvd) listing `entries` in order.
 void write_pvd(const std::string& path, const std::vector<SeriesEntry>& entries);
+
+/// The name of the Houdini file holding the state after `frame` frames (0: the start), on
+/// Houdini's time line (see above): "sand.0001.geo" for frame 0.
+std::string houdini_frame_name(int frame);
 
 /// Houdini classic ASCII geometry (PGEOMETRY V5): one point per grain with P (its position) and
 /// the point attributes Cd (its colour, linear RGB: sand_colour.hpp), v (vector), pscale (the

@@ -140,6 +140,17 @@ void FrameExporter::continue_after(const std::vector<FrameStats>& done) {
   for (const FrameStats& st : done) series_.push_back({st.time, "frames/" + frame_name(st.frame, ".vtp")});
 }
 
+void FrameExporter::write_start(const World& world) {
+  written_.clear();
+  if (has(ExportFormat::Geo)) write_houdini(world, world.visible_frame());
+}
+
+void FrameExporter::write_houdini(const World& world, const FrameData& f) {
+  if (!has(ExportFormat::Geo)) return;
+  written_.push_back((fs::path(dir_) / "frames" / houdini_frame_name(world.frame())).string());
+  write_houdini_geo(written_.back(), f, up_);
+}
+
 void FrameExporter::write(const World& world) {
   written_.clear();
   if (formats_.empty()) return;
@@ -162,7 +173,7 @@ void FrameExporter::write(const World& world) {
     series_.push_back({t, "frames/" + frame_name(n, ".vtp")});
     write_pvd((fs::path(dir_) / "frames.pvd").string(), series_);
   }
-  if (has(ExportFormat::Geo)) write_houdini_geo(frame_file(".geo"), f, up_);
+  write_houdini(world, f);
   if (has(ExportFormat::Csv)) write_grains_csv(frame_file(".csv"), f, up_);
   if (has(ExportFormat::Pov))
     write_file_atomic(

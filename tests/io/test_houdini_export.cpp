@@ -1,26 +1,38 @@
-// The Houdini export (`geo`): orient is the identity and each grain's Cd is the colour
-// `sandflow render` gives it, as linear light. Files are read back by the reader of
+// The Houdini export (`geo`): the frames are numbered on Houdini's time line (file N holds
+// t = (N - 1) / fps, from the start of the run), orient is the identity and each grain's Cd is the
+// colour `sandflow render` gives it, as linear light. Files are read back by the reader of
 // tests/support/houdini_geo.hpp (a parser written from the format's documentation).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "io/export_formats.hpp"
+#include "io/frame_exporter.hpp"
+#include "io/ply.hpp"
 #include "io/pov_writer.hpp"
+#include "scene/scene_loader.hpp"
+#include "sim/world.hpp"
 #include "support/houdini_geo.hpp"
 #include "support/scratch.hpp"
 
 namespace sandflow {
 namespace {
 
+namespace fs = std::filesystem;
+
 using HoudiniTest = test::ScratchTest;
 using test::read_bytes;
+
+float as_float(double v) {
+  return static_cast<float>(v);
+}
 
 // n grains on a jittered lattice with distinct ids, radii and velocities.
 FrameData lattice_frame(std::size_t n) {
@@ -93,6 +105,78 @@ TEST_F(HoudiniTest, CdIsTheColourOfTheGrainInPovRayAsLinearLight) {
     shades.insert(texture[i]);
   }
   EXPECT_GE(shades.size(), 6u);  // 64 grains show (nearly) every shade
+}
+
+// ---- Frame numbers ------------------------------------------------------------------------------
+
+const char* kBlockScene = R"(
+[material]
+diameter = 0.01
+k_n = 1.0e4
+[output]
+fps = 24
+export = ["ply", "geo"]
+[[geometry]]
+type = "plane"
+[[emitter]]
+type = "block"
+count = 40
+center = [0.0, 0.0, 0.05]
+size = [0.04, 0.04, 0.06]
+velocity = [0.2, 0.0, 0.0]
+)";
+
+TEST_F(HoudiniTest, FileNHoldsTheStateAtTimeNMinusOneOverFps) {
+  const SceneConfig scene = load_scene_from_string(kBlockScene, "block.toml");
+  World world(scene);
+  fs::create_directories(dir_ / "frames");
+  FrameExporter exporter(world, dir_.string());
+  const fs::path frames = dir_ / "frames";
+  // What file N of each Houdini series must hold: the state at t = (N - 1) / fps, N = 1, 2, ...
+  const auto check = [&](int n) {
+    SCOPED_TRACE("sand." + std::to_string(n));
+    EXPECT_NEAR(world.time(), (n - 1) / 24.0, 1e-12);
+    const FrameData want = world.visible_frame();
+    const std::string name = houdini_frame_name(world.frame());
+    char expected[32];
+    std::snprintf(expected, sizeof expected, "sand.%04d.geo", n);
+    EXPECT_EQ(name, expected);
+    // among the files a checkpoint flushes (after the frame's PLY)
+    ASSERT_FALSE(exporter.written().empty());
+    EXPECT_EQ(exporter.written().back(), (frames / expected).string());
+    const test::Geo g = test::parse_geo(read_bytes((frames / expected).string()));
+    ASSERT_EQ(g.points.size(), want.size());
+    for (std::size_t i = 0; i < want.size(); ++i) {
+      EXPECT_EQ(g.points[i].attr.at("id")[0], want.id[i]);
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(g.points[i].P[c], as_float(want.position[i][c]));
+    }
+  };
+  const auto points = [&](const char* name) {
+    return test::parse_geo(read_bytes((frames / name).string())).points;
+  };
+  // the start: frame 1 (the emitter places its grains in the first step: none yet)
+  ASSERT_EQ(world.frame(), 0);
+  exporter.write_start(world);
+  check(1);
+  EXPECT_TRUE(points("sand.0001.geo").empty());
+  for (int frame = 1; frame <= 3; ++frame) {
+    world.advance_frame();
+    exporter.write(world);
+    check(frame + 1);
+    const auto g = points(("sand.000" + std::to_string(frame + 1) + ".geo").c_str());
+    EXPECT_EQ(g.size(), 40u);
+    // the PLY frame of the same moment is numbered `frame`: the same grains
+    const FrameData ply = read_ply((frames / ("000" + std::to_string(frame) + ".ply")).string());
+    ASSERT_EQ(ply.size(), g.size());
+    for (std::size_t i = 0; i < ply.size(); ++i)
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(g[i].P[c], ply.position[i][c]);
+  }
+  // the grains moved between the frames (so that the frames are told apart above)
+  EXPECT_NE(read_bytes((frames / "sand.0003.geo").string()),
+            read_bytes((frames / "sand.0004.geo").string()));
+  EXPECT_FALSE(fs::exists(frames / "sand.0000.geo"));
+  EXPECT_FALSE(fs::exists(frames / "sand.0005.geo"));
+  EXPECT_FALSE(fs::exists(frames / "0001.geo"));  // the old name
 }
 
 }  // namespace
