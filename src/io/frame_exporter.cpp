@@ -142,13 +142,18 @@ void FrameExporter::continue_after(const std::vector<FrameStats>& done) {
 
 void FrameExporter::write_start(const World& world) {
   written_.clear();
-  if (has(ExportFormat::Geo)) write_houdini(world, world.visible_frame());
+  if (has(ExportFormat::Geo) || has(ExportFormat::GeoGz))
+    write_houdini(world, world.visible_frame());
 }
 
 void FrameExporter::write_houdini(const World& world, const FrameData& f) {
-  if (!has(ExportFormat::Geo)) return;
-  written_.push_back((fs::path(dir_) / "frames" / houdini_frame_name(world.frame())).string());
-  write_houdini_geo(written_.back(), f, up_);
+  const fs::path frames = fs::path(dir_) / "frames";
+  for (const ExportFormat format : {ExportFormat::Geo, ExportFormat::GeoGz})
+    if (has(format)) {
+      written_.push_back(
+          (frames / houdini_frame_name(world.frame(), format == ExportFormat::GeoGz)).string());
+      write_houdini_geo(written_.back(), f, up_);
+    }
 }
 
 void FrameExporter::write(const World& world) {
@@ -162,7 +167,7 @@ void FrameExporter::write(const World& world) {
     return written_.back();
   };
   const bool grains = has(ExportFormat::Ply) || has(ExportFormat::Vtk) || has(ExportFormat::Geo) ||
-                      has(ExportFormat::Csv) || has(ExportFormat::Pov);
+                      has(ExportFormat::GeoGz) || has(ExportFormat::Csv) || has(ExportFormat::Pov);
   const FrameData f = grains ? world.visible_frame() : FrameData{};
   if (has(ExportFormat::Ply)) write_ply(frame_file(".ply"), f, up_);
   if (has(ExportFormat::Vtk)) {

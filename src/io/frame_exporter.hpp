@@ -5,7 +5,7 @@
 // height field's) go to DIR/frames/NNNN.ply, .vtk and .vtp (listed with their times in
 // DIR/frames.pvd, rewritten after every frame so that an interrupted run leaves a readable
 // series), .csv and .pov, NNNN being the frame (at t = NNNN / fps), and to
-// DIR/frames/sand.NNNN.geo, numbered on Houdini's time line: NNNN - 1 frames, at
+// DIR/frames/sand.NNNN.geo and .geo.gz, numbered on Houdini's time line: NNNN - 1 frames, at
 // t = (NNNN - 1) / fps, from sand.0001 (the state at the start, write_start) to one past the
 // last frame (export_formats.hpp). The POV-Ray frames are small: camera, lights, textures and the
 // geometry (a mesh can be megabytes) are written once to DIR/frames/pov_scene.inc, which every
@@ -63,7 +63,7 @@ class FrameExporter {
 
  private:
   bool has(ExportFormat f) const { return has_export(formats_, f); }
-  /// The Houdini file of world.frame(), holding `f`, if chosen.
+  /// The chosen Houdini files of world.frame(), holding `f`.
   void write_houdini(const World& world, const FrameData& f);
 
   std::string dir_;

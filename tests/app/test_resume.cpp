@@ -241,13 +241,13 @@ TEST(Resume, TheExportsOfAResumedRunAreThoseOfTheRunUninterrupted) {
   box.write("pour.toml", kPourScene);
   const std::string scene = (box.dir / "pour.toml").string();
   const fs::path want = box.dir / "straight";
-  ASSERT_EQ(sandflow(fmt::format("run {} --frames {} --export ply,vtk,geo --out {}", scene, kFrames,
-                                 want.string())),
+  ASSERT_EQ(sandflow(fmt::format("run {} --frames {} --export ply,vtk,geo_gz --out {}", scene,
+                                 kFrames, want.string())),
             0);
   const fs::path out = box.dir / "run";
-  const pid_t pid = spawn(
-      fmt::format("run {} --frames {} --export ply,vtk,geo --out {}", scene, kFrames, out.string()),
-      box.dir / "run.log");
+  const pid_t pid = spawn(fmt::format("run {} --frames {} --export ply,vtk,geo_gz --out {}", scene,
+                                      kFrames, out.string()),
+                          box.dir / "run.log");
   while (!fs::exists(out / "frames" / "0005.vtp") && waitpid(pid, nullptr, WNOHANG) == 0)
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   kill(pid, SIGINT);
@@ -262,11 +262,11 @@ TEST(Resume, TheExportsOfAResumedRunAreThoseOfTheRunUninterrupted) {
   }
   // Houdini's frames, from the start (written once, before the interruption) to the end
   for (int f = 1; f <= kFrames + 1; ++f) {
-    const std::string name = fmt::format("frames/sand.{:04d}.geo", f);
+    const std::string name = fmt::format("frames/sand.{:04d}.geo.gz", f);
     ASSERT_TRUE(fs::exists(out / name)) << name;
     EXPECT_EQ(read_text(out / name), read_text(want / name)) << name << " differs";
   }
-  EXPECT_FALSE(fs::exists(out / fmt::format("frames/sand.{:04d}.geo", kFrames + 2)));
+  EXPECT_FALSE(fs::exists(out / fmt::format("frames/sand.{:04d}.geo.gz", kFrames + 2)));
 }
 
 TEST(Resume, KilledAtRandomMomentsItResumesToTheSameRun) {

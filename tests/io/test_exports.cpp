@@ -526,6 +526,8 @@ TEST(HeightSidecar, RecordsTheGridAndTheRange) {
 TEST(ExportList, ParsesNamesAndRefusesUnknownOnesListingTheKnown) {
   EXPECT_EQ(parse_export_list("ply,vtk, geo ,ply", "--export"),
             (std::vector<ExportFormat>{ExportFormat::Ply, ExportFormat::Vtk, ExportFormat::Geo}));
+  EXPECT_EQ(parse_export_list("geo_gz,geo", "--export"),
+            (std::vector<ExportFormat>{ExportFormat::GeoGz, ExportFormat::Geo}));
   EXPECT_TRUE(parse_export_list("none", "--export").empty());
   for (const char* bad : {"ply,vtkk", "ply,,csv", "none,ply", ""}) {
     try {
@@ -535,7 +537,8 @@ TEST(ExportList, ParsesNamesAndRefusesUnknownOnesListingTheKnown) {
       const std::string msg = e.what();
       EXPECT_EQ(msg.rfind("--export", 0), 0u) << msg;
       if (std::string(bad) != "none,ply") {
-        EXPECT_NE(msg.find("ply, vtk, geo, pov, csv, height, height_obj"), std::string::npos)
+        EXPECT_NE(msg.find("ply, vtk, geo, geo_gz, pov, csv, height, height_obj"),
+                  std::string::npos)
             << msg;
       }
     }
@@ -582,7 +585,7 @@ TEST(ExportKeys, BadValuesNameThePlaceAndWhatWasExpected) {
   std::string text = kScene;
   text.replace(text.find("\"height_obj\""), 12, "\"vtkk\"");
   EXPECT_NE(error(text).find("x.toml:4:18: output.export[1] = \"vtkk\" is not an export: expected "
-                             "one of ply, vtk, geo, pov, csv, height, height_obj"),
+                             "one of ply, vtk, geo, geo_gz, pov, csv, height, height_obj"),
             std::string::npos)
       << error(text);
   EXPECT_NE(error(kScene, {{"output.up_axis", "x"}})

@@ -1,7 +1,10 @@
 // A reader of the Houdini classic ASCII geometry the `geo` and `geo_gz` exports write, written from
 // the format's documentation (sidefx.com/docs/houdini/io/formats/geo.html), not from the writer's
-// code: the header, the point attribute dictionary, the points and the particle primitive.
+// code: the header, the point attribute dictionary, the points and the particle primitive; and
+// gunzip by zlib, for the .geo.gz files.
 #pragma once
+
+#include <zlib.h>
 
 #include <cstddef>
 #include <map>
@@ -83,6 +86,27 @@ inline Geo parse_geo(const std::string& text) {
   if (w == "[0]") in >> w;
   if (w != "beginExtra") throw std::runtime_error("geo: no beginExtra, got " + w);
   return g;
+}
+
+/// The bytes of gzip data (one member), by zlib; throws std::runtime_error when it is not.
+inline std::string gunzip(const std::string& gz) {
+  z_stream zs{};
+  if (inflateInit2(&zs, 16 + MAX_WBITS) != Z_OK) throw std::runtime_error("gunzip: no zlib");
+  std::string out;
+  char buf[1 << 16];
+  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(gz.data()));
+  zs.avail_in = static_cast<uInt>(gz.size());
+  int rc = Z_OK;
+  while (rc == Z_OK) {
+    zs.next_out = reinterpret_cast<Bytef*>(buf);
+    zs.avail_out = sizeof buf;
+    rc = inflate(&zs, Z_NO_FLUSH);
+    out.append(buf, sizeof buf - zs.avail_out);
+  }
+  const bool whole = rc == Z_STREAM_END && zs.avail_in == 0;
+  inflateEnd(&zs);
+  if (!whole) throw std::runtime_error("gunzip: not one whole gzip member");
+  return out;
 }
 
 }  // namespace sandflow::test
