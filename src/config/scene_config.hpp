@@ -86,7 +86,7 @@ struct SimulationConfig {
 };
 
 /// The files a run writes each frame (output.export, --export; docs/scenes.md "Exports").
-enum class ExportFormat { Ply, Vtk, Geo, Pov, Csv, Height, HeightObj };
+enum class ExportFormat { Ply, Vtk, Geo, GeoGz, Pov, Csv, Height, HeightObj };
 /// The up axis of exported coordinates: the scene's z, or y (the scene's z becomes y).
 enum class UpAxis { Z, Y };
 

@@ -16,13 +16,12 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/process.hpp"
+#include "io/sand_colour.hpp"
 
 namespace sandflow {
 namespace {
 
 namespace fs = std::filesystem;
-
-constexpr int kSandTextures = 8;
 
 // ---------------------------------------------------------------------------------------------
 // Text helpers
@@ -107,17 +106,6 @@ double nice_length(double x) {
   return p * (m < 1.5 ? 1 : m < 3.5 ? 2 : m < 7.5 ? 5 : 10);
 }
 
-// Stable per-grain texture index: a 32-bit integer hash (lowbias32) of the id.
-int sand_texture(std::uint32_t id) {
-  std::uint32_t x = id;
-  x ^= x >> 16;
-  x *= 0x7feb352dU;
-  x ^= x >> 15;
-  x *= 0x846ca68bU;
-  x ^= x >> 16;
-  return static_cast<int>(x % kSandTextures);
-}
-
 // ---------------------------------------------------------------------------------------------
 // Scene parts
 
@@ -181,15 +169,10 @@ void write_header(std::string& s, const Camera& cam, const ViewBounds& b, const 
   // Sand: base colour with a small, stable variation per grain; matte, no reflection.
   line(s,
        "#declare SandFinish = finish { ambient 0.05 diffuse 0.85 specular 0.06 roughness 0.06 }");
-  line(s, "#declare Sand = array[", kSandTextures, "] {");
-  for (int k = 0; k < kSandTextures; ++k) {
-    const double light = 0.88 + 0.24 * k / (kSandTextures - 1);  // brightness 0.88 .. 1.12
-    const double warm = (k % 3 - 1) * 0.025;                     // slight hue shift
-    const Vec3 rgb{std::min(1.0, 0.76 * light + warm), std::min(1.0, 0.62 * light),
-                   std::min(1.0, 0.40 * light - warm)};
-    line(s, "  texture { pigment { srgb ", rgb, " } finish { SandFinish } }",
-         k + 1 < kSandTextures ? "," : "");
-  }
+  line(s, "#declare Sand = array[", kSandShades, "] {");
+  for (int k = 0; k < kSandShades; ++k)
+    line(s, "  texture { pigment { srgb ", sand_srgb(k), " } finish { SandFinish } }",
+         k + 1 < kSandShades ? "," : "");
   line(s, "}");
   line(s, "#macro G(X,Y,Z,R,C) sphere { <X,Y,Z>, R texture { Sand[C] } } #end");
   line(s, "");
@@ -390,7 +373,7 @@ void write_grains(std::string& s, const FrameData& f) {
     s += ',';
     put(s, f.radius[i]);
     s += ',';
-    s += static_cast<char>('0' + sand_texture(id));
+    s += static_cast<char>('0' + sand_shade(id));
     s += ")\n";
   }
 }
