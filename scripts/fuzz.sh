@@ -32,7 +32,7 @@ done
 
 # 1. Debian packages (only the missing ones are installed), as setup.sh does
 packages=(clang libclang-rt-14-dev libomp-dev cmake make pkg-config libtomlplusplus-dev
-          libcli11-dev libfmt-dev nlohmann-json3-dev libpng-dev zlib1g-dev)
+          libcli11-dev libfmt-dev nlohmann-json3-dev libpng-dev zlib1g-dev libassimp-dev)
 scripts/install_packages.sh "${packages[@]}"
 
 # 2. Build (clang, -fsanitize=fuzzer,address,undefined)
