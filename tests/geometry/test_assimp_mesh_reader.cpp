@@ -1,0 +1,202 @@
+// The formats read through assimp (src/geometry/assimp_mesh_reader.cpp): STL written here in
+// both encodings reads back with its triangles and bounds; a glTF's nodes place each copy of a
+// mesh; FBX units become metres; assimp stays quiet, and what it logs without refusing a file
+// comes back as a warning. (The cube in every format and the malformed corpus are in
+// test_mesh_io.cpp.)
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "geometry/mesh_io.hpp"
+#include "mesh_test_shapes.hpp"
+#include "support/scratch.hpp"
+
+namespace sandflow {
+namespace {
+
+using test::ScratchTest;
+
+Vec3 facet_normal(const TriangleMesh& m, std::size_t t) {
+  const auto& [a, b, c] = m.triangles[t];
+  const Vec3 n = cross(m.vertices[b] - m.vertices[a], m.vertices[c] - m.vertices[a]);
+  return n / norm(n);
+}
+
+// ASCII STL as exporters write it: a facet normal, three vertices a facet, no shared vertices.
+std::string ascii_stl(const TriangleMesh& m) {
+  std::string s = "solid box\n";
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const Vec3 n = facet_normal(m, t);
+    s += "  facet normal " + std::to_string(n.x) + " " + std::to_string(n.y) + " " +
+         std::to_string(n.z) + "\n    outer loop\n";
+    for (std::uint32_t v : m.triangles[t]) {
+      const Vec3& p = m.vertices[v];
+      s += "      vertex " + std::to_string(p.x) + " " + std::to_string(p.y) + " " +
+           std::to_string(p.z) + "\n";
+    }
+    s += "    endloop\n  endfacet\n";
+  }
+  return s + "endsolid box\n";
+}
+
+void append_float(std::string& out, double v) {
+  const auto f = static_cast<float>(v);
+  char bytes[4];
+  std::memcpy(bytes, &f, 4);  // little-endian, as STL is, on the machines this project runs on
+  out.append(bytes, 4);
+}
+
+// Binary STL; its header starts with "solid", as some exporters write it, which must not make it
+// read as ASCII.
+std::string binary_stl(const TriangleMesh& m) {
+  std::string s = "solid box, written as binary STL";
+  s.resize(80, '\0');
+  const auto count = static_cast<std::uint32_t>(m.triangles.size());
+  s.append(reinterpret_cast<const char*>(&count), 4);
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const Vec3 n = facet_normal(m, t);
+    for (double c : {n.x, n.y, n.z}) append_float(s, c);
+    for (std::uint32_t v : m.triangles[t])
+      for (double c : {m.vertices[v].x, m.vertices[v].y, m.vertices[v].z}) append_float(s, c);
+    s.append(2, '\0');  // attribute byte count
+  }
+  return s;
+}
+
+class AssimpMeshReader : public ScratchTest {};
+
+// A tetrahedron used by two nodes, its buffer in tetra.bin
+constexpr const char* kTetraGltf = R"({
+  "asset": {"version": "2.0"},
+  "scene": 0,
+  "scenes": [{"nodes": [0]}],
+  "nodes": [
+    {"children": [1, 2], "translation": [0, 10, 0]},
+    {"mesh": 0, "translation": [1, 0, 0]},
+    {"mesh": 0, "translation": [0, 0, 5], "scale": [2, 2, 2]}
+  ],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+  "buffers": [{"uri": "tetra.bin", "byteLength": 72}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                  {"buffer": 0, "byteOffset": 48, "byteLength": 24}],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+     "min": [0, 0, 0], "max": [1, 1, 1]},
+    {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}
+  ]
+})";
+
+// A closed box of 0.5 x 0.25 x 0.125 m (exact in float) away from the origin: 12 facets, whose 36
+// corners join into 8 vertices although each facet carries its own normal; metres as written.
+TEST_F(AssimpMeshReader, StlWrittenHereReadsBackInBothEncodings) {
+  const Vec3 lo{1, -2, 0.5}, hi{1.5, -1.75, 0.625};
+  const TriangleMesh box = test::box_mesh(lo, hi);
+  const std::string ascii = folder_.write("box.stl", ascii_stl(box));
+  const std::string binary = folder_.write("box_binary.stl", binary_stl(box));
+  for (const std::string& path : {ascii, binary}) {
+    SCOPED_TRACE(path);
+    const TriangleMesh m = load_mesh(path);
+    EXPECT_EQ(m.triangles.size(), 12u);
+    EXPECT_EQ(m.vertices.size(), 8u);
+    const Aabb b = mesh_bounds(m);
+    EXPECT_EQ(b.lo, lo);
+    EXPECT_EQ(b.hi, hi);
+    const MeshQuality q = mesh_quality(m);
+    EXPECT_TRUE(q.closed());
+    EXPECT_TRUE(q.manifold());
+    EXPECT_EQ(q.degenerate_triangles, 0u);
+  }
+}
+
+// One tetrahedron, used by two nodes under a parent: the parent moves both by (0, 10, 0), one
+// child by (1, 0, 0), the other scales by 2 and moves by (0, 0, 5). The buffer is a .bin beside
+// the .gltf.
+TEST_F(AssimpMeshReader, GltfNodesPlaceEachUseOfAMesh) {
+  std::string bin;
+  for (double c : {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}) append_float(bin, c);
+  for (std::uint16_t i : {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3})
+    bin.append(reinterpret_cast<const char*>(&i), 2);
+  folder_.write("tetra.bin", bin);
+  const std::string gltf = folder_.write("tetra.gltf", kTetraGltf);
+  const TriangleMesh m = load_mesh(gltf);
+  EXPECT_EQ(m.triangles.size(), 8u);
+  EXPECT_EQ(m.vertices.size(), 8u);
+  const Aabb b = mesh_bounds(m);
+  EXPECT_EQ(b.lo, Vec3(0, 10, 0));  // the second copy reaches x = 0
+  EXPECT_EQ(b.hi, Vec3(2, 12, 7));
+  EXPECT_TRUE(mesh_quality(m).closed());
+  // the scaled copy: (0, 0, 1) -> (0, 0, 2) + (0, 0, 5) + (0, 10, 0)
+  bool found = false;
+  for (const Vec3& p : m.vertices) found = found || p == Vec3(0, 10, 7);
+  EXPECT_TRUE(found);
+}
+
+// FBX coordinates are centimetres times UnitScaleFactor: the cube of tests/data/meshes is written
+// in centimetres (factor 1); with factor 100 the same numbers are metres.
+TEST_F(AssimpMeshReader, FbxUnitScaleFactorGivesMetres) {
+  const std::string cm =
+      test::read_bytes(std::string(SANDFLOW_SOURCE_DIR) + "/tests/data/meshes/cube.fbx");
+  const std::string factor_1 = "\"UnitScaleFactor\", \"double\", \"Number\", \"\",1\n";
+  ASSERT_NE(cm.find(factor_1), std::string::npos);
+  std::string m = cm;
+  m.replace(m.find(factor_1), factor_1.size(),
+            "\"UnitScaleFactor\", \"double\", \"Number\", \"\",100\n");
+  EXPECT_EQ(mesh_bounds(load_mesh(folder_.write("cm.fbx", cm))).hi, Vec3(1, 1, 1));
+  EXPECT_EQ(mesh_bounds(load_mesh(folder_.write("m.fbx", m))).hi, Vec3(100, 100, 100));
+}
+
+// Assimp prints nothing, whether it reads a file or refuses it.
+TEST_F(AssimpMeshReader, AssimpPrintsNothing) {
+  const std::string data = std::string(SANDFLOW_SOURCE_DIR) + "/tests/data/meshes/";
+  ::testing::internal::CaptureStdout();
+  ::testing::internal::CaptureStderr();
+  EXPECT_NO_THROW(load_mesh(data + "cube.fbx"));
+  EXPECT_THROW(load_mesh(data + "bad/stl_four_vertices_ascii.stl"), InputError);
+  EXPECT_THROW(load_mesh(data + "bad/fbx_truncated.fbx"), InputError);
+  EXPECT_EQ(::testing::internal::GetCapturedStdout(), "");
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+}
+
+// A COLLADA node that names no node: assimp logs an error and reads the rest, which comes back
+// with a warning naming the file.
+TEST_F(AssimpMeshReader, WhatAssimpLogsWithoutRefusingBecomesAWarning) {
+  std::string dae =
+      test::read_bytes(std::string(SANDFLOW_SOURCE_DIR) + "/tests/data/meshes/cube.dae");
+  const std::string scene_node = "<node id=\"cube\" name=\"cube\">";
+  ASSERT_NE(dae.find(scene_node), std::string::npos);
+  dae.insert(dae.find(scene_node), "<node id=\"ghost\"><instance_node url=\"#nowhere\"/></node>\n");
+  const std::string path = folder_.write("ghost.dae", dae);
+  std::vector<std::string> warnings;
+  const TriangleMesh m = load_mesh(path, &warnings);
+  EXPECT_EQ(m.triangles.size(), 12u);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0].rfind(path + ": assimp: ", 0), 0u) << warnings[0];
+  EXPECT_NE(warnings[0].find("nowhere"), std::string::npos) << warnings[0];
+  // the cube alone reads without a word (assimp's remarks on its missing material are left out)
+  warnings.clear();
+  load_mesh(std::string(SANDFLOW_SOURCE_DIR) + "/tests/data/meshes/cube.dae", &warnings);
+  load_mesh(std::string(SANDFLOW_SOURCE_DIR) + "/tests/data/meshes/cube.fbx", &warnings);
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+}
+
+// A glTF names other files beside it; a FIFO there is never opened (it would block).
+TEST_F(AssimpMeshReader, AGltfBufferThatIsNotAFileIsRefused) {
+  ASSERT_EQ(::mkfifo(path("tetra.bin").c_str(), 0600), 0);
+  const std::string gltf = folder_.write("tetra.gltf", kTetraGltf);
+  try {
+    load_mesh(gltf);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("could not open referenced file \"tetra.bin\""),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace sandflow
