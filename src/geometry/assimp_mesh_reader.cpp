@@ -148,13 +148,19 @@ ProblemCollector& problem_collector() {
 }
 
 // The files assimp opens: the mesh itself from memory; a file it names (a glTF's buffers) from
-// disk, when it is a regular file within the size limit (never a FIFO, which would block). Nothing
-// is written.
+// disk, when it is a regular file (never a FIFO, which would block) and all of them together stay
+// within the limit for the file itself. Nothing is written. Why a named file was refused is kept:
+// assimp would only say that it could not open it.
 class MeshFiles final : public Assimp::IOSystem {
  public:
   MeshFiles(std::string_view data, std::string name) : data_(data), name_(std::move(name)) {}
 
-  bool Exists(const char* path) const override { return path == name_ || readable(path); }
+  std::string refusal;  ///< "" or why a named file was not opened
+
+  bool Exists(const char* path) const override {
+    std::error_code ec;
+    return path == name_ || fs::exists(path, ec);
+  }
   char getOsSeparator() const override { return '/'; }
 
   Assimp::IOStream* Open(const char* path, const char* mode) override {
@@ -162,20 +168,28 @@ class MeshFiles final : public Assimp::IOSystem {
     if (path == name_)
       return new Assimp::MemoryIOStream(reinterpret_cast<const std::uint8_t*>(data_.data()),
                                         data_.size());
-    return readable(path) ? disk_.Open(path, mode) : nullptr;
+    if (const std::string kind = special_file_kind(path); !kind.empty()) {
+      refusal = "the file it names, '" + std::string(path) + "', is " + kind + ", not a file";
+      return nullptr;
+    }
+    std::error_code ec;
+    const auto size = fs::file_size(path, ec);
+    if (ec) return nullptr;  // (not there: assimp says which file it could not open)
+    if (data_.size() + opened_bytes_ + size > kMaxAssimpMeshBytes) {
+      refusal = "with the files it names ('" + std::string(path) + "' is " + std::to_string(size) +
+                " bytes), more than the limit of " + std::to_string(kMaxAssimpMeshBytes) +
+                " bytes for the formats read through assimp";
+      return nullptr;
+    }
+    opened_bytes_ += size;
+    return disk_.Open(path, mode);
   }
   void Close(Assimp::IOStream* stream) override { delete stream; }
 
  private:
-  static bool readable(const char* path) {
-    std::error_code ec;
-    if (!special_file_kind(path).empty() || !fs::is_regular_file(path, ec)) return false;
-    const auto size = fs::file_size(path, ec);
-    return !ec && size <= kMaxMeshFileBytes;
-  }
-
   std::string_view data_;
   std::string name_;
+  std::uintmax_t opened_bytes_ = 0;
   Assimp::DefaultIOSystem disk_;
 };
 
@@ -292,6 +306,12 @@ TriangleMesh read_with_assimp(std::string_view data, MeshFormat format, const st
                               std::vector<std::string>* warnings) {
   const AssimpFormat f = assimp_format(format);
   if (data.empty()) fail_file(file, "empty file (expected " + std::string(f.name) + ")");
+  if (data.size() > kMaxAssimpMeshBytes)
+    fail_file(file, "the file is " + std::to_string(data.size()) +
+                        " bytes, more than the limit of " + std::to_string(kMaxAssimpMeshBytes) +
+                        " for the formats read through assimp (which take up to 23 times a "
+                        "file's size in memory); a binary PLY of the same mesh is read with much "
+                        "less");
   if (format == MeshFormat::Stl) check_stl_layout(data, file);
 
   const std::lock_guard<std::mutex> lock(assimp_mutex());
@@ -306,7 +326,8 @@ TriangleMesh read_with_assimp(std::string_view data, MeshFormat format, const st
   Assimp::Importer importer;
   keep_only_readers_of(importer, f);
   const std::string name = assimp_name(file, f);
-  importer.SetIOHandler(new MeshFiles(data, name));  // (the importer owns it)
+  auto* files = new MeshFiles(data, name);
+  importer.SetIOHandler(files);  // (the importer owns it)
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
   // an obstacle needs positions and faces only; without normals, vertices that differ by their
   // normal alone (an STL's, one a facet) are joined
@@ -318,6 +339,7 @@ TriangleMesh read_with_assimp(std::string_view data, MeshFormat format, const st
 
   // read and check indices and counts (ValidateDataStructure), then the coordinates
   const aiScene* scene = importer.ReadFile(name, aiProcess_ValidateDataStructure);
+  if (scene == nullptr && !files->refusal.empty()) fail_file(file, files->refusal);
   if (scene == nullptr) refuse(data, f, file, importer.GetErrorString(), "cannot read");
   if (f.strict && !problems.empty())
     fail_file(file,

@@ -25,6 +25,11 @@ inline constexpr std::size_t kMaxMeshVertices = 20'000'000;
 inline constexpr std::size_t kMaxMeshTriangles = 20'000'000;
 /// Largest file accepted, after decompression [bytes].
 inline constexpr std::size_t kMaxMeshFileBytes = std::size_t{1} << 30;
+/// Largest file read through assimp (STL, glTF, FBX, COLLADA), after decompression [bytes]:
+/// assimp keeps each face in an allocation of its own and took 400-640 MB a million triangles,
+/// 13 (binary STL) to 23 (COLLADA) times the file's size, where the readers of OBJ, PLY and OFF
+/// take about 50 bytes a triangle.
+inline constexpr std::size_t kMaxAssimpMeshBytes = std::size_t{64} << 20;
 
 enum class MeshFormat { Obj, Ply, Off, Stl, Gltf, Fbx, Dae };
 

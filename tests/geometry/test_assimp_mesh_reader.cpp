@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -192,8 +193,29 @@ TEST_F(AssimpMeshReader, AGltfBufferThatIsNotAFileIsRefused) {
     load_mesh(gltf);
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("could not open referenced file \"tetra.bin\""),
-              std::string::npos)
+    EXPECT_NE(std::string(e.what()).find(gltf + ": the file it names, '"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("tetra.bin', is a FIFO, not a file"), std::string::npos)
+        << e.what();
+  }
+}
+
+// Assimp takes up to 23 times a file's size in memory: a file read through it is refused above
+// kMaxAssimpMeshBytes, before assimp sees it, and so are the files a glTF names, together with it
+// (here a sparse file, which takes no disk).
+TEST_F(AssimpMeshReader, FilesAboveTheirLimitAreRefusedUnread) {
+  const std::string big(kMaxAssimpMeshBytes + 1, ' ');
+  EXPECT_THROW(parse_mesh(big, MeshFormat::Stl, "big.stl"), InputError);
+  folder_.write("tetra.bin", "");
+  std::filesystem::resize_file(path("tetra.bin"), kMaxAssimpMeshBytes);
+  const std::string gltf = folder_.write("tetra.gltf", kTetraGltf);
+  try {
+    load_mesh(gltf);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("more than the limit of " + std::to_string(kMaxAssimpMeshBytes)),
+        std::string::npos)
         << e.what();
   }
 }
