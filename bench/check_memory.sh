@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Peak memory and time of `sandflow run FILE --check` on the worst inputs the limits allow (and a
 # few they refuse): the table of docs/fuzzing.md, "Peak memory and time of run --check".
-# Writes the inputs (about 130 MB, most of it one PLY) into a temporary folder, measures each with
-# GNU time on an otherwise idle machine, and prints one line per input.
+# Writes the inputs (about 260 MB, most of it one PLY, an STL and a COLLADA file) into a temporary
+# folder, measures each with GNU time on an otherwise idle machine, and prints one line per input.
 #
 # usage: bench/check_memory.sh [SANDFLOW]   (default build/sandflow)
 # Needs /usr/bin/time (Debian package `time`) and /usr/bin/python3; takes about 4 minutes.
@@ -63,6 +63,48 @@ with open('grid.ply', 'wb') as f:
         f.write(b''.join(struct.pack('<Biii', 3, a, a + 1, a + N + 1) + struct.pack('<Biii', 3, a, a + N + 1, a + N)
                          for a in range(j * N, j * N + N - 1)))
 write('grid', dem + mesh('grid.ply', 0.5) + block)
+# a binary STL and a COLLADA file of just under 64 MiB, the limit of the formats read through
+# assimp (which takes 13 and 23 times their size): the same grid, 1.34 and 2.38 million triangles
+def grid_triangles(side):
+    for j in range(side):
+        for i in range(side):
+            a, b, c, d = j * (side + 1) + i, j * (side + 1) + i + 1, (j + 1) * (side + 1) + i + 1, (j + 1) * (side + 1) + i
+            yield a, b, c
+            yield a, c, d
+def grid_point(side, k):
+    i, j = k % (side + 1), k // (side + 1)
+    return i / side, j / side, ((i * 7 + j * 13) % 5) * 1e-4
+limit = 64 << 20
+n = (limit - 84) // 50
+with open('limit.stl', 'wb') as f:
+    f.write(b'binary STL at the limit'.ljust(80, b'\0') + struct.pack('<I', n))
+    out, k = bytearray(), 0
+    for t in grid_triangles(820):
+        if k == n: break
+        out += struct.pack('<3f', 0, 0, 1) + b''.join(struct.pack('<3f', *grid_point(820, v)) for v in t) + b'\0\0'
+        k += 1
+    f.write(out)
+write('stl', dem + mesh('limit.stl', 0.5) + block)
+side = 1200
+coords = ' '.join('%d %d %d' % (k % (side + 1), k // (side + 1), k % 5) for k in range((side + 1) ** 2))  # short text, more triangles
+dae_head = ('<?xml version="1.0" encoding="utf-8"?>\n<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">'
+            '<asset><up_axis>Z_UP</up_axis></asset><library_geometries><geometry id="m"><mesh><source id="p">'
+            '<float_array id="pa" count="%d">%s</float_array><technique_common><accessor source="#pa" count="%d" stride="3">'
+            '<param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/></accessor>'
+            '</technique_common></source><vertices id="v"><input semantic="POSITION" source="#p"/></vertices>'
+            % (3 * (side + 1) ** 2, coords, (side + 1) ** 2))
+dae_tail = ('</mesh></geometry></library_geometries><library_visual_scenes><visual_scene id="s"><node id="n">'
+            '<instance_geometry url="#m"/></node></visual_scene></library_visual_scenes>'
+            '<scene><instance_visual_scene url="#s"/></scene></COLLADA>\n')
+budget = limit - len(dae_head) - len(dae_tail) - 200
+ps, size = [], 0
+for t in grid_triangles(side):
+    text = '%d %d %d' % t
+    if size + len(text) + 1 > budget: break
+    ps.append(text); size += len(text) + 1
+open('limit.dae', 'w').write(dae_head + '<triangles count="%d"><input semantic="VERTEX" source="#v" offset="0"/><p>' % len(ps)
+                             + ' '.join(ps) + '</p></triangles>' + dae_tail)
+write('dae', dem + mesh('limit.dae', 0.5) + block)
 # a flat square sampled into just under 20 million points before merging
 open('quad.obj', 'w').write('v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n')
 write('square', dem + mesh('quad.obj', 7.89) + block)
@@ -94,8 +136,8 @@ write('every_limit', surface + mesh('grid.ply', 0.5) + png_map
 PY
 
 printf '%-16s %4s %12s %9s  %s\n' input exit "peak (MiB)" "time (s)" "last line"
-for t in bomb grid square pour png field field_64_planes stacked_boxes planes_200k planes_32mib \
-  toml_worst every_limit; do
+for t in bomb grid stl dae square pour png field field_64_planes stacked_boxes planes_200k \
+  planes_32mib toml_worst every_limit; do
   set +e
   /usr/bin/time -o time.txt -f "%e %M" timeout 300 "$sandflow" run "$t.toml" --check > out.txt 2>&1
   rc=$?
