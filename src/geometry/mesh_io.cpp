@@ -123,15 +123,17 @@ MeshFormat mesh_format_from_name(const std::string& path) {
   if (ends_with(name, ".off")) return MeshFormat::Off;
   if (ends_with(name, ".stl")) return MeshFormat::Stl;
   if (ends_with(name, ".gltf") || ends_with(name, ".glb")) return MeshFormat::Gltf;
-  if (ends_with(name, ".fbx")) return MeshFormat::Fbx;
-  if (ends_with(name, ".dae")) return MeshFormat::Dae;
+  // (docs/meshes.md, "Which reader reads which format")
+  if (ends_with(name, ".fbx") || ends_with(name, ".dae"))
+    fail_file(path, std::string(ends_with(name, ".fbx") ? "FBX" : "COLLADA") +
+                        " files are not read: assimp 5.2, which would read them, crashes on some "
+                        "malformed ones; export the mesh as glTF (.glb), STL or PLY");
   fail_file(path,
-            "unknown mesh format: expected a name ending in .obj, .ply, .off, .stl, .gltf, .glb, "
-            ".fbx or .dae (optionally + .gz)");
+            "unknown mesh format: expected a name ending in .obj, .ply, .off, .stl, .gltf or .glb "
+            "(optionally + .gz)");
 }
 
-TriangleMesh parse_mesh(std::string_view data, MeshFormat format, const std::string& name,
-                        std::vector<std::string>* warnings) {
+TriangleMesh parse_mesh(std::string_view data, MeshFormat format, const std::string& name) {
   TriangleMesh mesh;
   switch (format) {
     case MeshFormat::Obj:
@@ -145,28 +147,25 @@ TriangleMesh parse_mesh(std::string_view data, MeshFormat format, const std::str
       break;
     case MeshFormat::Stl:
     case MeshFormat::Gltf:
-    case MeshFormat::Fbx:
-    case MeshFormat::Dae:
-      mesh = mesh_io::read_with_assimp(data, format, name, warnings);
+      mesh = mesh_io::read_with_assimp(data, format, name);
       break;
   }
   check_usable(mesh, name);
   return mesh;
 }
 
-TriangleMesh decode_mesh(std::string bytes, const std::string& name,
-                         std::vector<std::string>* warnings) {
+TriangleMesh decode_mesh(std::string bytes, const std::string& name) {
   const MeshFormat format = mesh_format_from_name(name);
   if (is_gzip(bytes))
     bytes = gunzip(bytes, name);
   else if (ends_with(lower_case(name), ".gz"))
     fail_file(name, "expected gzip data (the name ends in .gz)");
-  return parse_mesh(bytes, format, name, warnings);
+  return parse_mesh(bytes, format, name);
 }
 
-TriangleMesh load_mesh(const std::string& path, std::vector<std::string>* warnings) {
+TriangleMesh load_mesh(const std::string& path) {
   mesh_format_from_name(path);  // an unknown format is refused before the file is read
-  return decode_mesh(read_file_bytes(path), path, warnings);
+  return decode_mesh(read_file_bytes(path), path);
 }
 
 }  // namespace sandflow

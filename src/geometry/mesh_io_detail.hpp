@@ -6,7 +6,6 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
-#include <vector>
 
 #include "core/error.hpp"
 #include "geometry/mesh.hpp"
@@ -72,8 +71,7 @@ void add_fan(TriangleMesh& mesh, const std::uint32_t* polygon, std::size_t n);
 TriangleMesh read_obj(std::string_view data, const std::string& file);
 TriangleMesh read_ply(std::string_view data, const std::string& file);
 TriangleMesh read_off(std::string_view data, const std::string& file);
-/// STL, glTF, FBX and COLLADA (assimp_mesh_reader.cpp).
-TriangleMesh read_with_assimp(std::string_view data, MeshFormat format, const std::string& file,
-                              std::vector<std::string>* warnings);
+/// STL and glTF (assimp_mesh_reader.cpp).
+TriangleMesh read_with_assimp(std::string_view data, MeshFormat format, const std::string& file);
 
 }  // namespace sandflow::mesh_io

@@ -84,7 +84,7 @@ MeshObstacle place_mesh(const GeometryConfig& c, const MaterialConfig& material,
     o.mesh = box_mesh(c.fallback_size);
     transform(o.mesh, 1.0, c.rotation_deg, c.position);
   } else {
-    o.mesh = load_mesh(found, &warnings);
+    o.mesh = load_mesh(found);
     // scale, rotate about the origin, then set the bottom centre of its bounds at `position`
     Aabb box = mesh_bounds(o.mesh);
     const Vec3 ext = box.hi - box.lo;

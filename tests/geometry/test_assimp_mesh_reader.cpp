@@ -1,8 +1,7 @@
 // The formats read through assimp (src/geometry/assimp_mesh_reader.cpp): STL written here in
 // both encodings reads back with its triangles and bounds; a glTF's nodes place each copy of a
-// mesh; FBX units become metres; assimp stays quiet, and what it logs without refusing a file
-// comes back as a warning. (The cube in every format and the malformed corpus are in
-// test_mesh_io.cpp.)
+// mesh; assimp stays quiet; the files a glTF names are read only when they are files, within the
+// size limit. (The cube in every format and the malformed corpus are in test_mesh_io.cpp.)
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -10,7 +9,6 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
-#include <vector>
 
 #include "core/error.hpp"
 #include "geometry/mesh_io.hpp"
@@ -137,52 +135,16 @@ TEST_F(AssimpMeshReader, GltfNodesPlaceEachUseOfAMesh) {
   EXPECT_TRUE(found);
 }
 
-// FBX coordinates are centimetres times UnitScaleFactor: the cube of tests/data/meshes is written
-// in centimetres (factor 1); with factor 100 the same numbers are metres.
-TEST_F(AssimpMeshReader, FbxUnitScaleFactorGivesMetres) {
-  const std::string cm =
-      test::read_bytes(std::string(SANDFLOW_SOURCE_DIR) + "/tests/data/meshes/cube.fbx");
-  const std::string factor_1 = "\"UnitScaleFactor\", \"double\", \"Number\", \"\",1\n";
-  ASSERT_NE(cm.find(factor_1), std::string::npos);
-  std::string m = cm;
-  m.replace(m.find(factor_1), factor_1.size(),
-            "\"UnitScaleFactor\", \"double\", \"Number\", \"\",100\n");
-  EXPECT_EQ(mesh_bounds(load_mesh(folder_.write("cm.fbx", cm))).hi, Vec3(1, 1, 1));
-  EXPECT_EQ(mesh_bounds(load_mesh(folder_.write("m.fbx", m))).hi, Vec3(100, 100, 100));
-}
-
 // Assimp prints nothing, whether it reads a file or refuses it.
 TEST_F(AssimpMeshReader, AssimpPrintsNothing) {
   const std::string data = std::string(SANDFLOW_SOURCE_DIR) + "/tests/data/meshes/";
   ::testing::internal::CaptureStdout();
   ::testing::internal::CaptureStderr();
-  EXPECT_NO_THROW(load_mesh(data + "cube.fbx"));
+  EXPECT_NO_THROW(load_mesh(data + "cube.glb"));
   EXPECT_THROW(load_mesh(data + "bad/stl_four_vertices_ascii.stl"), InputError);
-  EXPECT_THROW(load_mesh(data + "bad/fbx_truncated.fbx"), InputError);
+  EXPECT_THROW(load_mesh(data + "bad/gltf_index_out_of_range.gltf"), InputError);
   EXPECT_EQ(::testing::internal::GetCapturedStdout(), "");
   EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
-}
-
-// A COLLADA node that names no node: assimp logs an error and reads the rest, which comes back
-// with a warning naming the file.
-TEST_F(AssimpMeshReader, WhatAssimpLogsWithoutRefusingBecomesAWarning) {
-  std::string dae =
-      test::read_bytes(std::string(SANDFLOW_SOURCE_DIR) + "/tests/data/meshes/cube.dae");
-  const std::string scene_node = "<node id=\"cube\" name=\"cube\">";
-  ASSERT_NE(dae.find(scene_node), std::string::npos);
-  dae.insert(dae.find(scene_node), "<node id=\"ghost\"><instance_node url=\"#nowhere\"/></node>\n");
-  const std::string path = folder_.write("ghost.dae", dae);
-  std::vector<std::string> warnings;
-  const TriangleMesh m = load_mesh(path, &warnings);
-  EXPECT_EQ(m.triangles.size(), 12u);
-  ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_EQ(warnings[0].rfind(path + ": assimp: ", 0), 0u) << warnings[0];
-  EXPECT_NE(warnings[0].find("nowhere"), std::string::npos) << warnings[0];
-  // the cube alone reads without a word (assimp's remarks on its missing material are left out)
-  warnings.clear();
-  load_mesh(std::string(SANDFLOW_SOURCE_DIR) + "/tests/data/meshes/cube.dae", &warnings);
-  load_mesh(std::string(SANDFLOW_SOURCE_DIR) + "/tests/data/meshes/cube.fbx", &warnings);
-  EXPECT_TRUE(warnings.empty()) << warnings.front();
 }
 
 // A glTF names other files beside it; a FIFO there is never opened (it would block).

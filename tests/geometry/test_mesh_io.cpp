@@ -40,14 +40,14 @@ void expect_unit_cube(const TriangleMesh& m, const std::string& name) {
 
 // The formats read through assimp are in it too: the STL as triangles with their facet normals
 // (ASCII, binary, gzipped), the glTF centred on the origin and moved by its node (data URI, a
-// .bin beside it, GLB), the COLLADA and FBX in centimetres (the FBX moved by its model).
+// .bin beside it, GLB).
 TEST(MeshIo, CubeInEveryFormatGivesTheSameMesh) {
   const TriangleMesh reference = load_mesh(mesh_path("cube_ascii.ply"));
   expect_unit_cube(reference, "cube_ascii.ply");
   for (const char* name :
        {"cube.obj", "cube.off", "cube_le.ply", "cube_be.ply", "cube_be_double.ply", "cube.obj.gz",
         "cube.off.gz", "cube_le.ply.gz", "cube.stl", "cube_binary.stl", "cube.stl.gz", "cube.gltf",
-        "cube_external.gltf", "cube.glb", "cube.dae", "cube.fbx"}) {
+        "cube_external.gltf", "cube.glb"}) {
     const TriangleMesh m = load_mesh(mesh_path(name));
     expect_unit_cube(m, name);
   }
@@ -100,7 +100,7 @@ struct BadFile {
 // Positions: the cube PLY header is 14 lines (vertices on lines 15-22, faces 23-28); its binary
 // header is 273 bytes (little endian) or 270 (big endian), vertex and face records 17 bytes each
 // (make_meshes.py prints these). The cube OFF has vertices on lines 5-12, faces on 13-18. Assimp
-// names no position in an STL, a COLLADA file or a GLB: there the message says what is wrong.
+// names no position in an STL or a GLB: there the message says what is wrong.
 const BadFile kBadFiles[] = {
     {"obj_non_numeric.obj", ":3:", "expected a number, found 'abc'"},
     {"obj_index_out_of_range.obj", ":5:", "vertex index 9 is out of range"},
@@ -161,7 +161,7 @@ const BadFile kBadFiles[] = {
     {"stl_truncated_ascii.stl", "", "STL: Invalid number of vertices"},
     {"stl_four_vertices_ascii.stl", "", "a facet with more than 3 vertices"},
     {"stl_degenerate_ascii.stl", "", "degenerate"},
-    // glTF, COLLADA, FBX: the JSON's own line and column, or what assimp says
+    // glTF: the JSON's own line and column, or what assimp says
     {"gltf_not_json.gltf", "",
      "not valid glTF JSON: [json.exception.parse_error.101] parse error "
      "at line 1, column 2"},
@@ -170,17 +170,12 @@ const BadFile kBadFiles[] = {
     {"gltf_accessor_past_buffer.gltf", "", "Accessor with offset/length (0/3200) is out of range"},
     {"gltf_index_out_of_range.gltf", "", "Some faces had out-of-range indices"},
     {"gltf_nan.gltf", "", "mesh 'meshes[0]' (0 of 1), vertex 0: (nan, 0, 0) is not finite"},
+    {"gltf_number_overflow.gltf", "", "number overflow parsing '1e999'"},
     {"glb_truncated.glb", "", "assimp's glTF reader does not recognise the file"},
-    {"dae_not_xml.dae", "", "malformed XML"},
-    {"dae_truncated.dae", "", "malformed XML"},
-    {"dae_index_out_of_range.dae", "", "Invalid data index (99/8)"},
-    {"dae_nan.dae", "", "vertex 0: (nan, 0, 0) is not finite"},
-    {"fbx_garbage.fbx", "", "FBX-Parser unexpected end of file"},
-    {"fbx_truncated.fbx", "", "(TOK_DATA, line 24, col 36) unexpected end of file"},
-    {"fbx_index_out_of_range.fbx", "",
-     "no triangles were read; assimp says: FBX-DOM (TOK_KEY, line 30, col 27) polygon vertex "
-     "index out of range"},
-    {"fbx_nan.fbx", "", "vertex 0: (nan, -50, -50) is not finite"},
+    // FBX and COLLADA are not read (docs/meshes.md): assimp crashed on the first, took 12 GB on
+    // the second
+    {"fbx_model_connected_to_itself.fbx", "", "FBX files are not read: assimp 5.2"},
+    {"dae_index_not_a_number.dae", "", "COLLADA files are not read"},
 };
 
 TEST(MeshIo, EveryMalformedFileNamesFileAndPosition) {
