@@ -1,7 +1,8 @@
 // The peer comparison of the mesh readers: each file given is read by sandflow (load_mesh) and by
 // assimp as a program would use it alone (every reader registered, ValidateDataStructure,
 // Triangulate, JoinIdenticalVertices), and one line says what each made of it. Assimp runs in a
-// child process with a time limit, so that a hang or a crash is a result, not the end of the run.
+// child process with limits on its time and memory, so that a hang, a crash or an allocation
+// without end is a result, not the end of the run (nor of the machine's memory).
 // docs/meshes.md ("Which reader reads which format") has the table this printed for the corpus:
 //
 //   build/bench/compare_mesh_readers tests/data/meshes/*.* tests/data/meshes/bad/*
@@ -10,6 +11,7 @@
 #include <assimp/scene.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -25,6 +27,7 @@
 namespace {
 
 constexpr int kSecondsAllowed = 10;
+constexpr rlim_t kBytesAllowed = rlim_t{2} << 30;
 
 std::string one_line(std::string s, std::size_t keep = 90) {
   for (char& c : s)
@@ -70,7 +73,11 @@ std::string with_assimp_isolated(const std::string& path) {
   const pid_t child = ::fork();
   if (child == 0) {
     ::close(pipe_fds[0]);
-    const std::string line = with_assimp(path);
+    const rlimit memory{kBytesAllowed, kBytesAllowed};
+    ::setrlimit(RLIMIT_AS, &memory);
+    std::string line = with_assimp(path);
+    if (line.find("bad_alloc") != std::string::npos)
+      line = "OUT OF MEMORY: its 2 GiB were not enough (" + line + ")";
     (void)!::write(pipe_fds[1], line.data(), line.size());
     ::_exit(0);
   }
