@@ -6,7 +6,6 @@
 // docs/meshes.md ("Which reader reads which format") has the table this printed for the corpus:
 //
 //   build/bench/compare_mesh_readers tests/data/meshes/*.* tests/data/meshes/bad/*
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <poll.h>
@@ -14,6 +13,7 @@
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <assimp/Importer.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -49,9 +49,9 @@ std::string with_sandflow(const std::string& path) {
 // In the child: what assimp made of the file, as one line.
 std::string with_assimp(const std::string& path) {
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure |
-                                                     aiProcess_Triangulate |
-                                                     aiProcess_JoinIdenticalVertices);
+  const aiScene* scene =
+      importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate |
+                                  aiProcess_JoinIdenticalVertices);
   if (scene == nullptr) return "refused: " + one_line(importer.GetErrorString());
   std::size_t triangles = 0, not_finite = 0;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
