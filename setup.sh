@@ -14,7 +14,8 @@ case "$what" in demo|test|build) ;; *) echo "usage: ./setup.sh demo|test|build" 
 
 # 1. Debian packages (only the missing ones are installed)
 packages=(g++ cmake make pkg-config libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev
-          libgtest-dev libpng-dev zlib1g-dev povray ffmpeg libopenvdb-dev libboost-iostreams-dev)
+          libgtest-dev libpng-dev zlib1g-dev libassimp-dev povray ffmpeg libopenvdb-dev
+          libboost-iostreams-dev)
 # (OpenVDB's find module asks for Boost's iostreams, which libopenvdb-dev does not pull in)
 # Blender runs one test, the loader's (tests/blender); it is large (190 MB installed, with its data,
 # and some 70 libraries), so only `test` installs it

@@ -1,11 +1,12 @@
 // `sandflow render`: a run's frames drawn by POV-Ray, several at once, and a movie of them.
 //
-// The camera and the lights belong to the run, not to the frame: they are placed around the
-// bounds of the geometry and of the grains of every frame of the run, computed once before the
-// first picture, so that an animation does not jitter and a frame rendered later matches the
-// others. A comparison folder (DIR/surface and DIR/dem) is framed over both runs, so their
-// pictures can be put side by side. A [camera] table in the scene file replaces the automatic
-// camera.
+// The camera and the lights of an animation belong to the run, not to the frame: they are placed
+// around the bounds of the geometry and of the grains of every frame of the run, computed once
+// before the first picture, so that it does not jitter and a frame rendered later matches the
+// others. A still (one frame of each run) is framed on what it shows. In surface mode the static
+// layer, whose grains the frames do not hold, is drawn as a surface from the run's height images. A
+// comparison folder (DIR/surface and DIR/dem) is framed over both runs, so their pictures can be
+// put side by side. A [camera] table in the scene file replaces the automatic camera.
 #include <omp.h>
 
 #include <algorithm>
@@ -30,6 +31,7 @@
 #include "core/process.hpp"
 #include "geometry/shapes.hpp"
 #include "io/ply.hpp"
+#include "io/png_gray.hpp"
 #include "io/pov_writer.hpp"
 #include "io/run_output.hpp"
 #include "progress.hpp"
@@ -118,6 +120,8 @@ struct RenderScene {
   std::vector<const TriangleMesh*> meshes;
   CameraConfig camera;
   std::optional<double> fps;  ///< [1/s]: the run's, else the scene file's
+  std::optional<Geometry> solids;  ///< what the grains met: where the static layer has sand
+  Real diameter = 0;               ///< the grains' mean diameter [m]
 };
 
 nlohmann::json read_summary(const std::string& run) {
@@ -199,6 +203,8 @@ RenderScene load_render_scene(const std::string& scene_option,
   }
   const SceneConfig scene = load_scene(file, overrides);
   rs.geometry = scene.geometry;
+  rs.solids = Geometry::from_config(scene.geometry, scene.material, scene.path);
+  rs.diameter = scene.material.diameter;
   rs.camera = scene.camera;
   if (!rs.fps) rs.fps = scene.output.fps;
   std::vector<std::string> warnings;
@@ -215,6 +221,69 @@ RenderScene load_render_scene(const std::string& scene_option,
   return rs;
 }
 
+// ---- The static layer: the height field's h, from the run's heightfield/ files --------------
+
+/// The grid and z range of a run's height images (heightfield/heightfield.json), when it has them.
+struct HeightImages {
+  Real origin_x = 0, origin_y = 0, cell = 0, z_min = 0, z_max = 0;
+  int nx = 0, ny = 0;
+};
+
+std::optional<HeightImages> read_height_images(const std::string& run) {
+  std::ifstream in(fs::path(run) / "heightfield" / "heightfield.json");
+  if (!in) return std::nullopt;
+  const auto j = nlohmann::json::parse(in, nullptr, false);
+  try {
+    HeightImages h;
+    h.origin_x = j.at("origin").at(0).get<Real>();
+    h.origin_y = j.at("origin").at(1).get<Real>();
+    h.cell = j.at("cell_size").get<Real>();
+    h.nx = j.at("nx").get<int>();
+    h.ny = j.at("ny").get<int>();
+    h.z_min = j.at("png").at("z_min").get<Real>();
+    h.z_max = j.at("png").at("z_max").get<Real>();
+    if (h.nx < 2 || h.ny < 2 || !(h.cell > 0) || !(h.z_max > h.z_min)) return std::nullopt;
+    return h;
+  } catch (const nlohmann::json::exception&) {
+    // not a height field this build wrote: the picture goes without its static layer
+    return std::nullopt;
+  }
+}
+
+/// Frame `frame`'s static layer (heightfield/h_NNNN.png): a column holds sand where h stands a
+/// quarter of a grain above the solid top under it. Empty when the run did not export it.
+SandSurface static_layer(const std::string& run, int frame, const HeightImages& hi,
+                         const RenderScene& scene) {
+  SandSurface sf;
+  const fs::path png = fs::path(run) / "heightfield" / fmt::format("h_{:04d}.png", frame);
+  std::error_code ec;
+  if (!scene.solids || !fs::exists(png, ec)) return sf;
+  const GrayImage img = read_gray_png(png.string(), std::max(hi.nx, hi.ny));
+  if (img.width != hi.nx || img.height != hi.ny)
+    throw InputError(fmt::format("{}: {} x {} pixels, but heightfield.json says {} x {}",
+                                 png.string(), img.width, img.height, hi.nx, hi.ny));
+  sf.origin_x = hi.origin_x;
+  sf.origin_y = hi.origin_y;
+  sf.cell = hi.cell;
+  sf.nx = hi.nx;
+  sf.ny = hi.ny;
+  sf.grain_diameter = scene.diameter;
+  sf.z.resize(static_cast<std::size_t>(hi.nx) * hi.ny);
+  sf.sand.resize(sf.z.size());
+  for (int j = 0; j < hi.ny; ++j)
+    for (int i = 0; i < hi.nx; ++i) {
+      const std::size_t k = static_cast<std::size_t>(j) * hi.nx + i;
+      // image row 0 holds the columns of highest y
+      const Real h = hi.z_min + img.value[static_cast<std::size_t>(hi.ny - 1 - j) * hi.nx + i] *
+                                    (hi.z_max - hi.z_min);
+      const Real x = hi.origin_x + (i + 0.5) * hi.cell, y = hi.origin_y + (j + 0.5) * hi.cell;
+      const Real ground = scene.solids->top_below(x, y, h + 0.1 * scene.diameter, h - 1e3);
+      sf.z[k] = h;
+      sf.sand[k] = h > ground + 0.25 * scene.diameter;
+    }
+  return sf;
+}
+
 // ---- Running tasks on several threads ----------------------------------------------------------
 
 /// Calls task(i) for i in [0, n) on `jobs` threads; `task` must not throw.
@@ -229,19 +298,20 @@ void parallel_tasks(int n, int jobs, const std::function<void(int)>& task) {
   for (std::thread& t : pool) t.join();
 }
 
-/// Bounds of the grains of every frame of `runs` (every frame, not only those rendered: the
-/// camera is the run's), read `jobs` at a time.
-ViewBounds run_bounds(const std::vector<std::string>& runs, int jobs) {
+/// Bounds of the grains (grain_core_bounds) of the frames `numbers` of each of `runs` (every frame
+/// of an animation, not only those rendered: the camera is the run's), read `jobs` at a time.
+ViewBounds run_bounds(const std::vector<std::string>& runs,
+                      const std::vector<std::vector<int>>& numbers, int jobs) {
   std::vector<std::string> files;
-  for (const std::string& run : runs)
-    for (int f : frame_numbers(run)) files.push_back(frame_path(run, f));
+  for (std::size_t k = 0; k < runs.size(); ++k)
+    for (int f : numbers[k]) files.push_back(frame_path(runs[k], f));
   if (files.size() > 30)  // seconds for a large run: say what the wait is for
     fmt::print(stderr, "framing the camera: reading the grains of {} frames\n", files.size());
   std::vector<ViewBounds> part(files.size());
   std::vector<std::string> errors(files.size());
   parallel_tasks(static_cast<int>(files.size()), jobs, [&](int i) {
     try {
-      part[i] = grain_bounds(read_ply(files[i]));
+      part[i] = grain_core_bounds(read_ply(files[i]));
     } catch (const std::exception& e) {
       errors[i] = e.what();
     }
@@ -335,9 +405,29 @@ int render_command(const RenderOptions& o) {
     opt.camera_look_at = *scene.camera.look_at;
     opt.camera_up = scene.camera.up.value_or(Vec3{0, 0, 1});
   }
-  // lights and floor are placed around the same bounds for every frame, the camera too
-  opt.bounds = run_bounds(runs, cores);
+  // Lights and floor are placed around the same bounds for every frame, the camera too: those of
+  // every frame of the run for an animation, so that it does not jitter; a still is framed on
+  // what it shows. Either way the static layer's sand and the geometry are in.
+  const bool still =
+      std::all_of(spans.begin(), spans.end(), [](const Span& sp) { return sp.first == sp.last; });
+  std::vector<std::vector<int>> framed;
+  for (std::size_t k = 0; k < runs.size(); ++k)
+    framed.push_back(still ? std::vector<int>{spans[k].first} : frame_numbers(runs[k]));
+  opt.bounds = run_bounds(runs, framed, cores);
   opt.bounds.add(geometry_bounds(scene.geometry, scene.meshes));
+  std::vector<std::optional<HeightImages>> heights;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    heights.push_back(read_height_images(runs[k]));
+    if (!heights.back() || !still) continue;  // (in an animation the grains cover it)
+    for (int f : framed[k]) {
+      const SandSurface sf = static_layer(runs[k], f, *heights.back(), scene);
+      for (std::size_t c = 0; c < sf.sand.size(); ++c)
+        if (sf.sand[c])
+          opt.bounds.add({sf.origin_x + (static_cast<Real>(c % sf.nx) + 0.5) * sf.cell,
+                          sf.origin_y + (static_cast<Real>(c / sf.nx) + 0.5) * sf.cell, sf.z[c]},
+                         0.5 * sf.cell);
+    }
+  }
 
   for (const std::string& run : runs) {
     std::error_code ec;
@@ -360,7 +450,10 @@ int render_command(const RenderOptions& o) {
     try {
       const FrameData f = read_ply(frame_path(t.run, t.frame));
       grains = f.size();
-      write_pov_scene(stem + ".pov", f, scene.geometry, opt, scene.meshes);
+      const auto& hi = heights[static_cast<std::size_t>(std::find(runs.begin(), runs.end(), t.run) -
+                                                        runs.begin())];
+      const SandSurface sf = hi ? static_layer(t.run, t.frame, *hi, scene) : SandSurface{};
+      write_pov_scene(stem + ".pov", f, scene.geometry, opt, scene.meshes, &sf);
       render_pov(stem + ".pov", stem + ".png", o.width, o.height, threads_each,
                  o.quality == "final");
       if (!o.keep_pov) {

@@ -130,6 +130,10 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
   Progress progress(fmt::format("{}{} [{}]", label, scene.name, mode_name(scene.simulation.mode)),
                     frames, world.frame());
   std::vector<std::string> unsynced;  // frames written since the last checkpoint
+  if (world.frame() == 0) {
+    exporter.write_start(world);  // Houdini's frame 1 is the start (export_formats.hpp)
+    unsynced = exporter.written();
+  }
   auto write_checkpoint = [&] {
     // the frames it vouches for reach the disk before it does
     std::set<std::string> folders;

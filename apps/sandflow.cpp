@@ -44,11 +44,10 @@ void add_scene_options(CLI::App* cmd, RunOptions& o, const std::string& out_help
   cmd->add_option("--threads", o.threads, "OpenMP threads (default: all cores)")
       ->check(CLI::Range(1, 1024));
   cmd->add_option("--set", o.sets, set_help);
-  cmd->add_option(
-      "--export", o.exports,
-      "files written each frame, comma-separated: ply, vtk, geo, pov, csv, height, "
-      "height_obj, vdb, or none (default: the scene's output.export, else ply, and height "
-      "in surface mode; the files: docs/scenes.md, Exports)");
+  cmd->add_option("--export", o.exports,
+                  "files written each frame, comma-separated: ply, vtk, geo, geo_gz, pov, csv, "
+                  "height, height_obj, vdb, or none (default: the scene's output.export, else "
+                  "ply, and height in surface mode; the files: docs/scenes.md, Exports)");
   cmd->add_option("--up-axis", o.up_axis,
                   "up axis of exported PLY, VTK, geo, CSV, OBJ and VDB files: z (the scene's) or y "
                   "(the scene's z becomes y); POV-Ray files are unaffected (default: the scene's "

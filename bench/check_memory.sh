@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Peak memory and time of `sandflow run FILE --check` on the worst inputs the limits allow (and a
 # few they refuse): the table of docs/fuzzing.md, "Peak memory and time of run --check".
-# Writes the inputs (about 130 MB, most of it one PLY) into a temporary folder, measures each with
-# GNU time on an otherwise idle machine, and prints one line per input.
+# Writes the inputs (about 260 MB, most of it one PLY, an STL and a GLB) into a temporary
+# folder, measures each with GNU time on an otherwise idle machine, and prints one line per input.
 #
 # usage: bench/check_memory.sh [SANDFLOW]   (default build/sandflow)
 # Needs /usr/bin/time (Debian package `time`) and /usr/bin/python3; takes about 4 minutes.
@@ -63,6 +63,48 @@ with open('grid.ply', 'wb') as f:
         f.write(b''.join(struct.pack('<Biii', 3, a, a + 1, a + N + 1) + struct.pack('<Biii', 3, a, a + N + 1, a + N)
                          for a in range(j * N, j * N + N - 1)))
 write('grid', dem + mesh('grid.ply', 0.5) + block)
+# a binary STL and a GLB of just under 64 MiB, the limit of the formats read through assimp (which
+# takes up to 18 times a file's size): the same bumpy grid
+def grid_triangles(side):
+    for j in range(side):
+        for i in range(side):
+            a, b, c, d = j * (side + 1) + i, j * (side + 1) + i + 1, (j + 1) * (side + 1) + i + 1, (j + 1) * (side + 1) + i
+            yield a, b, c
+            yield a, c, d
+def grid_point(side, k):
+    i, j = k % (side + 1), k // (side + 1)
+    return i / side, j / side, ((i * 7 + j * 13) % 5) * 1e-4
+limit = 64 << 20
+n = (limit - 84) // 50
+with open('limit.stl', 'wb') as f:
+    f.write(b'binary STL at the limit'.ljust(80, b'\0') + struct.pack('<I', n))
+    out, k = bytearray(), 0
+    for t in grid_triangles(820):
+        if k == n: break
+        out += struct.pack('<3f', 0, 0, 1) + b''.join(struct.pack('<3f', *grid_point(820, v)) for v in t) + b'\0\0'
+        k += 1
+    f.write(out)
+write('stl', dem + mesh('limit.stl', 0.5) + block)
+# GLB: 12 bytes a vertex and 12 a triangle (32-bit indices), denser than glTF's JSON and base64
+side = 1650
+positions = b''.join(struct.pack('<3f', *grid_point(side, k)) for k in range((side + 1) ** 2))
+indices = bytearray()
+for t in grid_triangles(side):
+    if len(positions) + len(indices) + 12 > limit - 2000: break
+    indices += struct.pack('<3I', *t)
+gltf = ('{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],'
+        '"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],'
+        '"buffers":[{"byteLength":%d}],"bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":%d},'
+        '{"buffer":0,"byteOffset":%d,"byteLength":%d}],"accessors":[{"bufferView":0,'
+        '"componentType":5126,"count":%d,"type":"VEC3","min":[0,0,0],"max":[1,1,0.0004]},'
+        '{"bufferView":1,"componentType":5125,"count":%d,"type":"SCALAR"}]}'
+        % (len(positions) + len(indices), len(positions), len(positions), len(indices),
+           (side + 1) ** 2, len(indices) // 4)).encode()
+gltf += b' ' * (-len(gltf) % 4)
+chunks = struct.pack('<I4s', len(gltf), b'JSON') + gltf
+chunks += struct.pack('<I4s', len(positions) + len(indices), b'BIN\0') + positions + indices
+open('limit.glb', 'wb').write(struct.pack('<4sII', b'glTF', 2, 12 + len(chunks)) + chunks)
+write('glb', dem + mesh('limit.glb', 0.5) + block)
 # a flat square sampled into just under 20 million points before merging
 open('quad.obj', 'w').write('v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n')
 write('square', dem + mesh('quad.obj', 7.89) + block)
@@ -94,8 +136,8 @@ write('every_limit', surface + mesh('grid.ply', 0.5) + png_map
 PY
 
 printf '%-16s %4s %12s %9s  %s\n' input exit "peak (MiB)" "time (s)" "last line"
-for t in bomb grid square pour png field field_64_planes stacked_boxes planes_200k planes_32mib \
-  toml_worst every_limit; do
+for t in bomb grid stl glb square pour png field field_64_planes stacked_boxes planes_200k \
+  planes_32mib toml_worst every_limit; do
   set +e
   /usr/bin/time -o time.txt -f "%e %M" timeout 300 "$sandflow" run "$t.toml" --check > out.txt 2>&1
   rc=$?

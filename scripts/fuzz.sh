@@ -32,8 +32,8 @@ done
 
 # 1. Debian packages (only the missing ones are installed), as setup.sh does
 packages=(clang libclang-rt-14-dev libomp-dev cmake make pkg-config libtomlplusplus-dev
-          libcli11-dev libfmt-dev nlohmann-json3-dev libpng-dev zlib1g-dev libopenvdb-dev
-          libboost-iostreams-dev)
+          libcli11-dev libfmt-dev nlohmann-json3-dev libpng-dev zlib1g-dev libassimp-dev
+          libopenvdb-dev libboost-iostreams-dev)
 scripts/install_packages.sh "${packages[@]}"
 
 # 2. Build (clang, -fsanitize=fuzzer,address,undefined)
@@ -57,9 +57,12 @@ seeds_mesh() {
   for f in tests/data/meshes/*.* tests/data/meshes/bad/*; do
     name=$(basename "$f")
     case "$name" in
-      *.obj | *.obj.gz) prefix=o fitted='\201' ;;
-      *.ply | *.ply.gz) prefix=p fitted='\202' ;;
-      *.off | *.off.gz) prefix=f fitted='\200' ;;
+      *.obj | *.obj.gz) prefix=o fitted='\200' ;;
+      *.ply | *.ply.gz) prefix=p fitted='\201' ;;
+      *.off | *.off.gz) prefix=f fitted='\202' ;;
+      *.stl | *.stl.gz) prefix=s fitted='\203' ;;
+      *.gltf) prefix=g fitted='\204' ;;
+      *.glb) prefix=b fitted='\205' ;;
       *) continue ;;
     esac
     { printf %s "$prefix"; cat "$f"; } > "$1/$name"

@@ -86,7 +86,7 @@ struct SimulationConfig {
 };
 
 /// The files a run writes each frame (output.export, --export; docs/scenes.md "Exports").
-enum class ExportFormat { Ply, Vtk, Geo, Pov, Csv, Height, HeightObj, Vdb };
+enum class ExportFormat { Ply, Vtk, Geo, GeoGz, Pov, Csv, Height, HeightObj, Vdb };
 /// The up axis of exported coordinates: the scene's z, or y (the scene's z becomes y).
 enum class UpAxis { Z, Y };
 
@@ -155,7 +155,7 @@ struct GeometryConfig {
   std::uint64_t noise_seed = 1;     ///< Noise: seed of the wave directions and phases
   Real base_thickness = 0.05;       ///< the solid reaches this far below its lowest sample [m]
   // mesh
-  std::string mesh_file;            ///< OBJ, PLY or OFF (maybe .gz), as written (key `file`)
+  std::string mesh_file;  ///< OBJ, PLY, OFF, STL or glTF (maybe .gz), as written (key `file`)
   std::optional<Real> scale;        ///< multiplies the file's coordinates [-]
   std::optional<Real> mesh_size;    ///< or: the largest extent after scaling [m] (key `size`)
   Vec3 position{0, 0, 0};           ///< where the centre of the bottom of its bounds goes [m]

@@ -20,6 +20,7 @@ namespace sandflow {
 namespace {
 
 using mesh_io::fail_file;
+using mesh_io::lower_case;
 
 std::string read_file_bytes(const std::string& path) {
   if (const std::string kind = special_file_kind(path); !kind.empty())
@@ -96,11 +97,6 @@ std::string gunzip(const std::string& in, const std::string& path) {
   return out;
 }
 
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
 bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() &&
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -120,13 +116,21 @@ void check_usable(const TriangleMesh& mesh, const std::string& path) {
 }  // namespace
 
 MeshFormat mesh_format_from_name(const std::string& path) {
-  std::string name = lower(std::filesystem::path(path).filename().string());
+  std::string name = lower_case(std::filesystem::path(path).filename().string());
   if (ends_with(name, ".gz")) name.resize(name.size() - 3);
   if (ends_with(name, ".obj")) return MeshFormat::Obj;
   if (ends_with(name, ".ply")) return MeshFormat::Ply;
   if (ends_with(name, ".off")) return MeshFormat::Off;
+  if (ends_with(name, ".stl")) return MeshFormat::Stl;
+  if (ends_with(name, ".gltf") || ends_with(name, ".glb")) return MeshFormat::Gltf;
+  // (docs/meshes.md, "Which reader reads which format")
+  if (ends_with(name, ".fbx") || ends_with(name, ".dae"))
+    fail_file(path, std::string(ends_with(name, ".fbx") ? "FBX" : "COLLADA") +
+                        " files are not read: assimp 5.2, which would read them, crashes on some "
+                        "malformed ones; export the mesh as glTF (.glb), STL or PLY");
   fail_file(path,
-            "unknown mesh format: expected a name ending in .obj, .ply or .off (optionally + .gz)");
+            "unknown mesh format: expected a name ending in .obj, .ply, .off, .stl, .gltf or .glb "
+            "(optionally + .gz)");
 }
 
 TriangleMesh parse_mesh(std::string_view data, MeshFormat format, const std::string& name) {
@@ -141,6 +145,10 @@ TriangleMesh parse_mesh(std::string_view data, MeshFormat format, const std::str
     case MeshFormat::Off:
       mesh = mesh_io::read_off(data, name);
       break;
+    case MeshFormat::Stl:
+    case MeshFormat::Gltf:
+      mesh = mesh_io::read_with_assimp(data, format, name);
+      break;
   }
   check_usable(mesh, name);
   return mesh;
@@ -150,7 +158,7 @@ TriangleMesh decode_mesh(std::string bytes, const std::string& name) {
   const MeshFormat format = mesh_format_from_name(name);
   if (is_gzip(bytes))
     bytes = gunzip(bytes, name);
-  else if (ends_with(lower(name), ".gz"))
+  else if (ends_with(lower_case(name), ".gz"))
     fail_file(name, "expected gzip data (the name ends in .gz)");
   return parse_mesh(bytes, format, name);
 }

@@ -1,5 +1,6 @@
 #include "geometry/mesh_io_detail.hpp"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -93,6 +94,11 @@ bool Tokens::next(std::string_view& token) {
 bool Tokens::empty() {
   while (pos_ < line_.size() && is_space(line_[pos_])) ++pos_;
   return pos_ >= line_.size();
+}
+
+std::string lower_case(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
 }
 
 std::string_view strip_comment(std::string_view line) {

@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "geometry/mesh.hpp"
+#include "geometry/mesh_io.hpp"
 
 namespace sandflow::mesh_io {
 
@@ -58,6 +59,9 @@ class Tokens {
   std::size_t pos_ = 0;
 };
 
+/// The text in lower case (ASCII), for file names.
+std::string lower_case(std::string s);
+
 /// The line without a '#' comment.
 std::string_view strip_comment(std::string_view line);
 
@@ -67,5 +71,7 @@ void add_fan(TriangleMesh& mesh, const std::uint32_t* polygon, std::size_t n);
 TriangleMesh read_obj(std::string_view data, const std::string& file);
 TriangleMesh read_ply(std::string_view data, const std::string& file);
 TriangleMesh read_off(std::string_view data, const std::string& file);
+/// STL and glTF (assimp_mesh_reader.cpp).
+TriangleMesh read_with_assimp(std::string_view data, MeshFormat format, const std::string& file);
 
 }  // namespace sandflow::mesh_io

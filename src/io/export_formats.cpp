@@ -9,9 +9,11 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <zlib.h>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "io/sand_colour.hpp"
 
 namespace sandflow {
 namespace {
@@ -20,6 +22,7 @@ constexpr std::array<std::pair<std::string_view, ExportFormat>, 8> kNames = {{
     {"ply", ExportFormat::Ply},
     {"vtk", ExportFormat::Vtk},
     {"geo", ExportFormat::Geo},
+    {"geo_gz", ExportFormat::GeoGz},
     {"pov", ExportFormat::Pov},
     {"csv", ExportFormat::Csv},
     {"height", ExportFormat::Height},
@@ -76,6 +79,43 @@ void put_text3(std::string& s, const Vec3& v) {
   put_text(s, v.y);
   s += ' ';
   put_text(s, v.z);
+}
+
+// gzip data (RFC 1952) holding `bytes`, as gunzip and Houdini read it. zlib's default level (6):
+// on a frame of 20,000 grains, level 1 made a file 18 % larger in a fifth of the time, level 9 one
+// 2 % smaller in 3.6 times the time.
+std::string gzip(std::string_view bytes, const std::string& path) {
+  z_stream zs{};
+  if (deflateInit2(&zs, Z_DEFAULT_COMPRESSION, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY) !=
+      Z_OK)
+    throw OutputError(path + ": cannot compress: zlib could not start");
+  std::string out(deflateBound(&zs, bytes.size()), '\0');
+  std::size_t read = 0, written = 0;
+  constexpr std::size_t kChunk = std::size_t{1} << 30;  // zlib counts in 32 bits
+  int rc = Z_OK;
+  while (rc != Z_STREAM_END) {
+    if (written == out.size()) out.resize(2 * out.size());
+    const std::size_t in = std::min(bytes.size() - read, kChunk);
+    const std::size_t room = std::min(out.size() - written, kChunk);
+    zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data() + read));
+    zs.avail_in = static_cast<uInt>(in);
+    zs.next_out = reinterpret_cast<Bytef*>(out.data() + written);
+    zs.avail_out = static_cast<uInt>(room);
+    rc = deflate(&zs, read + in == bytes.size() ? Z_FINISH : Z_NO_FLUSH);
+    read += in - zs.avail_in;
+    written += room - zs.avail_out;
+    if (rc == Z_STREAM_ERROR) {
+      deflateEnd(&zs);
+      throw OutputError(path + ": cannot compress: zlib failed");
+    }
+  }
+  deflateEnd(&zs);
+  out.resize(written);
+  return out;
+}
+
+bool ends_with(std::string_view s, std::string_view tail) {
+  return s.size() >= tail.size() && s.substr(s.size() - tail.size()) == tail;
 }
 
 }  // namespace
@@ -279,32 +319,42 @@ void write_pvd(const std::string& path, const std::vector<SeriesEntry>& entries)
   write_file_atomic(path, s);
 }
 
+std::string houdini_frame_name(int frame, bool gzip) {
+  return fmt::format("sand.{:04d}.geo{}", frame + 1, gzip ? ".gz" : "");
+}
+
 void write_houdini_geo(const std::string& path, const FrameData& f, UpAxis up) {
   check_sizes(f, "write_houdini_geo");
   const std::size_t n = f.size();
   const int prims = n > 0 ? 1 : 0;
   std::string s;
-  s.reserve(512 + 96 * n);
+  s.reserve(512 + 144 * n);
   fmt::format_to(std::back_inserter(s),
                  "PGEOMETRY V5\n"
                  "NPoints {} NPrims {}\n"
                  "NPointGroups 0 NPrimGroups 0\n"
-                 "NPointAttrib 4 NVertexAttrib 0 NPrimAttrib {} NAttrib 0\n"
+                 "NPointAttrib 6 NVertexAttrib 0 NPrimAttrib {} NAttrib 0\n"
                  "PointAttrib\n"
+                 "Cd 3 float 1 1 1\n"
                  "v 3 vector 0 0 0\n"
                  "pscale 1 float 0\n"
+                 "orient 4 float 0 0 0 1\n"
                  "id 1 int 0\n"
                  "state 1 int 0\n",
                  n, prims, prims);
-  // each point: x y z w (v pscale id state)
+  std::array<std::string, kSandShades> colour;  // each shade's Cd, as text
+  for (int k = 0; k < kSandShades; ++k) put_text3(colour[k], srgb_to_linear(sand_srgb(k)));
+  // each point: x y z w (Cd v pscale orient id state)
   for (std::size_t i = 0; i < n; ++i) {
     const Grain g = grain(f, i, up);
     put_text3(s, g.x);
     s += " 1 (";
+    s += colour[static_cast<std::size_t>(sand_shade(g.id))];
+    s += ' ';
     put_text3(s, g.v);
     s += ' ';
     put_text(s, g.r);
-    fmt::format_to(std::back_inserter(s), " {} {})\n", g.id, g.state);
+    fmt::format_to(std::back_inserter(s), " 0 0 0 1 {} {})\n", g.id, g.state);
   }
   if (n > 0) {
     // one particle system holding every point, with the attribute Houdini gives its particles
@@ -313,7 +363,7 @@ void write_houdini_geo(const std::string& path, const FrameData& f, UpAxis up) {
     s += " [0]\n";
   }
   s += "beginExtra\nendExtra\n";
-  write_file_atomic(path, s);
+  write_file_atomic(path, ends_with(path, ".gz") ? gzip(s, path) : s);
 }
 
 void write_grains_csv(const std::string& path, const FrameData& f, UpAxis up) {

@@ -1,10 +1,23 @@
 // The grain formats of `--export` besides PLY (ply.hpp) and POV-Ray (pov_writer.hpp): one frame
-// of visible grains as legacy VTK, VTK XML PolyData, Houdini classic .geo and CSV, and the
-// ParaView series (.pvd) that lists a run's frames with their times. No Debian package writes
-// these for us; each is a page of the format's documentation, written here by hand.
+// of visible grains as legacy VTK, VTK XML PolyData, Houdini classic .geo (plain or gzipped) and
+// CSV, and the ParaView series (.pvd) that lists a run's frames with their times. No Debian
+// package writes these for us; each is a page of the format's documentation, written here by
+// hand (gzip by zlib).
 //
 // Every file is written whole to `path + ".tmp"` and renamed over `path` (write_file_atomic), so a
 // reader never sees half a frame; a failure throws OutputError naming the path.
+//
+// Houdini's frames are numbered on Houdini's time line, not as the other exports: Houdini puts
+// frame 1 at t = 0 ($T = ($F - 1) / $FPS), so sand.0001.geo holds the state the run starts from
+// and sand.NNNN.geo the state at t = (NNNN - 1) / fps, the state of the other exports' frame
+// NNNN - 1. A File SOP on sand.$F4.geo then shows at each frame the grains of that moment.
+//
+// The grains are spheres and the simulation tracks their spin (angular velocity), not how far
+// they have turned (src/dem/grains.hpp): there is no orientation to export. `orient` is the
+// identity for every grain, in the exported frame, so a shape copied onto the points stands as it
+// was modelled. A random turn per grain drawn from its id was tried: the gzipped frames grew from
+// 37 to 57 bytes a grain for a number the simulation does not know; docs/houdini.md gives each
+// grain one in Houdini instead, from its id, the same in every frame.
 //
 // The up axis. The scene is right-handed with z up. With UpAxis::Y every position and velocity is
 // written rotated by -90 degrees about x, (x, y, z) -> (x, z, -y): the scene's z becomes y and the
@@ -29,8 +42,8 @@ namespace sandflow {
 
 // ---- Choosing exports ----
 
-/// "ply", "vtk", "geo", "pov", "csv", "height", "height_obj", "vdb": the names of scene files and
-/// --export.
+/// "ply", "vtk", "geo", "geo_gz", "pov", "csv", "height", "height_obj", "vdb": the names of scene
+/// files and --export.
 std::string_view export_name(ExportFormat f);
 /// The format of a name, or nullopt.
 std::optional<ExportFormat> export_format(std::string_view name);
@@ -80,9 +93,15 @@ struct SeriesEntry {
 /// A ParaView collection (.pvd) listing `entries` in order.
 void write_pvd(const std::string& path, const std::vector<SeriesEntry>& entries);
 
+/// The name of the Houdini file holding the state after `frame` frames (0: the start), on
+/// Houdini's time line (see above): "sand.0001.geo" for frame 0, with ".gz" when `gzip`.
+std::string houdini_frame_name(int frame, bool gzip);
+
 /// Houdini classic ASCII geometry (PGEOMETRY V5): one point per grain with P (its position) and
-/// the point attributes v (vector), pscale (the radius, float), id and state (int), held by one
+/// the point attributes Cd (its colour, linear RGB: sand_colour.hpp), v (vector), pscale (the
+/// radius, float), orient (the identity: see above), id and state (int), held by one
 /// particle-system primitive (Part), as Houdini writes particles. No primitive when f is empty.
+/// A path ending in ".gz" is written as gzip data, which Houdini reads as it is.
 void write_houdini_geo(const std::string& path, const FrameData& f, UpAxis up);
 
 /// CSV with the header `id,x,y,z,radius,vx,vy,vz,state`, one row per grain.

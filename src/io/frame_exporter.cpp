@@ -141,6 +141,22 @@ void FrameExporter::continue_after(const std::vector<FrameStats>& done) {
   for (const FrameStats& st : done) series_.push_back({st.time, "frames/" + frame_name(st.frame, ".vtp")});
 }
 
+void FrameExporter::write_start(const World& world) {
+  written_.clear();
+  if (has(ExportFormat::Geo) || has(ExportFormat::GeoGz))
+    write_houdini(world, world.visible_frame());
+}
+
+void FrameExporter::write_houdini(const World& world, const FrameData& f) {
+  const fs::path frames = fs::path(dir_) / "frames";
+  for (const ExportFormat format : {ExportFormat::Geo, ExportFormat::GeoGz})
+    if (has(format)) {
+      written_.push_back(
+          (frames / houdini_frame_name(world.frame(), format == ExportFormat::GeoGz)).string());
+      write_houdini_geo(written_.back(), f, up_);
+    }
+}
+
 void FrameExporter::write(const World& world) {
   written_.clear();
   if (formats_.empty()) return;
@@ -152,7 +168,7 @@ void FrameExporter::write(const World& world) {
     return written_.back();
   };
   const bool grains = has(ExportFormat::Ply) || has(ExportFormat::Vtk) || has(ExportFormat::Geo) ||
-                      has(ExportFormat::Csv) || has(ExportFormat::Pov);
+                      has(ExportFormat::GeoGz) || has(ExportFormat::Csv) || has(ExportFormat::Pov);
   const FrameData f = grains ? world.visible_frame() : FrameData{};
   if (has(ExportFormat::Ply)) write_ply(frame_file(".ply"), f, up_);
   if (has(ExportFormat::Vtk)) {
@@ -163,7 +179,7 @@ void FrameExporter::write(const World& world) {
     series_.push_back({t, "frames/" + frame_name(n, ".vtp")});
     write_pvd((fs::path(dir_) / "frames.pvd").string(), series_);
   }
-  if (has(ExportFormat::Geo)) write_houdini_geo(frame_file(".geo"), f, up_);
+  write_houdini(world, f);
   if (has(ExportFormat::Csv)) write_grains_csv(frame_file(".csv"), f, up_);
   if (has(ExportFormat::Pov))
     write_file_atomic(

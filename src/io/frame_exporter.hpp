@@ -4,7 +4,10 @@
 // Grains: the visible ones (ACTIVE and INTERFACE; in surface mode the STATIC grains are the
 // height field's) go to DIR/frames/NNNN.ply, .vtk and .vtp (listed with their times in
 // DIR/frames.pvd, rewritten after every frame so that an interrupted run leaves a readable
-// series), .geo, .csv and .pov. The POV-Ray frames are small: camera, lights, textures and the
+// series), .csv and .pov, NNNN being the frame (at t = NNNN / fps), and to
+// DIR/frames/sand.NNNN.geo and .geo.gz, numbered on Houdini's time line: NNNN - 1 frames, at
+// t = (NNNN - 1) / fps, from sand.0001 (the state at the start, write_start) to one past the
+// last frame (export_formats.hpp). The POV-Ray frames are small: camera, lights, textures and the
 // geometry (a mesh can be megabytes) are written once to DIR/frames/pov_scene.inc, which every
 // NNNN.pov includes. Its camera is fixed for the whole run, framing the geometry and where the
 // grains can go (each emitter widened by the largest heap the scene can make), so that the frames
@@ -40,6 +43,9 @@ class FrameExporter {
   /// heightfield folder and heightfield.json, the POV-Ray include. Throws OutputError.
   FrameExporter(const World& world, const std::string& dir);
 
+  /// Writes the files of the state a run starts from (world.frame() is 0, at t = 0): the Houdini
+  /// frame sand.0001 (the other exports have no frame 0). Call it once, before the first frame.
+  void write_start(const World& world);
   /// Writes every chosen file of the frame just finished (world.frame(), at world.time()).
   void write(const World& world);
 
@@ -57,6 +63,8 @@ class FrameExporter {
 
  private:
   bool has(ExportFormat f) const { return has_export(formats_, f); }
+  /// The chosen Houdini files of world.frame(), holding `f`.
+  void write_houdini(const World& world, const FrameData& f);
 
   std::string dir_;
   std::vector<ExportFormat> formats_;

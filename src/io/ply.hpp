@@ -2,7 +2,8 @@
 //
 // Written as binary_little_endian PLY 1.0 with the vertex properties
 //   float x, y, z, radius, vx, vy, vz; uint id; uchar state
-// (33 bytes a grain), which ParaView, Blender and Houdini read as they are. The file is written
+// (33 bytes a grain), which ParaView and Houdini read as they are (Blender's own PLY importer keeps
+// only the positions: tools/blender/sandflow_blender.py reads the rest). The file is written
 // to `path + ".tmp"` and renamed over `path`, so a reader never sees half a frame. A header line
 // `comment up_axis z` (or `y`) says which way is up: with y, positions and velocities are written
 // rotated, (x, y, z) -> (x, z, -y) (export_formats.hpp), and read_ply rotates them back, so that

@@ -16,13 +16,12 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/process.hpp"
+#include "io/sand_colour.hpp"
 
 namespace sandflow {
 namespace {
 
 namespace fs = std::filesystem;
-
-constexpr int kSandTextures = 8;
 
 // ---------------------------------------------------------------------------------------------
 // Text helpers
@@ -107,17 +106,6 @@ double nice_length(double x) {
   return p * (m < 1.5 ? 1 : m < 3.5 ? 2 : m < 7.5 ? 5 : 10);
 }
 
-// Stable per-grain texture index: a 32-bit integer hash (lowbias32) of the id.
-int sand_texture(std::uint32_t id) {
-  std::uint32_t x = id;
-  x ^= x >> 16;
-  x *= 0x7feb352dU;
-  x ^= x >> 15;
-  x *= 0x846ca68bU;
-  x ^= x >> 16;
-  return static_cast<int>(x % kSandTextures);
-}
-
 // ---------------------------------------------------------------------------------------------
 // Scene parts
 
@@ -181,15 +169,10 @@ void write_header(std::string& s, const Camera& cam, const ViewBounds& b, const 
   // Sand: base colour with a small, stable variation per grain; matte, no reflection.
   line(s,
        "#declare SandFinish = finish { ambient 0.05 diffuse 0.85 specular 0.06 roughness 0.06 }");
-  line(s, "#declare Sand = array[", kSandTextures, "] {");
-  for (int k = 0; k < kSandTextures; ++k) {
-    const double light = 0.88 + 0.24 * k / (kSandTextures - 1);  // brightness 0.88 .. 1.12
-    const double warm = (k % 3 - 1) * 0.025;                     // slight hue shift
-    const Vec3 rgb{std::min(1.0, 0.76 * light + warm), std::min(1.0, 0.62 * light),
-                   std::min(1.0, 0.40 * light - warm)};
-    line(s, "  texture { pigment { srgb ", rgb, " } finish { SandFinish } }",
-         k + 1 < kSandTextures ? "," : "");
-  }
+  line(s, "#declare Sand = array[", kSandShades, "] {");
+  for (int k = 0; k < kSandShades; ++k)
+    line(s, "  texture { pigment { srgb ", sand_srgb(k), " } finish { SandFinish } }",
+         k + 1 < kSandShades ? "," : "");
   line(s, "}");
   line(s, "#macro G(X,Y,Z,R,C) sphere { <X,Y,Z>, R texture { Sand[C] } } #end");
   line(s, "");
@@ -390,7 +373,7 @@ void write_grains(std::string& s, const FrameData& f) {
     s += ',';
     put(s, f.radius[i]);
     s += ',';
-    s += static_cast<char>('0' + sand_texture(id));
+    s += static_cast<char>('0' + sand_shade(id));
     s += ")\n";
   }
 }
@@ -431,6 +414,32 @@ ViewBounds grain_bounds(const FrameData& f) {
   for (std::size_t i = 0; i < f.size(); ++i) {
     if (is_finite(f.position[i]) && i < f.radius.size()) b.add(f.position[i], f.radius[i]);
   }
+  return b;
+}
+
+ViewBounds grain_core_bounds(const FrameData& f) {
+  if (f.size() < 1000) return grain_bounds(f);
+  std::vector<Real> c[3];
+  Real r_max = 0;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const Vec3& p = f.position[i];
+    if (!is_finite(p)) continue;
+    c[0].push_back(p.x), c[1].push_back(p.y), c[2].push_back(p.z);
+    r_max = std::max(r_max, f.radius[i]);
+  }
+  if (c[0].empty()) return {};
+  Real lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    const auto n = c[a].size();
+    const auto k_lo = n / 200, k_hi = n - 1 - n / 200;
+    std::nth_element(c[a].begin(), c[a].begin() + static_cast<std::ptrdiff_t>(k_lo), c[a].end());
+    lo[a] = c[a][k_lo];
+    std::nth_element(c[a].begin(), c[a].begin() + static_cast<std::ptrdiff_t>(k_hi), c[a].end());
+    hi[a] = c[a][k_hi];
+  }
+  ViewBounds b;
+  b.add({lo[0], lo[1], lo[2]}, r_max);
+  b.add({hi[0], hi[1], hi[2]}, r_max);
   return b;
 }
 
@@ -536,9 +545,64 @@ std::pair<Vec3, Vec3> auto_camera(const ViewBounds& bounds, const PovOptions& op
   return {target + view * dist, target};
 }
 
+namespace {
+
+// The static layer as one smooth mesh2 (normals from the heights around each vertex) in a sand
+// texture whose grain is the grains' size: seen between the visible grains, it reads as the
+// packed sand under them rather than as a floor showing through.
+void write_static_layer(std::string& s, const SandSurface& sf) {
+  const int nx = sf.nx, ny = sf.ny;
+  const auto at = [&](int i, int j) { return static_cast<std::size_t>(j) * nx + i; };
+  if (sf.empty() || sf.z.size() != at(0, ny) || sf.sand.size() != sf.z.size()) return;
+  std::vector<std::array<int, 3>> faces;
+  for (int j = 0; j + 1 < ny; ++j)
+    for (int i = 0; i + 1 < nx; ++i) {
+      if (!(sf.sand[at(i, j)] | sf.sand[at(i + 1, j)] | sf.sand[at(i, j + 1)] |
+            sf.sand[at(i + 1, j + 1)]))
+        continue;
+      const int a = static_cast<int>(at(i, j)), b = a + 1, c = a + nx, d = c + 1;
+      faces.push_back({a, b, d});
+      faces.push_back({a, d, c});
+    }
+  if (faces.empty()) return;
+  const Real grain = sf.grain_diameter > 0 ? sf.grain_diameter : sf.cell;
+  const Vec3 lo = sand_srgb(0), hi = sand_srgb(kSandShades - 1);
+  line(s,
+       "// the static layer: h, the top of the sand that does not move (its grains are not "
+       "drawn)");
+  line(s, "#declare StaticSand = texture { pigment { granite color_map { [0 srgb ", lo * 0.92,
+       "] [0.5 srgb ", (lo + hi) * 0.5, "] [1 srgb ", hi, "] } scale ", 2 * grain,
+       " } normal { bumps 0.5 scale ", 0.4 * grain, " } finish { SandFinish } }");
+  line(s, "mesh2 {");
+  line(s, "  vertex_vectors { ", sf.z.size(), ",");
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      line(s, "    <", sf.origin_x + (i + 0.5) * sf.cell, ",", sf.origin_y + (j + 0.5) * sf.cell,
+           ",", sf.z[at(i, j)], ">");
+  line(s, "  }");
+  line(s, "  normal_vectors { ", sf.z.size(), ",");
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int i0 = std::max(i - 1, 0), i1 = std::min(i + 1, nx - 1);
+      const int j0 = std::max(j - 1, 0), j1 = std::min(j + 1, ny - 1);
+      const Real gx = (sf.z[at(i1, j)] - sf.z[at(i0, j)]) / ((i1 - i0) * sf.cell);
+      const Real gy = (sf.z[at(i, j1)] - sf.z[at(i, j0)]) / ((j1 - j0) * sf.cell);
+      line(s, "    ", normalized(Vec3{-gx, -gy, 1}));
+    }
+  line(s, "  }");
+  line(s, "  face_indices { ", faces.size(), ",");
+  for (const auto& f : faces) line(s, "    <", f[0], ",", f[1], ",", f[2], ">");
+  line(s, "  }");
+  line(s, "  texture { StaticSand }");
+  line(s, "}");
+}
+
+}  // namespace
+
 void write_pov_scene(const std::string& path, const FrameData& f,
                      const std::vector<GeometryConfig>& geometry, const PovOptions& opt,
-                     const std::vector<const TriangleMesh*>& meshes) {
+                     const std::vector<const TriangleMesh*>& meshes,
+                     const SandSurface* static_layer) {
   if (f.radius.size() != f.size() || (!f.id.empty() && f.id.size() != f.size())) {
     throw std::invalid_argument("write_pov_scene: FrameData arrays have different lengths");
   }
@@ -561,6 +625,7 @@ void write_pov_scene(const std::string& path, const FrameData& f,
     line(s, "plane { z, ", floor_z, " texture { Floor } }");
   }
   line(s, "");
+  if (static_layer) write_static_layer(s, *static_layer);
   write_grains(s, f);
   write_file_atomic(path, s, Sync::Later);
 }

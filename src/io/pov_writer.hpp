@@ -16,11 +16,12 @@
 // (glass planes as a thin finite slab); boxes and cylinders as solids or, for containers, as
 // walls of wall_thickness around the inner size, centred on `center`, without a lid when
 // open_top; spheres as spheres; a bowl as its shell below the rim; heightmaps and meshes as
-// mesh2 triangles. RenderStyle::Glass draws clear glass, Hidden draws nothing. A scene without a
-// solid plane gets a floor under its lowest point, for looks only (unless the camera is below it).
-// Lighting: for the final look a soft key light (a 3x3 adaptive area light), a shadowless fill
-// light and a little ambient light, with a pale sky behind; the draft look replaces the area light
-// by a point light (faster, hard shadows).
+// mesh2 triangles; a surface-mode frame's static layer (SandSurface) as a smooth mesh2 in a sand
+// texture with a grain-sized grain. RenderStyle::Glass draws clear glass, Hidden draws nothing. A
+// scene without a solid plane gets a floor under its lowest point, for looks only (unless the
+// camera is below it). Lighting: for the final look a soft key light (a 3x3 adaptive area light), a
+// shadowless fill light and a little ambient light, with a pale sky behind; the draft look replaces
+// the area light by a point light (faster, hard shadows).
 //
 // An animation must not jitter: everything sized from the scene's extent (the automatic camera,
 // the lights, the floor's squares, a glass plane's slab) is sized from PovOptions::bounds when it
@@ -28,6 +29,7 @@
 // same camera and light.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,6 +53,11 @@ struct ViewBounds {
 
 /// The grains of a frame (non-finite positions skipped).
 ViewBounds grain_bounds(const FrameData& f);
+/// The box of a frame's grains without its strays: on each axis from the 0.5th to the 99.5th
+/// percentile of the centres (all of them under 1,000 grains), widened by the largest radius. A
+/// grain thrown far from the heap would otherwise set the camera's distance, and the heap come out
+/// small in the picture.
+ViewBounds grain_core_bounds(const FrameData& f);
 /// The finite, visible geometry: meshes (as in write_pov_scene), spheres, boxes, cylinders,
 /// bowls, heightmaps; planes are infinite and hidden geometry is not drawn, so neither counts.
 ViewBounds geometry_bounds(const std::vector<GeometryConfig>& geometry,
@@ -82,9 +89,24 @@ std::pair<Vec3, Vec3> auto_camera(const ViewBounds& bounds, const PovOptions& op
 /// std::invalid_argument if f.radius (or a non-empty f.id) does not match f.position in length.
 /// `meshes`, when given, holds one entry per geometry entry: the placed mesh of a mesh entry
 /// (drawn as a mesh2), nullptr for the others; a mesh entry without one is not drawn.
+/// The static layer of a surface-mode frame, drawn as a smooth surface under the grains (its
+/// grains are not in the frame): the top h of each column, row-major with x fastest, column (i, j)
+/// centred at origin + ((i + 1/2) cell, (j + 1/2) cell), and whether the column holds sand. A cell
+/// between four column centres is drawn when one of them holds sand, so the surface runs down to
+/// the ground at the heap's edge.
+struct SandSurface {
+  Real origin_x = 0, origin_y = 0, cell = 0;
+  int nx = 0, ny = 0;
+  std::vector<Real> z;             ///< h per column [m]
+  std::vector<std::uint8_t> sand;  ///< 1 where the column holds sand
+  Real grain_diameter = 0;         ///< the scale of the texture's grain [m]
+  bool empty() const { return nx < 2 || ny < 2; }
+};
+
 void write_pov_scene(const std::string& path, const FrameData& f,
                      const std::vector<GeometryConfig>& geometry, const PovOptions& opt,
-                     const std::vector<const TriangleMesh*>& meshes = {});
+                     const std::vector<const TriangleMesh*>& meshes = {},
+                     const SandSurface* static_layer = nullptr);
 
 /// find_program("povray") (core/process.hpp).
 std::string find_povray();

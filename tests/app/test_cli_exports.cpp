@@ -14,6 +14,7 @@
 #include "cli_runner.hpp"
 #include "io/ply.hpp"
 #include "io/png_gray.hpp"
+#include "support/houdini_geo.hpp"
 #include "support/xml_tags.hpp"
 
 namespace fs = std::filesystem;
@@ -38,15 +39,34 @@ TEST(CliExports, EveryFormatForEveryFrame) {
   const auto scene = box.write("tiny.toml", kTinyScene);
   const auto out = box.dir / "out";
   std::string log;
-  ASSERT_EQ(sandflow("run " + scene.string() + " --frames 3 --export ply,vtk,geo,pov,csv --out " +
-                         out.string(),
+  ASSERT_EQ(sandflow("run " + scene.string() +
+                         " --frames 3 --export ply,vtk,geo,geo_gz,pov,csv --out " + out.string(),
                      &log),
             0)
       << log;
   for (int n = 1; n <= 3; ++n)
-    for (const char* ext : {".ply", ".vtk", ".vtp", ".geo", ".pov", ".csv"})
+    for (const char* ext : {".ply", ".vtk", ".vtp", ".pov", ".csv"})
       EXPECT_TRUE(fs::exists(out / "frames" / frame(n, ext))) << frame(n, ext);
   EXPECT_TRUE(fs::exists(out / "frames" / "pov_scene.inc"));
+  // Houdini's frames: sand.0001 at the start (t = 0) to sand.0004 at t = 3 / fps, each the
+  // other exports' frame one lower; plain and gzipped, the same geometry
+  for (int n = 1; n <= 4; ++n) {
+    const std::string geo = "sand." + frame(n, ".geo");
+    const std::string plain = read_text(out / "frames" / geo);
+    const auto g = sandflow::test::parse_geo(plain);
+    EXPECT_EQ(sandflow::test::gunzip(read_text(out / "frames" / (geo + ".gz"))), plain) << geo;
+    if (n == 1) {
+      EXPECT_TRUE(g.points.empty()) << geo;  // the block's grains appear in the first step
+      continue;
+    }
+    const auto ply = sandflow::read_ply((out / "frames" / frame(n - 1, ".ply")).string());
+    ASSERT_EQ(g.points.size(), ply.size()) << geo;
+    ASSERT_GT(ply.size(), 0u);
+    for (std::size_t i = 0; i < ply.size(); ++i)
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(g.points[i].P[c], ply.position[i][c]) << geo;
+  }
+  for (const char* missing : {"sand.0000.geo", "sand.0005.geo", "sand.0005.geo.gz", "0001.geo"})
+    EXPECT_FALSE(fs::exists(out / "frames" / missing)) << missing;
   // the series lists the three frames with their times (fps 30)
   const std::string pvd = read_text(out / "frames.pvd");
   int k = 0;
@@ -59,7 +79,8 @@ TEST(CliExports, EveryFormatForEveryFrame) {
   // the height field was not asked for
   EXPECT_FALSE(fs::exists(out / "heightfield"));
   const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
-  EXPECT_EQ(summary["exports"]["formats"], nlohmann::json({"ply", "vtk", "geo", "pov", "csv"}));
+  EXPECT_EQ(summary["exports"]["formats"],
+            nlohmann::json({"ply", "vtk", "geo", "geo_gz", "pov", "csv"}));
   // no temporary file is left behind
   for (const auto& e : fs::recursive_directory_iterator(out))
     EXPECT_NE(e.path().extension(), ".tmp") << e.path();
@@ -157,7 +178,8 @@ TEST(CliExports, UnknownExportIsRefusedListingTheKnownOnesAndWritesNothing) {
   EXPECT_EQ(sandflow("run " + scene.string() + " --export ply,vtkk --out " + out.string(), &log),
             2);
   EXPECT_NE(log.find("--export ply,vtkk: unknown export \"vtkk\""), std::string::npos) << log;
-  EXPECT_NE(log.find("ply, vtk, geo, pov, csv, height, height_obj"), std::string::npos) << log;
+  EXPECT_NE(log.find("ply, vtk, geo, geo_gz, pov, csv, height, height_obj"), std::string::npos)
+      << log;
   EXPECT_FALSE(fs::exists(out));
   EXPECT_EQ(sandflow("compare " + scene.string() + " --up-axis x --out " + out.string(), &log), 2);
   EXPECT_NE(log.find("--up-axis"), std::string::npos) << log;

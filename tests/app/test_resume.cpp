@@ -241,11 +241,11 @@ TEST(Resume, TheExportsOfAResumedRunAreThoseOfTheRunUninterrupted) {
   box.write("pour.toml", kPourScene);
   const std::string scene = (box.dir / "pour.toml").string();
   const fs::path want = box.dir / "straight";
-  ASSERT_EQ(sandflow(fmt::format("run {} --frames {} --export ply,vtk --out {}", scene, kFrames,
-                                 want.string())),
+  ASSERT_EQ(sandflow(fmt::format("run {} --frames {} --export ply,vtk,geo_gz --out {}", scene,
+                                 kFrames, want.string())),
             0);
   const fs::path out = box.dir / "run";
-  const pid_t pid = spawn(fmt::format("run {} --frames {} --export ply,vtk --out {}", scene,
+  const pid_t pid = spawn(fmt::format("run {} --frames {} --export ply,vtk,geo_gz --out {}", scene,
                                       kFrames, out.string()),
                           box.dir / "run.log");
   while (!fs::exists(out / "frames" / "0005.vtp") && waitpid(pid, nullptr, WNOHANG) == 0)
@@ -260,6 +260,13 @@ TEST(Resume, TheExportsOfAResumedRunAreThoseOfTheRunUninterrupted) {
     const std::string name = fmt::format("frames/{:04d}.vtk", f);
     EXPECT_EQ(read_text(out / name), read_text(want / name)) << name << " differs";
   }
+  // Houdini's frames, from the start (written once, before the interruption) to the end
+  for (int f = 1; f <= kFrames + 1; ++f) {
+    const std::string name = fmt::format("frames/sand.{:04d}.geo.gz", f);
+    ASSERT_TRUE(fs::exists(out / name)) << name;
+    EXPECT_EQ(read_text(out / name), read_text(want / name)) << name << " differs";
+  }
+  EXPECT_FALSE(fs::exists(out / fmt::format("frames/sand.{:04d}.geo.gz", kFrames + 2)));
 }
 
 TEST(Resume, KilledAtRandomMomentsItResumesToTheSameRun) {

@@ -31,9 +31,10 @@
 #include "io/pov_writer.hpp"
 #include "scene/scene_loader.hpp"
 #include "sim/world.hpp"
+#include "support/houdini_geo.hpp"
+#include "support/scratch.hpp"
 #include "support/xml_tags.hpp"
 #include "surface/surface_params.hpp"
-#include "support/scratch.hpp"
 
 namespace sandflow {
 namespace {
@@ -250,87 +251,36 @@ TEST_F(ExportTest, PvdListsFilesAndTimesInOrder) {
 
 // ---- Houdini classic .geo -----------------------------------------------------------------------
 
-struct GeoPoint {
-  float P[3];
-  std::map<std::string, std::vector<double>> attr;
-};
-
-// Reads the header, the point attribute dictionary, the points and the particle primitive.
-std::vector<GeoPoint> read_geo(const std::string& path, std::vector<std::size_t>* part) {
-  std::istringstream in(read_bytes(path));
-  std::string w;
-  std::size_t npoints = 0, nprims = 0, g1 = 0, g2 = 0, npattr = 0, v = 0, nprattr = 0, na = 0;
-  in >> w;
-  if (w != "PGEOMETRY") throw std::runtime_error("geo: magic");
-  in >> w;  // V5
-  in >> w >> npoints >> w >> nprims;
-  in >> w >> g1 >> w >> g2;
-  in >> w >> npattr >> w >> v >> w >> nprattr >> w >> na;
-  std::vector<std::pair<std::string, int>> dict;
-  if (npattr > 0) {
-    in >> w;
-    if (w != "PointAttrib") throw std::runtime_error("geo: no PointAttrib");
-    for (std::size_t a = 0; a < npattr; ++a) {
-      std::string name, type;
-      int size = 0;
-      in >> name >> size >> type;
-      for (int k = 0; k < size; ++k) in >> w;  // the default
-      dict.emplace_back(name, size);
-    }
-  }
-  std::vector<GeoPoint> pts(npoints);
-  for (GeoPoint& p : pts) {
-    float wgt;
-    in >> p.P[0] >> p.P[1] >> p.P[2] >> wgt;
-    char paren;
-    in >> paren;
-    if (paren != '(') throw std::runtime_error("geo: no (");
-    for (const auto& [name, size] : dict)
-      for (int k = 0; k < size; ++k) {
-        double x;
-        in >> x;
-        p.attr[name].push_back(x);
-      }
-    in >> paren;
-    if (paren != ')') throw std::runtime_error("geo: no )");
-  }
-  if (nprims == 1) {
-    in >> w;  // PrimitiveAttrib
-    std::getline(in, w);
-    std::getline(in, w);  // generator 1 index 1 papi
-    std::size_t n = 0;
-    in >> w >> n;
-    if (w != "Part") throw std::runtime_error("geo: no Part");
-    part->resize(n);
-    for (auto& i : *part) in >> i;
-  }
-  in >> w;
-  if (w == "[0]") in >> w;
-  if (w != "beginExtra") throw std::runtime_error("geo: no beginExtra, got " + w);
-  return pts;
-}
-
-TEST_F(ExportTest, HoudiniGeoHasPVelocityAndPscale) {
+// The reader: tests/support/houdini_geo.hpp. Houdini's own frames are checked further in
+// tests/io/test_houdini_export.cpp (gzip, orient, Cd, the frame numbers).
+TEST_F(ExportTest, HoudiniGeoHasPVelocityPscaleColourAndOrient) {
   const FrameData f = sample_frame();
   write_houdini_geo(path("f.geo"), f, UpAxis::Z);
-  std::vector<std::size_t> part;
-  const auto pts = read_geo(path("f.geo"), &part);
-  ASSERT_EQ(pts.size(), 3u);
-  EXPECT_EQ(part, (std::vector<std::size_t>{0, 1, 2}));
+  const test::Geo g = test::parse_geo(read_bytes(path("f.geo")));
+  std::vector<std::string> names;
+  for (const test::GeoAttribute& a : g.dictionary) names.push_back(a.name + " " + a.type);
+  EXPECT_EQ(names, (std::vector<std::string>{"Cd float", "v vector", "pscale float", "orient float",
+                                             "id int", "state int"}));
+  ASSERT_EQ(g.points.size(), 3u);
+  EXPECT_EQ(g.part, (std::vector<std::size_t>{0, 1, 2}));
   for (std::size_t i = 0; i < 3; ++i) {
+    const test::GeoPoint& p = g.points[i];
     for (int c = 0; c < 3; ++c) {
-      EXPECT_EQ(pts[i].P[c], as_float(f.position[i][c]));
-      EXPECT_EQ(as_float(pts[i].attr.at("v")[c]), as_float(f.velocity[i][c]));
+      EXPECT_EQ(p.P[c], as_float(f.position[i][c]));
+      EXPECT_EQ(as_float(p.attr.at("v")[c]), as_float(f.velocity[i][c]));
     }
-    EXPECT_EQ(as_float(pts[i].attr.at("pscale")[0]), as_float(f.radius[i]));
-    EXPECT_EQ(pts[i].attr.at("id")[0], f.id[i]);
-    EXPECT_EQ(pts[i].attr.at("state")[0], f.state[i]);
+    EXPECT_EQ(as_float(p.attr.at("pscale")[0]), as_float(f.radius[i]));
+    EXPECT_EQ(p.attr.at("id")[0], f.id[i]);
+    EXPECT_EQ(p.attr.at("state")[0], f.state[i]);
+    // the grain's colour (its values: test_houdini_export.cpp) and no turn
+    EXPECT_EQ(p.attr.at("Cd").size(), 3u);
+    EXPECT_EQ(p.attr.at("orient"), (std::vector<double>{0, 0, 0, 1}));
   }
   // no grains: no primitive either
   write_houdini_geo(path("e.geo"), FrameData{}, UpAxis::Z);
-  part.clear();
-  EXPECT_TRUE(read_geo(path("e.geo"), &part).empty());
-  EXPECT_TRUE(part.empty());
+  const test::Geo e = test::parse_geo(read_bytes(path("e.geo")));
+  EXPECT_TRUE(e.points.empty());
+  EXPECT_TRUE(e.part.empty());
 }
 
 // ---- CSV ----------------------------------------------------------------------------------------
@@ -382,8 +332,7 @@ TEST_F(ExportTest, YUpRotatesEveryGrainFormatAndPlyReadsBack) {
   const VtkData d = read_vtk(path("f.vtk"));
   write_grains_csv(path("f.csv"), f, UpAxis::Y);
   write_houdini_geo(path("f.geo"), f, UpAxis::Y);
-  std::vector<std::size_t> part;
-  const auto g = read_geo(path("f.geo"), &part);
+  const auto g = test::parse_geo(read_bytes(path("f.geo"))).points;
   for (int c = 0; c < 3; ++c) {
     EXPECT_EQ(d.points[3 + c], as_float(up_x[c]));
     EXPECT_EQ(d.arrays.at("velocity")[3 + c], as_float(up_v[c]));
@@ -577,6 +526,8 @@ TEST(HeightSidecar, RecordsTheGridAndTheRange) {
 TEST(ExportList, ParsesNamesAndRefusesUnknownOnesListingTheKnown) {
   EXPECT_EQ(parse_export_list("ply,vtk, geo ,ply", "--export"),
             (std::vector<ExportFormat>{ExportFormat::Ply, ExportFormat::Vtk, ExportFormat::Geo}));
+  EXPECT_EQ(parse_export_list("geo_gz,geo", "--export"),
+            (std::vector<ExportFormat>{ExportFormat::GeoGz, ExportFormat::Geo}));
   EXPECT_TRUE(parse_export_list("none", "--export").empty());
   for (const char* bad : {"ply,vtkk", "ply,,csv", "none,ply", ""}) {
     try {
@@ -586,7 +537,8 @@ TEST(ExportList, ParsesNamesAndRefusesUnknownOnesListingTheKnown) {
       const std::string msg = e.what();
       EXPECT_EQ(msg.rfind("--export", 0), 0u) << msg;
       if (std::string(bad) != "none,ply") {
-        EXPECT_NE(msg.find("ply, vtk, geo, pov, csv, height, height_obj"), std::string::npos)
+        EXPECT_NE(msg.find("ply, vtk, geo, geo_gz, pov, csv, height, height_obj"),
+                  std::string::npos)
             << msg;
       }
     }
@@ -633,7 +585,7 @@ TEST(ExportKeys, BadValuesNameThePlaceAndWhatWasExpected) {
   std::string text = kScene;
   text.replace(text.find("\"height_obj\""), 12, "\"vtkk\"");
   EXPECT_NE(error(text).find("x.toml:4:18: output.export[1] = \"vtkk\" is not an export: expected "
-                             "one of ply, vtk, geo, pov, csv, height, height_obj"),
+                             "one of ply, vtk, geo, geo_gz, pov, csv, height, height_obj"),
             std::string::npos)
       << error(text);
   EXPECT_NE(error(kScene, {{"output.up_axis", "x"}})

@@ -120,6 +120,77 @@ TEST_F(PovTest, SceneTextHasGrainsAndGeometry) {
                OutputError);
 }
 
+// A 6 x 5 grid of columns of 1 cm with sand (h = 2 cm) in the two columns (2, 2) and (3, 2).
+SandSurface two_sand_columns() {
+  SandSurface sf;
+  sf.origin_x = -0.03;
+  sf.origin_y = -0.02;
+  sf.cell = 0.01;
+  sf.nx = 6;
+  sf.ny = 5;
+  sf.grain_diameter = 0.01;
+  sf.z.assign(30, 0.0);
+  sf.sand.assign(30, 0);
+  for (int i : {2, 3}) {
+    sf.z[2 * 6 + i] = 0.02;
+    sf.sand[2 * 6 + i] = 1;
+  }
+  return sf;
+}
+
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+TEST_F(PovTest, TheStaticLayerIsASmoothSurfaceOverTheCellsThatTouchSand) {
+  const SandSurface sf = two_sand_columns();
+  const std::string p = path("layer.pov");
+  write_pov_scene(p, small_mound(), {floor_plane()}, PovOptions{}, {}, &sf);
+  const std::string text = read_bytes(p);
+  ASSERT_NE(text.find("mesh2 {"), std::string::npos);
+  EXPECT_NE(text.find("texture { StaticSand }"), std::string::npos);
+  EXPECT_NE(text.find("vertex_vectors { 30,"), std::string::npos);
+  EXPECT_NE(text.find("normal_vectors { 30,"), std::string::npos);
+  // the cells with a sand column at a corner: x cells 1..3, y cells 1..2, two triangles each
+  EXPECT_NE(text.find("face_indices { 12,"), std::string::npos);
+  // a sand column's vertex at its centre and height
+  EXPECT_NE(text.find("<-0.005,0.005,0.02>"), std::string::npos);
+  // the grains are still drawn, after the surface
+  EXPECT_EQ(count_of(text, "\nG("), small_mound().size());
+  EXPECT_LT(text.find("mesh2 {"), text.find("\nG("));
+
+  SandSurface bare = two_sand_columns();
+  bare.sand.assign(bare.sand.size(), 0);
+  write_pov_scene(p, small_mound(), {floor_plane()}, PovOptions{}, {}, &bare);
+  EXPECT_EQ(read_bytes(p).find("mesh2 {"), std::string::npos) << "no sand: nothing drawn";
+  write_pov_scene(p, small_mound(), {floor_plane()}, PovOptions{});
+  EXPECT_EQ(read_bytes(p).find("mesh2 {"), std::string::npos);
+}
+
+TEST(PovCamera, CoreBoundsLeaveOutAStrayGrain) {
+  FrameData f;
+  Rng rng(5);
+  for (int i = 0; i < 2000; ++i) {
+    f.position.push_back({rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1), rng.uniform(0, 0.1)});
+    f.radius.push_back(0.005);
+  }
+  f.position.push_back({3.0, 0, 0});  // thrown far off
+  f.radius.push_back(0.005);
+  const ViewBounds all = grain_bounds(f), core = grain_core_bounds(f);
+  EXPECT_NEAR(all.hi.x, 3.005, 1e-12);
+  EXPECT_LT(core.hi.x, 0.106);
+  EXPECT_GT(core.hi.x, 0.09);  // the heap itself is kept, to within its outer half percent
+  EXPECT_LT(core.lo.x, -0.09);
+  EXPECT_GT(core.hi.z, 0.09);
+  // a small frame keeps every grain
+  FrameData few;
+  few.position = {{0, 0, 0}, {1, 0, 0}};
+  few.radius = {0.01, 0.01};
+  EXPECT_NEAR(grain_core_bounds(few).hi.x, 1.01, 1e-12);
+}
+
 TEST_F(PovTest, RotationMatchesRotationXyzDeg) {
   GeometryConfig box;
   box.type = GeometryType::Box;

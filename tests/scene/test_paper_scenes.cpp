@@ -1,13 +1,14 @@
-// The paper's five scenes (and the column of docs/physics.md), from their files, shrunk to a few
-// hundred grains and a few frames: each runs in both modes, loses no grain, and puts none inside
-// the geometry. (Without the fetched meshes, the dragon and the armadillo run with their fallback
-// boxes.)
+// The paper's five scenes (and the column of docs/physics.md, and the pyramid read from an STL
+// file), from their files, shrunk to a few hundred grains and a few frames: each runs in both
+// modes, loses no grain, and puts none inside the geometry. (Without the fetched meshes, the
+// dragon and the armadillo run with their fallback boxes; the pyramid's STL is committed.)
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include "geometry/shapes.hpp"
 #include "scene/scene_loader.hpp"
 #include "sim/world.hpp"
 
@@ -48,6 +49,24 @@ TEST_P(PaperScene, TinyVersionRunsInBothModesWithNoGrainInsideGeometry) {
 
 INSTANTIATE_TEST_SUITE_P(Scenes, PaperScene,
                          ::testing::Values("floor", "terrain", "bowl", "dragon", "armadillo"));
+INSTANTIATE_TEST_SUITE_P(StlObstacle, PaperScene, ::testing::Values("pyramid"));
+
+// The pyramid is the STL file's, in metres as written, set down on the floor: no stand-in box
+TEST(PyramidScene, ItsObstacleIsTheStlFile) {
+  const SceneConfig s = load_scene(std::string(SANDFLOW_SOURCE_DIR) + "/scenes/pyramid.toml", {});
+  const Geometry g = Geometry::from_config(s.geometry, s.material, s.path);
+  ASSERT_EQ(g.meshes().size(), 1u);
+  const TriangleMesh& m = g.meshes()[0].mesh;
+  EXPECT_EQ(m.triangles.size(), 6u);
+  EXPECT_EQ(m.vertices.size(), 5u);
+  EXPECT_TRUE(mesh_quality(m).closed());
+  const Aabb b = mesh_bounds(m);
+  EXPECT_NEAR(b.lo.x, -0.2, 1e-7);  // (STL stores float)
+  EXPECT_NEAR(b.hi.y, 0.2, 1e-7);
+  EXPECT_NEAR(b.lo.z, 0.0, 1e-7);
+  EXPECT_NEAR(b.hi.z, 0.2, 1e-7);
+  EXPECT_TRUE(g.warnings().empty());
+}
 
 TEST(ColumnScene, ASmallColumnIsLiftedAndSpreadsInBothModes) {
   // scenes/column.toml as the script runs it, small: 600 grains (a of about 1/3), the tube lifted
