@@ -18,7 +18,7 @@
 namespace sandflow {
 namespace {
 
-constexpr std::array<std::pair<std::string_view, ExportFormat>, 8> kNames = {{
+constexpr std::array<std::pair<std::string_view, ExportFormat>, 9> kNames = {{
     {"ply", ExportFormat::Ply},
     {"vtk", ExportFormat::Vtk},
     {"geo", ExportFormat::Geo},
