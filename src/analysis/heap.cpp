@@ -31,15 +31,6 @@ std::uint64_t key(std::int64_t i, std::int64_t j) {
   return (static_cast<std::uint64_t>(i) << 32) | static_cast<std::uint32_t>(j);
 }
 
-// Median of v (reordered); the mean of the two middle values for an even count.
-double median(std::vector<double>& v) {
-  const std::size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + m, v.end());
-  const double upper = v[m];
-  if (v.size() % 2 == 1) return upper;
-  return 0.5 * (upper + *std::max_element(v.begin(), v.begin() + m));
-}
-
 struct ProfilePoint {
   double r = 0;  // median distance from the apex [m]
   double h = 0;  // median cell height [m]

@@ -1,7 +1,8 @@
-// The few statistics the measurements share: means, sample standard deviations and a
+// The few statistics the measurements share: means, medians, sample standard deviations and a
 // least-squares line with its slope's standard error.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -15,6 +16,15 @@ inline double mean(const std::vector<double>& v) {
   double s = 0;
   for (double x : v) s += x;
   return s / static_cast<double>(v.size());
+}
+
+/// Median of v (reordered; v not empty); the mean of the two middle values for an even count.
+inline double median(std::vector<double>& v) {
+  const std::size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + m, v.end());
+  const double upper = v[m];
+  if (v.size() % 2 == 1) return upper;
+  return 0.5 * (upper + *std::max_element(v.begin(), v.begin() + m));
 }
 
 /// Sample standard deviation (n - 1); 0 for fewer than two values.
