@@ -56,6 +56,7 @@ struct SurfaceConfig {
   std::string angles_source;
   std::optional<Real> rolling_min;          ///< R_min [m]; default one mean diameter
   std::optional<Real> flowing_min;          ///< R_min under a flowing layer [m]; default 4 d
+  Real close_after = 2.0;                   ///< rest after which a column's top freezes [s]
   std::optional<Real> interface_thickness;  ///< T [m]; default half a mean diameter
   std::optional<Real> update_interval;      ///< time between height-field updates [s]
   std::optional<Real> trap_speed;           ///< grains slower than this may be trapped [m/s]

@@ -50,6 +50,8 @@ HeightField::HeightField(const HeightFieldParams& p, TerrainColumns terrain)
   R_.assign(columns(), 0);
   theta_.assign(columns(), 0);
   Gamma_.assign(columns(), 0);
+  // every column starts open (a bed born at rest closes its own: close())
+  rest_.assign(columns(), 0);
 }
 
 void HeightField::set_solids(TerrainColumns terrain) {
@@ -199,6 +201,7 @@ void HeightField::restore(State s) {
   R_ = std::move(s.R);
   theta_ = std::move(s.theta);
   Gamma_ = std::move(s.Gamma);
+  rest_ = std::move(s.rest);
 }
 
 void HeightField::exchange(Real dt, const std::vector<std::uint8_t>& flowing) {
@@ -253,11 +256,14 @@ void HeightField::exchange(Real dt, const std::vector<std::uint8_t>& flowing) {
     }
   const Real flowing_min = p_.flowing_floor();
   for (std::size_t c = 0; c < h_.size(); ++c) {
-    // R_min: the visible surface is always made of grains that can move. Where grains flow, DEM
-    // shears a layer several grains deep (docs/physics.md, "The flowing layer"): a static top one
-    // grain below the surface would hold up grains that DEM lets slide, and the heap grows steep.
+    // R_min: the visible surface is made of grains that can move, until the column has been at
+    // rest for close_after (then nothing there moves: its top joins the static layer). Where grains
+    // flow, DEM shears a layer several grains deep (docs/physics.md, "The flowing layer"): a static
+    // top one grain below the surface would hold up grains that DEM lets slide, and the heap grows
+    // steep.
     const bool flows = flowing.empty() || flowing[c];
-    const Real r_min = flows ? flowing_min : p_.rolling_min;
+    rest_[c] = flows ? 0 : std::min(rest_[c] + dt, p_.close_after);
+    const Real r_min = flows ? flowing_min : closed(c) ? 0 : p_.rolling_min;
     h_[c] = std::max(std::min(h_new[c], H_[c] - r_min), L_[c]);
     R_[c] = H_[c] - h_[c];
   }

@@ -30,6 +30,10 @@ struct HeightFieldParams {
   Real flowing_min = 0;       ///< R_min under a flowing layer [m] (never below rolling_min)
   Real avalanche_depth = 0.01;///< thickness that rolls where theta > theta_max [m]
   Real gap = 0.01;            ///< a grain separated from the pile below by more is airborne [m]
+  /// A column whose grains have not moved the pile for this long is closed: R_min no longer holds
+  /// there, so its top freezes into the static layer like the rest (a bed at rest costs nothing)
+  /// [s]
+  Real close_after = 2.0;
 
   /// R_min under a flowing layer as used: never below rolling_min [m].
   Real flowing_floor() const { return std::max(flowing_min, rolling_min); }
@@ -79,7 +83,7 @@ class HeightField {
   void measure(const Grains& hot, const std::vector<Real>& static_top,
                const std::vector<std::uint8_t>& counts = {});
   /// Steps 2-6 over a time dt: slopes, exchange, h, R, and the R_min floor (flowing_min under a
-  /// flowing layer). `flowing` marks the
+  /// flowing layer, none in a closed column: see close_after). `flowing` marks the
   /// columns whose rolling layer holds moving grains (empty: all flow). A rolling layer at rest
   /// deposits up to theta_max, the steepest a static slope stands; a flowing one erodes the
   /// static layer down to theta0 (the hysteresis of the angle of repose).
@@ -102,9 +106,9 @@ class HeightField {
 
   /// For restarts (src/checkpoint/): every per-column array the next update reads or reports.
   struct State {
-    std::vector<Real> L, H, h, R, theta, Gamma;
+    std::vector<Real> L, H, h, R, theta, Gamma, rest;
   };
-  State state() const { return {L_, H_, h_, R_, theta_, Gamma_}; }
+  State state() const { return {L_, H_, h_, R_, theta_, Gamma_, rest_}; }
   /// Sets the arrays as saved (sizes checked by the caller).
   void restore(State s);
 
@@ -124,6 +128,12 @@ class HeightField {
   const std::vector<Real>& rolling() const { return R_; }       ///< R = H - h
   const std::vector<Real>& slope() const { return theta_; }     ///< theta of h [rad]
   const std::vector<Real>& exchange_rate() const { return Gamma_; }  ///< Gamma [m/s]
+  /// Per column: how long since grains last moved the pile there, up to close_after [s].
+  const std::vector<Real>& rest() const { return rest_; }
+  /// A column at rest for close_after: its whole top is static (no R_min).
+  bool closed(std::size_t c) const { return rest_[c] >= p_.close_after; }
+  /// Closes column c now, as if at rest for close_after (a bed born at rest).
+  void close(std::size_t c) { rest_[c] = p_.close_after; }
   /// Volume of the static layer above the terrain [m^3].
   Real static_volume() const;
   /// Columns where there is sand (H above L).
@@ -136,7 +146,7 @@ class HeightField {
   HeightFieldParams p_;
   TerrainColumns solids_;
   std::uint64_t initial_terrain_hash_ = 0;
-  std::vector<Real> L_, H_, h_, R_, theta_, Gamma_;
+  std::vector<Real> L_, H_, h_, R_, theta_, Gamma_, rest_;
   // scratch of measure(): ray hits filed by column
   std::vector<std::uint32_t> hit_start_;
   std::vector<std::uint32_t> hit_fill_;  ///< per thread and column: where its next hit goes

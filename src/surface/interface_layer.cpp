@@ -100,7 +100,9 @@ Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticS
     const Real h = hf.static_top_at(x.x, x.y);
     if (hot.state[i] == GrainState::Active) {
       // (a slow grain at the top of a bounce, or one sliding over the bed, stays free)
-      if (x.z < h && held(p_.seat, hot, i, contacts[i])) {
+      if (x.z < h &&
+          (held(p_.seat, hot, i, contacts[i]) ||
+           (hf.closed(static_cast<std::size_t>(c)) && at_rest(p_.seat, hot, i, contacts[i])))) {
         // frozen where it is; its contacts with other frozen grains go inert at the next step,
         // while those with active grains keep their springs, so that the grains resting on it do
         // not lose their friction
@@ -116,9 +118,11 @@ Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticS
       // (its pairs with interface grains enter the list)
       changes.push_back({hot.id[i], GrainState::Interface, GrainState::Active});
       ++n.dislodged;
-    } else if (x.z < h - vertical_band(T, hf.slope()[static_cast<std::size_t>(c)]) - m &&
+    } else if ((x.z < h - vertical_band(T, hf.slope()[static_cast<std::size_t>(c)]) - m ||
+                hf.closed(static_cast<std::size_t>(c))) &&
                !(contacts[i] & DemSolver::kNearActive)) {
-      // (an active grain within reach would sink into it: static grains push nothing)
+      // (an active grain within reach would sink into it: static grains push nothing; in a
+      // closed column no grain moves, and the invariant wakes what one comes near)
       if (tops_follow(st)) {
         hf.for_each_ray_hit(x, hot.r[i], [&](std::size_t cc, Real, Real top) {
           tops_[cc] = std::max(tops_[cc], top);

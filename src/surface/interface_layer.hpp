@@ -1,5 +1,5 @@
-// The particle interface (docs/design.md §5): the band of frozen grains, of constant thickness T just
-// below the static top h, through which matter passes between the grains and the height field.
+// The particle interface (docs/design.md §5): the band of frozen grains, of constant thickness T
+// just below the static top h, through which matter passes between the grains and the height field.
 // After each height-field update every grain is classified against h at its own (x, y), with the
 // band measured normal to the local slope (T / cos theta in the vertical); "held" is seat.hpp's
 // rule (seated, no contact slipping, too slow to leave its seat):
@@ -7,7 +7,8 @@
 //   ACTIVE    centre below h and held   -> INTERFACE (trapped: v = w = 0; its contacts with
 //                                                     other frozen grains go inert)
 //   INTERFACE centre above h            -> ACTIVE    (dislodged, from rest)
-//   INTERFACE centre below h - T        -> STATIC    (sleeps: leaves the DEM, filed by column)
+//   INTERFACE centre below h - T        -> STATIC    (sleeps: leaves the DEM, filed by column;
+//                                                     anywhere below h in a closed column)
 //   STATIC    centre above h - T        -> INTERFACE (wakes: only where h fell)
 //
 // The invariant that makes the layers safe: no STATIC grain lies within reach of an ACTIVE grain,
@@ -15,6 +16,9 @@
 // nothing, so a grain that reached one would go into it. wake_within_reach() enforces it exactly
 // before every rebuild, for the allowances that rebuild gives; between rebuilds no grain moves
 // further than its allowance, so no ACTIVE grain ever touches a STATIC one.
+//
+// A column is closed when no grain has moved the pile there for a while (HeightField::closed):
+// its top is then static like the rest, and a bed at rest costs nothing; what comes near wakes.
 //
 // The band has a margin m of hysteresis: trapped below h, dislodged only above h + m; sleeps
 // below h - T - m, wakes above h - T. H is measured from grains, so h jitters by a fraction of a

@@ -49,6 +49,14 @@ inline bool held(const SeatParams& p, const Grains& g, std::size_t i, std::uint8
          kinetic_energy_per_mass(g, i) < p.hold_energy(g.r[i]);
 }
 
+/// Whether grain i rests where it is: touching something, no contact slipping, too slow to leave a
+/// seat. In a column where nothing has moved the pile for a while (a closed column) this is enough
+/// to trap it, seated on three or leaning on two: it is not bouncing, or the column would flow.
+inline bool at_rest(const SeatParams& p, const Grains& g, std::size_t i, std::uint8_t contacts) {
+  return (contacts & DemSolver::kTouches) && !(contacts & DemSolver::kSlips) &&
+         kinetic_energy_per_mass(g, i) < p.hold_energy(g.r[i]);
+}
+
 /// Whether grain i moves the pile it touches: touching it with more than the seat's energy.
 inline bool moves_pile(const SeatParams& p, const Grains& g, std::size_t i, std::uint8_t contacts) {
   return (contacts & DemSolver::kTouches) && kinetic_energy_per_mass(g, i) >= p.move_energy(g.r[i]);

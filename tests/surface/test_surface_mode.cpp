@@ -143,6 +143,9 @@ TEST(SurfaceMode, SettledHeapKeepsItsShapeAndSleeps) {
   e.size = {0.12, 0.12, 0.12};
   e.center = {0, 0, 0.061};
   e.velocity = {};
+  // (the heap settles within a second: after half a second at rest a column closes)
+  s.surface.close_after = 0.5;
+  s.surface.extent = {{-0.25, -0.25, 0.25, 0.25}};  // (outside the grid grains stay simulated)
   World w(s);
   for (int f = 0; f < 45; ++f) w.advance_frame();  // 1.5 s
   const SurfaceParams& sp = w.surface()->params();
@@ -165,15 +168,33 @@ TEST(SurfaceMode, SettledHeapKeepsItsShapeAndSleeps) {
   // no creep: the surface moves by less than a tenth of a grain (RMS), measured with rays that
   // resolve single grains
   EXPECT_LT(d.rms, 0.1 * diameter);
-  // asleep: in the last second no grain changes state, the static layer holds a share of the
-  // grains (R_min + T keep two of the heap's four grain layers hot), and what is still simulated
-  // barely moves: RMS speed under 1 cm/s, 2 % of sqrt(g d)
+  // asleep and closed: in the last second no grain changes state, and the heap is static (a heap
+  // at rest costs nothing). What stays simulated: grains that rolled out beyond the grid, and
+  // lone grains on the floor spinning about the vertical (the contact law has no twisting
+  // resistance: in plain DEM they spin on too), 26 of 1,200 here; 3 % allows for them
   EXPECT_EQ(late.total(), 0) << late.trapped << " " << late.dislodged << " " << late.slept << " "
                              << late.woken;
-  EXPECT_GT(st.n_static, st.n_total / 10);
-  Real v2 = 0;
-  for (const Vec3& v : w.grains().v) v2 += norm2(v);
-  EXPECT_LT(std::sqrt(v2 / static_cast<Real>(w.grains().size())), 0.01);
+  EXPECT_GE(st.n_static, st.n_total - 3 * st.n_total / 100);
+}
+
+TEST(SurfaceMode, AHeapAtRestStaysOpenUntilCloseAfter) {
+  // the same heap with close_after 3 s: at 2 s its top layer is still ACTIVE (R_min holds: the
+  // grains a pour would roll over can move), and it closes within a second after 3 s at rest
+  SceneConfig s = coarse_pour(1200, 1);
+  s.material.diameter = 0.01;
+  EmitterConfig& e = s.emitters[0];
+  e.type = EmitterType::Lattice;
+  e.size = {0.12, 0.12, 0.12};
+  e.center = {0, 0, 0.061};
+  e.velocity = {};
+  s.surface.close_after = 3.0;
+  s.surface.extent = {{-0.25, -0.25, 0.25, 0.25}};
+  World w(s);
+  FrameStats st;
+  for (int f = 0; f < 60; ++f) st = w.advance_frame();  // 2 s
+  EXPECT_GT(st.n_active, st.n_total / 10);
+  for (int f = 0; f < 75; ++f) st = w.advance_frame();        // 4.5 s
+  EXPECT_GE(st.n_static, st.n_total - 3 * st.n_total / 100);  // (as above)
 }
 
 }  // namespace
