@@ -31,7 +31,8 @@
 namespace sandflow {
 
 /// 4: the stage timings are those of the eight stages of World::step (core/timer.hpp), not five.
-constexpr std::uint32_t kCheckpointFormat = 4;
+/// 5: the height field keeps each column's time at rest (closed columns).
+constexpr std::uint32_t kCheckpointFormat = 5;
 
 struct Checkpoint {
   std::uint32_t format = kCheckpointFormat;
