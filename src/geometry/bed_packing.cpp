@@ -545,8 +545,7 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
         const Real mid = 0.5 * (lo + hi);
         (on_floor(arc.at(mid)) ? hi : lo) = mid;
       }
-      rest = arc.at(hi);
-      rest.z = std::max(rest.z, floor_rest(rest.x, rest.y, r));
+      rest = arc.at(hi);  // (the first point of the arc found on the floor, to 1e-12 rad)
       return true;
     }
     p = q;
