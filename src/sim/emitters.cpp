@@ -276,7 +276,17 @@ std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const Mat
   region.seed = seed;
   region.max_grains = max_grains;
   try {
-    const Real estimate = estimate_bed_grains(region);
+    // a coarse look first (33 x 33 points), so that a bed far too large is refused at once
+    Real coarse = 0;
+    for (int j = 0; j <= 32; ++j)
+      for (int i = 0; i <= 32; ++i) {
+        const Real x = region.x0 + (region.x1 - region.x0) * i / 32;
+        const Real y = region.y0 + (region.y1 - region.y0) * j / 32;
+        coarse += std::max(0.0, top - region.floor(x, y)) / (33.0 * 33.0);
+      }
+    coarse *= (region.x1 - region.x0) * (region.y1 - region.y0) * 0.6 /
+              (4.0 / 3.0 * kPi * std::pow(0.5 * m.diameter, 3));
+    const Real estimate = coarse > 4 * max_grains ? coarse : estimate_bed_grains(region);
     if (bottomless)
       return EmitterProblem{
           "center", fmt::format("puts the bed over ({:.4g}, {:.4g}) m, where no solid lies under "
