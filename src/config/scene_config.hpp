@@ -165,7 +165,7 @@ struct GeometryConfig {
   std::optional<Real> particle_radius;  ///< boundary particles [m]; unset: half the smallest d
 };
 
-enum class EmitterType { Pour, Block, Lattice };
+enum class EmitterType { Pour, Block, Lattice, Bed };
 enum class PourShape { Disk, Rect };
 
 struct EmitterConfig {
@@ -183,6 +183,10 @@ struct EmitterConfig {
   Real rate = 1000.0;               ///< pour rate [grains/s]
   Real rate_scale = 1.0;            ///< what scale_grain_count multiplied the scene's rate by
   Real spacing = 1.05;              ///< lattice/slot spacing as a multiple of the largest diameter
+  // bed: a packed region at rest over the footprint center.xy +- size.xy / 2, from the scene's
+  // geometry up to z = height. Its count is the packing's (resolve_beds, sim/emitters.hpp), and
+  // center.z and size.z become the box of its grains.
+  Real height = 0.0;  ///< the bed's flat top [m]
 };
 
 struct SceneConfig {

@@ -9,8 +9,10 @@
 namespace sandflow::loader {
 namespace {
 
-constexpr Choices<EmitterType> kEmitterTypes[] = {
-    {"pour", EmitterType::Pour}, {"block", EmitterType::Block}, {"lattice", EmitterType::Lattice}};
+constexpr Choices<EmitterType> kEmitterTypes[] = {{"pour", EmitterType::Pour},
+                                                  {"block", EmitterType::Block},
+                                                  {"lattice", EmitterType::Lattice},
+                                                  {"bed", EmitterType::Bed}};
 constexpr Choices<PourShape> kPourShapes[] = {{"disk", PourShape::Disk}, {"rect", PourShape::Rect}};
 
 }  // namespace
@@ -20,6 +22,22 @@ EmitterConfig read_emitter(TableReader r, std::size_t index, const MaterialConfi
   e.name = "emitter " + std::to_string(index);
   r.read("type", e.type, kEmitterTypes);
   r.read("name", e.name);
+  if (e.type == EmitterType::Bed) {
+    // (its count is its packing's: scene_loader.cpp packs it once the geometry is read)
+    if (r.has("count"))
+      r.fail_at("count", r.name("count") +
+                             " is not a key of a bed: the grains a bed holds follow from its "
+                             "region (center, size, height and the geometry under it)");
+    r.read("start", e.start, kNonNegative);
+    r.read("center", e.center, kAny, 2);   // x, y; z is not used
+    r.read("size", e.size, kPositive, 2);  // x, y extents of the footprint; z is not used
+    r.require("height", "the bed's flat top, z in metres");
+    r.read("height", e.height);
+    r.finish("a bed emitter");
+    if (const auto problem = emitter_problem(e, material))
+      r.fail_at(problem->key, r.name(problem->key) + " " + problem->what);
+    return e;
+  }
   r.require("count", "the number of grains to emit, an integer >= 1");
   r.read("count", e.count, closed(1, static_cast<Real>(kMaxGrains)));
   r.read("start", e.start, kNonNegative);
@@ -48,6 +66,8 @@ EmitterConfig read_emitter(TableReader r, std::size_t index, const MaterialConfi
     case EmitterType::Lattice:
       r.read("size", e.size, kPositive);
       r.finish("a lattice emitter");
+      break;
+    case EmitterType::Bed:  // (read above)
       break;
   }
   // sizes that no count makes possible, refused before anything of their size is made

@@ -14,11 +14,16 @@
 
 #include "scene/scene_loader.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 
+#include "core/error.hpp"
+#include "geometry/bed_packing.hpp"
 #include "geometry/heightmap.hpp"
+#include "geometry/shapes.hpp"
 #include "scene/overrides.hpp"
 #include "scene/scene_tables.hpp"
 #include "scene/table_reader.hpp"
@@ -87,16 +92,39 @@ void read_emitters(TableReader& doc, const Places& places, SceneConfig& c) {
     doc.fail_at("emitter", "emitter: a scene needs at least one [[emitter]] table, found none");
   std::int64_t total = 0;
   Real slots = 0;
+  std::optional<Geometry> geometry;  // built for the first bed
   for (std::size_t i = 0; i < emitters->size(); ++i) {
     const std::string prefix = "emitter[" + std::to_string(i) + "]";
     const TableReader r(places, *emitters->get(i)->as_table(), prefix);
     c.emitters.push_back(read_emitter(r, i, c.material));
-    total += c.emitters.back().count;  // each at most kMaxGrains: the sum cannot overflow here
+    EmitterConfig& e = c.emitters.back();
+    if (e.type == EmitterType::Bed) {
+      // a bed holds what its region holds: packed now, on the geometry, for its count (the World
+      // packs it again, the same, from the same seed), at most what the scene has room for
+      if (!geometry) {
+        try {
+          geometry.emplace(Geometry::from_config(c.geometry, c.material, c.path));
+        } catch (const InputError& err) {
+          r.fail_at("type", prefix + ": its floor is the scene's geometry, which cannot be made: " +
+                                err.what());
+        }
+      }
+      BedPacking bed;
+      const Real room = std::min(kMaxBedGrains, static_cast<Real>(kMaxGrains - total));
+      if (const auto problem =
+              pack_bed_emitter(e, c.material, *geometry, bed_seed(c.simulation.seed, i), bed, room))
+        r.fail_at(problem->key, r.name(problem->key) + " " + problem->what +
+                                    (room < kMaxBedGrains && std::string(problem->key) == "size"
+                                         ? " (the scene's room left for grains)"
+                                         : ""));
+      set_bed_extent(e, bed);
+    }
+    total += e.count;  // each at most kMaxGrains: the sum cannot overflow here
     if (total > kMaxGrains)
-      r.fail_at("count", r.name("count") + " = " + std::to_string(c.emitters.back().count) +
-                             " brings the scene to " + std::to_string(total) +
-                             " grains, more than the limit of " + std::to_string(kMaxGrains) +
-                             " in all");
+      r.fail_at(e.type == EmitterType::Bed ? "size" : "count",
+                r.name(e.type == EmitterType::Bed ? "size" : "count") + " = " +
+                    std::to_string(e.count) + " brings the scene to " + std::to_string(total) +
+                    " grains, more than the limit of " + std::to_string(kMaxGrains) + " in all");
     slots += pour_slots(c.emitters.back(), c.material);  // each at most kMaxPourSlots
     if (slots > kMaxPourSlots) {
       const char* key = c.emitters.back().shape == PourShape::Disk ? "radius" : "size";

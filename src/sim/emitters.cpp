@@ -16,6 +16,7 @@ Real largest_diameter(const MaterialConfig& m) { return m.diameter * (1 + m.diam
 
 // Half extents of the area a pour places grains over (x, y) or of a block's box.
 Vec3 half_extent(const EmitterConfig& e) {
+  if (e.type == EmitterType::Bed) return {e.size.x / 2, e.size.y / 2, 0};
   if (e.type != EmitterType::Pour) return e.size * 0.5;
   if (e.shape == PourShape::Disk) return {e.radius, e.radius, 0};
   return {e.size.x / 2, e.size.y / 2, 0};
@@ -67,7 +68,7 @@ BoxLattice box_lattice(const EmitterConfig& e, Real d_max) {
 }  // namespace
 
 Real box_slots(const EmitterConfig& e, const MaterialConfig& m) {
-  if (e.type == EmitterType::Pour) return 0;
+  if (e.type == EmitterType::Pour || e.type == EmitterType::Bed) return 0;
   const BoxLattice L = box_lattice(e, largest_diameter(m));
   Real n = 0;
   for (int b = 0; b < L.basis; ++b)
@@ -103,7 +104,7 @@ std::optional<EmitterProblem> emitter_problem(const EmitterConfig& e, const Mate
   }
   const char* axis[3] = {"x", "y", "z"};
   const Real sides[3] = {e.size.x, e.size.y, e.size.z};
-  for (int k = 0; k < 3; ++k)
+  for (int k = 0; k < (e.type == EmitterType::Bed ? 2 : 3); ++k)
     if (sides[k] < d - 2e-12)  // the lattice takes a grain 1e-12 m too wide
       return EmitterProblem{
           "size", fmt::format("is {:.3g} m along {}, less than the largest grain ({:.3g} m): the "
@@ -194,6 +195,7 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
     }
     return;
   }
+  if (config.type == EmitterType::Bed) return;  // (its grains come with set_bed)
   // a block or lattice: its grains are counted here and placed when emitted
   bool first = true;
   const std::int64_t fits = for_each_box_slot([&](const Vec3& p) {
@@ -205,6 +207,135 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
     throw InputError(fmt::format(
         "{}: the box holds only {} grains at spacing {}, fewer than count = {}; enlarge size",
         where, fits, config.spacing, config.count));
+}
+
+void Emitter::set_bed(BedPacking bed, const std::string& where) {
+  if (static_cast<std::int64_t>(bed.size()) != config_.count)
+    throw InputError(fmt::format(
+        "{}: the bed packs {} grains, but the scene was counted with {} (a bed's count is the "
+        "packing's: load the scene, or call resolve_beds, with this geometry and seed)",
+        where, bed.size(), config_.count));
+  bed_ = std::move(bed);
+}
+
+std::uint64_t bed_seed(std::uint64_t scene_seed, std::size_t index) {
+  // splitmix64 of the pair: beds of one scene, and scenes of neighbouring seeds, differ
+  std::uint64_t z = scene_seed * 0x9e3779b97f4a7c15ULL + (index + 1) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const MaterialConfig& m,
+                                               const Geometry& geometry, std::uint64_t seed,
+                                               BedPacking& out, Real max_grains) {
+  if (auto problem = emitter_problem(e, m)) return problem;
+  const Real d = largest_diameter(m);
+  const Real top = e.height;
+  // The floor: the highest solid top under (x, y) below the bed's top (a mesh by its crossings,
+  // grown by its boundary particles), searched down to a metre (or 1000 grains) under the lowest
+  // solid or the top. A point with none stops the bed.
+  Vec3 lo, hi;
+  Real bottom = top;
+  if (geometry.finite_bounds(lo, hi)) bottom = std::min(bottom, lo.z);
+  bottom -= std::max(1.0, 1000 * d);
+  bool bottomless = false;
+  Real bx = 0, by = 0;
+  BedRegion region;
+  region.x0 = e.center.x - e.size.x / 2;
+  region.x1 = e.center.x + e.size.x / 2;
+  region.y0 = e.center.y - e.size.y / 2;
+  region.y1 = e.center.y + e.size.y / 2;
+  // (looked for half a grain inside the footprint's edge: a container's wall, whose inner face is
+  // the edge, is not the floor)
+  const Real inset = 0.25 * m.diameter * (1 - m.diameter_spread);
+  region.floor = [&](Real x, Real y) {
+    x = std::clamp(x, region.x0 + inset, region.x1 - inset);
+    y = std::clamp(y, region.y0 + inset, region.y1 - inset);
+    const auto solids = geometry.solid_intervals(x, y, top, bottom);
+    if (solids.empty()) {
+      if (!bottomless) bx = x, by = y;
+      bottomless = true;
+      return bottom;
+    }
+    return std::min(solids.back().second, top);
+  };
+  region.top = [top](Real, Real) { return top; };
+  // a grain reaching into a solid by more than 1 % of d is refused (the floor is sampled and
+  // met through tangent planes: a grain may rest a hair into a curved one)
+  const Real tolerance = 0.01 * d;
+  region.blocked = [&](const Vec3& c, Real r) {
+    for (const Obstacle& o : geometry.obstacles())
+      if (o.solid->closest(c).distance < r - tolerance) return true;
+    for (const MeshObstacle& mesh : geometry.meshes())
+      if (mesh.winding->inside(c)) return true;
+    return false;
+  };
+  region.r_lo = 0.5 * m.diameter * (1 - m.diameter_spread);
+  region.r_hi = 0.5 * m.diameter * (1 + m.diameter_spread);
+  region.seed = seed;
+  region.max_grains = max_grains;
+  try {
+    // a coarse look first (33 x 33 points), so that a bed far too large is refused at once
+    Real coarse = 0;
+    for (int j = 0; j <= 32; ++j)
+      for (int i = 0; i <= 32; ++i) {
+        const Real x = region.x0 + (region.x1 - region.x0) * i / 32;
+        const Real y = region.y0 + (region.y1 - region.y0) * j / 32;
+        coarse += std::max(0.0, top - region.floor(x, y)) / (33.0 * 33.0);
+      }
+    coarse *= (region.x1 - region.x0) * (region.y1 - region.y0) * 0.6 /
+              (4.0 / 3.0 * kPi * std::pow(0.5 * m.diameter, 3));
+    const Real estimate = coarse > 4 * max_grains ? coarse : estimate_bed_grains(region);
+    if (bottomless)
+      return EmitterProblem{
+          "center", fmt::format("puts the bed over ({:.4g}, {:.4g}) m, where no solid lies under "
+                                "its top (z = {:.4g} m): a bed rests on the scene's geometry",
+                                bx, by, top)};
+    if (estimate > max_grains)
+      return EmitterProblem{
+          "size", fmt::format("makes a bed of about {:.3g} grains, more than the limit of {:.0f}",
+                              estimate, max_grains)};
+    out = pack_bed(region);
+  } catch (const std::length_error& err) {
+    return EmitterProblem{"size", fmt::format("makes too large a bed ({})", err.what())};
+  } catch (const std::invalid_argument& err) {
+    return EmitterProblem{"size", fmt::format("cannot be packed ({})", err.what())};
+  }
+  if (out.size() == 0)
+    return EmitterProblem{
+        "height", fmt::format("= {:.4g} m leaves no room for a grain of {:.4g} m over the floor "
+                              "under the footprint",
+                              top, 2 * region.r_lo)};
+  return std::nullopt;
+}
+
+void resolve_beds(SceneConfig& scene) {
+  bool any = false;
+  for (const EmitterConfig& e : scene.emitters) any = any || e.type == EmitterType::Bed;
+  if (!any) return;
+  const Geometry geometry = Geometry::from_config(scene.geometry, scene.material, scene.path);
+  for (std::size_t k = 0; k < scene.emitters.size(); ++k) {
+    EmitterConfig& e = scene.emitters[k];
+    if (e.type != EmitterType::Bed) continue;
+    BedPacking bed;
+    if (const auto problem =
+            pack_bed_emitter(e, scene.material, geometry, bed_seed(scene.simulation.seed, k), bed))
+      throw InputError(
+          fmt::format("{}: emitter[{}].{} {}", scene.path, k, problem->key, problem->what));
+    set_bed_extent(e, bed);
+  }
+}
+
+void set_bed_extent(EmitterConfig& e, const BedPacking& bed) {
+  e.count = static_cast<std::int64_t>(bed.size());
+  Real z_lo = bed.x[0].z - bed.r[0], z_hi = bed.x[0].z + bed.r[0];
+  for (std::size_t k = 0; k < bed.size(); ++k) {
+    z_lo = std::min(z_lo, bed.x[k].z - bed.r[k]);
+    z_hi = std::max(z_hi, bed.x[k].z + bed.r[k]);
+  }
+  e.center.z = 0.5 * (z_lo + z_hi);
+  e.size.z = z_hi - z_lo;
 }
 
 bool Emitter::near_slots(const Vec3& x, Real r) const {
@@ -235,6 +366,14 @@ void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vect
                    (1.0 / std::sqrt(3.0));
   };
 
+  if (config_.type == EmitterType::Bed) {
+    // the packed grains, at rest (the World seats them in surface mode)
+    out.reserve(out.size() + bed_.size());
+    for (std::size_t k = 0; k < bed_.size(); ++k) out.push_back({bed_.x[k], Vec3{}, bed_.r[k]});
+    emitted_ = static_cast<std::int64_t>(bed_.size());
+    bed_ = {};
+    return;
+  }
   if (config_.type != EmitterType::Pour) {
     out.reserve(out.size() + static_cast<std::size_t>(config_.count));
     for_each_box_slot([&](const Vec3& p) {

@@ -2,7 +2,10 @@
 // rectangle, each batch placed on free slots of a hexagonal pattern so that no two new grains
 // overlap, and the next batch waits until the last one has fallen one slot spacing. A block fills
 // a box with a jittered cubic lattice and gives it a velocity (a splash, a wave); a lattice fills a
-// box with a close-packed (FCC) lattice at rest (a prefilled pile).
+// box with a close-packed (FCC) lattice at rest (a prefilled pile). A bed fills a footprint, from
+// the scene's geometry up to a height, with a random packing at rest (geometry/bed_packing.hpp),
+// made once when the scene is loaded (resolve_beds: it decides the count) and again, the same,
+// by the World.
 #pragma once
 
 #include <cstdint>
@@ -14,6 +17,8 @@
 #include "core/rng.hpp"
 #include "core/vec3.hpp"
 #include "dem/grains.hpp"
+#include "geometry/bed_packing.hpp"
+#include "geometry/shapes.hpp"
 
 namespace sandflow {
 
@@ -40,6 +45,28 @@ Real pour_slots(const EmitterConfig& e, const MaterialConfig& m);
 /// same rows the emitter places.
 Real box_slots(const EmitterConfig& e, const MaterialConfig& m);
 
+/// The most grains a bed may hold: 2^31 - 1 (its grains are numbered by 32-bit ids; the scene's
+/// limit, 2e9 in all, is below it and is checked by the loader).
+inline constexpr Real kMaxBedGrains = 2147483647.0;
+
+/// The seed of the bed emitter[index] of a scene seeded `scene_seed`: each bed its own packing.
+std::uint64_t bed_seed(std::uint64_t scene_seed, std::size_t index);
+
+/// Packs the bed `e` (EmitterType::Bed) on `geometry`: the footprint e.center.xy +- e.size.xy / 2,
+/// the floor the highest solid top under each point below e.height, grains wholly outside every
+/// solid (to 1 % of a diameter). Returns what makes it impossible (the key at fault and the rest of
+/// the message: no solid under the footprint, no room for a grain, more than max_grains), or fills
+/// `out`.
+std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const MaterialConfig& m,
+                                               const Geometry& geometry, std::uint64_t seed,
+                                               BedPacking& out, Real max_grains = kMaxBedGrains);
+
+/// Sets count, center.z and size.z of every bed of the scene from its packing (the loader does it
+/// with the file's places; a scene built in code calls this). Throws InputError naming the bed.
+void resolve_beds(SceneConfig& scene);
+/// The count, center.z and size.z of the bed `e` from its packing (not empty).
+void set_bed_extent(EmitterConfig& e, const BedPacking& bed);
+
 struct NewGrain {
   Vec3 x, v;
   Real r;
@@ -64,6 +91,9 @@ class Emitter {
   /// the time between batches, so that batches never merge. Its grains are placed where their
   /// free fall since the batch's time has brought them. 0 for a block or a lattice.
   Real max_wait() const { return config_.type == EmitterType::Pour ? batch_interval_ / 2 : 0; }
+  /// A bed: its grains, packed (the World's, from the geometry); emitted at once at `start`, at
+  /// rest. InputError when their number is not the count the scene was loaded with.
+  void set_bed(BedPacking bed, const std::string& where);
   /// Pour: the most grains per second its slots let through without overlaps (0 otherwise).
   Real max_rate() const {
     return batch_interval_ > 0 ? static_cast<Real>(slots_.size()) / batch_interval_ : 0;
@@ -89,6 +119,7 @@ class Emitter {
     next_time_ = p.next_time;
     emitted_ = p.emitted;
     delayed_ = p.delayed;
+    if (done()) bed_ = {};  // (a bed emitted before the checkpoint: its grains are in the state)
   }
 
   /// Time the last grain is emitted [s].
@@ -119,6 +150,7 @@ class Emitter {
   Vec3 slot_lo_, slot_hi_;   ///< bounds of the slot centres (pour) or of the grains (box) [m]
   std::int64_t emitted_ = 0;
   std::int64_t delayed_ = 0;
+  BedPacking bed_;  ///< bed: its grains until they are emitted
 };
 
 }  // namespace sandflow

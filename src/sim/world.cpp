@@ -76,7 +76,19 @@ ContactParams contact_params(const MaterialConfig& m) {
 }
 
 void scale_grain_count(SceneConfig& scene, std::int64_t total) {
-  const std::int64_t old_total = scene.total_grains();
+  // a bed keeps its region, so its grains: the other emitters make the rest
+  std::int64_t beds = 0;
+  for (const EmitterConfig& e : scene.emitters)
+    if (e.type == EmitterType::Bed) beds += e.count;
+  const std::int64_t old_total = scene.total_grains() - beds;
+  if (beds > 0 && (old_total > 0 ? total <= beds : total != beds))
+    throw InputError(fmt::format(
+        "{}: --grains {}: the scene's beds hold {} grains, which --grains does not scale (a bed "
+        "keeps its region){}",
+        scene.path, total, beds,
+        old_total > 0 ? "; ask for more, the other emitters making the rest"
+                      : "; the scene has no other emitter"));
+  total -= beds;
   if (old_total <= 0 || scene.emitters.empty()) return;
   std::vector<std::int64_t> old_counts;
   for (const EmitterConfig& e : scene.emitters) old_counts.push_back(e.count);
@@ -84,6 +96,7 @@ void scale_grain_count(SceneConfig& scene, std::int64_t total) {
   std::vector<std::pair<double, std::size_t>> rem;
   std::int64_t sum = 0;
   for (std::size_t k = 0; k < scene.emitters.size(); ++k) {
+    if (scene.emitters[k].type == EmitterType::Bed) continue;
     const double exact = static_cast<double>(scene.emitters[k].count) * static_cast<double>(total) /
                          static_cast<double>(old_total);
     scene.emitters[k].count = static_cast<std::int64_t>(std::floor(exact));
@@ -96,7 +109,7 @@ void scale_grain_count(SceneConfig& scene, std::int64_t total) {
 
   for (std::size_t k = 0; k < scene.emitters.size(); ++k) {
     EmitterConfig& e = scene.emitters[k];
-    if (old_counts[k] <= 0 || e.count <= 0) continue;
+    if (old_counts[k] <= 0 || e.count <= 0 || e.type == EmitterType::Bed) continue;
     const double ratio = static_cast<double>(e.count) / static_cast<double>(old_counts[k]);
     if (e.type == EmitterType::Pour) {
       e.rate *= ratio;
@@ -216,9 +229,18 @@ World::World(const SceneConfig& scene)
       throw InputError(fmt::format("{}: {}", scene_.path, e.what()));
     }
   }
-  for (std::size_t k = 0; k < scene.emitters.size(); ++k)
-    emitters_.emplace_back(scene.emitters[k], scene.material, scene.simulation.gravity,
-                           fmt::format("{}: emitter[{}]", scene.path, k));
+  for (std::size_t k = 0; k < scene.emitters.size(); ++k) {
+    const std::string where = fmt::format("{}: emitter[{}]", scene.path, k);
+    emitters_.emplace_back(scene.emitters[k], scene.material, scene.simulation.gravity, where);
+    if (scene.emitters[k].type != EmitterType::Bed) continue;
+    // a bed is packed again, the same as when the scene was loaded (resolve_beds), on this
+    // geometry and seed
+    BedPacking bed;
+    if (const auto problem = pack_bed_emitter(scene.emitters[k], scene.material, geometry_,
+                                              bed_seed(scene.simulation.seed, k), bed))
+      throw InputError(fmt::format("{}.{} {}", where, problem->key, problem->what));
+    emitters_.back().set_bed(std::move(bed), where);
+  }
   scene_domain(scene_, geometry_, domain_lo_, domain_hi_);
   // a solid removed at time t goes at the first step that starts at or after t
   for (const GeometryConfig& g : scene_.geometry)
@@ -280,11 +302,31 @@ void World::emit() {
       for (std::size_t k = 0; k < static_.size(); ++k) consider(static_.x[k], static_.r[k]);
       for (const NewGrain& g : new_grains_) consider(g.x, g.r);
     }
+    if (e.type() == EmitterType::Bed && surface_) {
+      seat_bed(e);
+      continue;
+    }
     e.emit(time_, rng_, new_grains_, nearby_x_, nearby_r_);
   }
   if (new_grains_.empty()) return;
   for (const NewGrain& g : new_grains_)
     grains_.add(next_id_++, g.x, g.v, g.r, scene_.material.density);
+  dem_.invalidate();
+}
+
+void World::seat_bed(Emitter& e) {
+  std::vector<NewGrain> bed;
+  e.emit(time_, rng_, bed);
+  if (bed.empty()) return;
+  std::vector<GrainId> ids(bed.size());
+  std::vector<Vec3> x(bed.size());
+  std::vector<Real> r(bed.size());
+  for (std::size_t k = 0; k < bed.size(); ++k) {
+    ids[k] = next_id_++;
+    x[k] = bed[k].x;
+    r[k] = bed[k].r;
+  }
+  surface_->seat_bed(grains_, static_, ids, x, r);
   dem_.invalidate();
 }
 

@@ -48,7 +48,9 @@ ContactParams contact_params(const MaterialConfig& m);
 /// keeping the scene's character: a pour keeps its start and duration (its rate scales with its
 /// count), so that a smaller run is a preview of the same shot; a block or lattice keeps its
 /// proportions, the centre of its bottom face and its spacing (its box scales with the cube root
-/// of its count, grown until the count fits).
+/// of its count, grown until the count fits). A bed keeps its region and its grains: the other
+/// emitters make the rest (InputError when `total` leaves them none, or differs from the beds'
+/// grains in a scene of beds only).
 void scale_grain_count(SceneConfig& scene, std::int64_t total);
 
 struct FrameStats {
@@ -156,6 +158,8 @@ class World {
   /// Guards: the solids whose time has come are removed, then check_grains.
   void begin_step();
   void emit();
+  /// A bed's grains, in surface mode: to the layers where they rest (SurfaceFlow::seat_bed).
+  void seat_bed(Emitter& e);
   /// Height field: measure H, evolve h through the exchange (an update, every update_steps).
   void update_height_field();
   /// Impacts: the static top held below the grains that move the pile (the same update).

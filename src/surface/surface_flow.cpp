@@ -22,6 +22,12 @@ void SurfaceFlow::update_height_field(const Grains& hot, const StaticStore& st,
   counts_.resize(hot.size());
   for (std::size_t i = 0; i < hot.size(); ++i)
     counts_[i] = hot.state[i] != GrainState::Active || (contacts_[i] & DemSolver::kTouches);
+  // (a bed's ACTIVE grains, seated before the DEM has seen their contacts, are part of the pile)
+  if (!seated_.empty()) {
+    for (std::size_t i = 0; i < hot.size(); ++i)
+      counts_[i] |= std::binary_search(seated_.begin(), seated_.end(), hot.id[i]);
+    seated_.clear();
+  }
   hf_.measure(hot, interface_.static_tops(hf_, st), counts_);
   // The columns where grains move: a grain in contact with the pile with the energy to leave a
   // seat (seat.hpp). There the rolling layer flows (BCRE with theta0); elsewhere it is at rest
@@ -36,6 +42,58 @@ void SurfaceFlow::update_height_field(const Grains& hot, const StaticStore& st,
     hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) { flowing_[c] = 1; });
   }
   hf_.exchange(dt, flowing_);
+}
+
+SurfaceFlow::Seating SurfaceFlow::seat_bed(Grains& hot, StaticStore& st,
+                                           const std::vector<GrainId>& ids,
+                                           const std::vector<Vec3>& x, const std::vector<Real>& r) {
+  Seating out;
+  const std::vector<Real>& L = hf_.terrain();
+  // H: the top of the bed's grains in each column they reach (above its level)
+  std::vector<Real> H = hf_.surface(), h = hf_.static_top();
+  std::vector<std::uint8_t> bed(hf_.columns(), 0);
+  Real r_max = 0;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    r_max = std::max(r_max, r[k]);
+    hf_.for_each_ray_hit(x[k], r[k], [&](std::size_t c, Real, Real top) {
+      if (x[k].z < L[c]) return;
+      H[c] = std::max(H[c], top);
+      bed[c] = 1;
+    });
+  }
+  // h: R_min below H, as exchange() leaves a column at rest, so that the next update neither
+  // erodes nor wakes the bed
+  for (std::size_t c = 0; c < bed.size(); ++c)
+    if (bed[c]) h[c] = std::max(h[c], H[c] - p_.grid.rolling_min);
+  hf_.set_surface(H);
+  hf_.set_static_top(h);
+
+  // each grain to its layer: ACTIVE above h, INTERFACE in the band, STATIC below it and below the
+  // reach of any ACTIVE grain (two radii and an allowance of a diameter: the invariant of the
+  // layers holds from the first rebuild on)
+  const Real T = p_.interface.thickness, m = p_.interface.margin;
+  const Real reach = 4 * r_max;
+  const Real density = p_.interface.density;
+  seated_.clear();
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const std::int64_t c = hf_.column_of(x[k].x, x[k].y);
+    const Real top = c < 0 ? 0 : hf_.static_top_at(x[k].x, x[k].y);
+    if (c < 0 || x[k].z < L[static_cast<std::size_t>(c)] || x[k].z > top) {
+      hot.add(ids[k], x[k], Vec3{}, r[k], density);
+      seated_.push_back(ids[k]);
+      ++out.active;
+    } else if (x[k].z < top - T - m - reach) {
+      st.add(ids[k], x[k], r[k], static_cast<std::uint32_t>(c));
+      ++out.statics;
+    } else {
+      hot.add(ids[k], x[k], Vec3{}, r[k], density);
+      hot.state.back() = GrainState::Interface;
+      ++out.interface;
+    }
+  }
+  std::sort(seated_.begin(), seated_.end());
+  if (out.statics > 0) st.file_by_column(hf_.columns());
+  return out;
 }
 
 void SurfaceFlow::apply_impacts(const Grains& hot, Real dt) {

@@ -56,6 +56,20 @@ class SurfaceFlow {
   /// every STATIC grain within reach of an ACTIVE grain wakes (InterfaceLayer::wake_within_reach).
   Transitions wake_within_reach(Grains& hot, StaticStore& st, const DemSolver& dem, Real dt);
 
+  /// A bed born at rest (sim/emitters.hpp, docs/design.md §7): new grains ids[k] at x[k] with
+  /// radii r[k] go straight to the layers an update would keep a resting pile in. H, where they
+  /// lie, rises to their top; h to H - rolling_min (the R_min of a column at rest, as exchange()
+  /// holds it); a grain above h is ACTIVE at rest, one in the band [h - T, h] (widened down by the
+  /// reach of an ACTIVE grain, so that no STATIC grain starts within it) INTERFACE, a deeper one
+  /// STATIC; a grain outside the grid or under its column's level is ACTIVE. The ACTIVE grains
+  /// count in the next measure of H though the DEM has not yet seen their contacts. Returns how
+  /// many went to each state.
+  struct Seating {
+    std::int64_t active = 0, interface = 0, statics = 0;
+  };
+  Seating seat_bed(Grains& hot, StaticStore& st, const std::vector<GrainId>& ids,
+                   const std::vector<Vec3>& x, const std::vector<Real>& r);
+
   const SurfaceParams& params() const { return p_; }
   const HeightField& height_field() const { return hf_; }
 
@@ -79,6 +93,8 @@ class SurfaceFlow {
   std::vector<std::uint8_t> contacts_, counts_, flowing_;
   std::vector<std::uint32_t> fast_;  ///< the hot grains that move the pile, at the last update
   std::vector<Real> allow_;
+  /// ACTIVE grains seated by seat_bed: part of the pile at the next measure (sorted ids)
+  std::vector<GrainId> seated_;
   bool pending_ = false;  ///< transitions that change the pair list wait for its next rebuild
 };
 

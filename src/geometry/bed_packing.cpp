@@ -1,0 +1,812 @@
+#include "geometry/bed_packing.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "core/rng.hpp"
+
+namespace sandflow {
+
+namespace {
+
+constexpr Real kInf = std::numeric_limits<Real>::infinity();
+constexpr Real kTwoPi = 2 * kPi;
+/// The most samples of the floor and of the top: 2^22 each (32 MiB); a larger footprint is
+/// sampled more coarsely than r_lo.
+constexpr Real kMaxMapSamples = 4194304.0;
+/// A grain that has not come to rest after this many arcs is discarded (rounding can make a
+/// grain take and leave the same contact over and over; real sequences take a handful).
+constexpr int kMaxArcs = 64;
+/// The packing fraction estimate_bed_grains assumes.
+constexpr Real kEstimatePacking = 0.60;
+
+// ---- The floor and the top, sampled ---------------------------------------------------------
+
+struct Map {
+  Real x0 = 0, y0 = 0, hx = 1, hy = 1;
+  int mx = 2, my = 2;
+  std::vector<Real> v;
+  Real lo = 0, hi = 0;  ///< smallest and largest sample
+
+  Real at(int i, int j) const { return v[static_cast<std::size_t>(j) * mx + i]; }
+
+  /// Bilinear value and gradient at (x, y), clamped to the map.
+  Real eval(Real x, Real y, Real& fx, Real& fy) const {
+    const Real u = std::clamp((x - x0) / hx, 0.0, static_cast<Real>(mx - 1));
+    const Real w = std::clamp((y - y0) / hy, 0.0, static_cast<Real>(my - 1));
+    const int i = std::min(static_cast<int>(u), mx - 2);
+    const int j = std::min(static_cast<int>(w), my - 2);
+    const Real a = u - i, b = w - j;
+    const Real f00 = at(i, j), f10 = at(i + 1, j), f01 = at(i, j + 1), f11 = at(i + 1, j + 1);
+    fx = ((1 - b) * (f10 - f00) + b * (f11 - f01)) / hx;
+    fy = ((1 - a) * (f01 - f00) + a * (f11 - f10)) / hy;
+    return (1 - b) * ((1 - a) * f00 + a * f10) + b * ((1 - a) * f01 + a * f11);
+  }
+  Real value(Real x, Real y) const {
+    Real fx, fy;
+    return eval(x, y, fx, fy);
+  }
+};
+
+Map sample_map(const BedRegion& R, const std::function<Real(Real, Real)>& f, const char* what) {
+  Map m;
+  const Real w = R.x1 - R.x0, h = R.y1 - R.y0;
+  Real spacing = R.r_lo;
+  const Real n = (w / spacing + 2) * (h / spacing + 2);
+  if (n > kMaxMapSamples) spacing *= std::sqrt(n / kMaxMapSamples);
+  m.mx = std::max(2, static_cast<int>(std::ceil(w / spacing)) + 1);
+  m.my = std::max(2, static_cast<int>(std::ceil(h / spacing)) + 1);
+  m.x0 = R.x0;
+  m.y0 = R.y0;
+  m.hx = w / (m.mx - 1);
+  m.hy = h / (m.my - 1);
+  m.v.resize(static_cast<std::size_t>(m.mx) * m.my);
+  m.lo = kInf;
+  m.hi = -kInf;
+  for (int j = 0; j < m.my; ++j)
+    for (int i = 0; i < m.mx; ++i) {
+      const Real z = f(m.x0 + i * m.hx, m.y0 + j * m.hy);
+      if (!std::isfinite(z))
+        throw std::invalid_argument(std::string("bed packing: the ") + what +
+                                    " is not finite at a point of the footprint");
+      m.v[static_cast<std::size_t>(j) * m.mx + i] = z;
+      m.lo = std::min(m.lo, z);
+      m.hi = std::max(m.hi, z);
+    }
+  return m;
+}
+
+void check_region(const BedRegion& R) {
+  if (!(R.x1 > R.x0 && R.y1 > R.y0) || !std::isfinite(R.x1 - R.x0) || !std::isfinite(R.y1 - R.y0))
+    throw std::invalid_argument("bed packing: the footprint is empty or not finite");
+  if (!(R.r_lo > 0 && R.r_hi >= R.r_lo) || !std::isfinite(R.r_hi))
+    throw std::invalid_argument("bed packing: radii need 0 < r_lo <= r_hi");
+  if (!R.floor || !R.top) throw std::invalid_argument("bed packing: needs a floor and a top");
+  if (R.patience < 1) throw std::invalid_argument("bed packing: patience must be at least 1");
+}
+
+Real mean_grain_volume(const BedRegion& R) {
+  // <r^3> for r uniform in [r_lo, r_hi]
+  const Real a = R.r_lo, b = R.r_hi;
+  const Real r3 = b > a ? (b * b * b * b - a * a * a * a) / (4 * (b - a)) : a * a * a;
+  return 4.0 / 3.0 * kPi * r3;
+}
+
+Real estimate_from_maps(const BedRegion& R, const Map& floor, const Map& top) {
+  Real volume = 0;
+  for (int j = 0; j + 1 < floor.my; ++j)
+    for (int i = 0; i + 1 < floor.mx; ++i) {
+      Real dz = 0;
+      for (int q = 0; q < 4; ++q)
+        dz += std::max(0.0, top.at(i + q % 2, j + q / 2) - floor.at(i + q % 2, j + q / 2));
+      volume += dz / 4;
+    }
+  return volume * floor.hx * floor.hy * kEstimatePacking / mean_grain_volume(R);
+}
+
+// ---- Arcs and the events along them -----------------------------------------------------------
+
+/// The first t in [0, t_max] where g(t) = k + a cos t + b sin t falls through 0, or kInf. A
+/// contact touching now (g(0) <= 0, to rounding) and closing (g'(0) = b < 0) is met at once; one
+/// touching and opening is met again only after it has opened.
+inline Real first_entry(Real k, Real a, Real b, Real t_max) {
+  const Real g0 = k + a;
+  const Real r2 = a * a + b * b;
+  const Real r = std::sqrt(r2);
+  // (closing slower than choose_supports' tolerance is leaving, as choose_supports decided: a
+  // contact the grain has just left at a lift-off, where it moves along it)
+  if (g0 <= 0 && b < -1e-9 * r) return 0;
+  if (k * k >= r2) return kInf;  // g keeps its sign
+  // g = k + r cos(t - phi) falls through 0 where t - phi = acos(-k / r); into (0, 2 pi] (t lies
+  // within (-pi, 2 pi]: no floor, a libm call without SSE4.1)
+  Real t = std::atan2(b, a) + std::acos(-k / r);
+  if (t > kTwoPi) t -= kTwoPi;
+  if (g0 > 0) {
+    // the root lies ahead: a hair behind 0 is rounding
+    if (t < 0) t = t > -1e-6 ? 0 : t + kTwoPi;
+  } else if (t < 1e-6) {
+    t += kTwoPi;  // touching and opening: the root just passed (or rounding put it a hair ahead)
+  }
+  return t <= t_max ? t : kInf;
+}
+
+/// A circle c + rho (cos t e1 + sin t e2), followed from t = 0 (the grain's centre now) down.
+struct Arc {
+  Vec3 c, e1, e2;
+  Real rho = 0;
+  Real t_max = 0;
+  Vec3 at(Real t) const { return c + (e1 * std::cos(t) + e2 * std::sin(t)) * rho; }
+};
+
+struct Cell {
+  Real x, y, z, r;
+};
+
+/// A contact: a grain (id >= 0) or a wall of the footprint (kWall0 - k, k = 0..3).
+constexpr int kWall0 = -1;
+constexpr int kFloor = -100;
+inline bool is_wall(int id) {
+  return id < 0;
+}
+inline int wall_index(int id) {
+  return kWall0 - id;
+}
+
+/// Which of m <= 3 touching contacts (unit normals n, pointing to the grain) hold the grain, as
+/// quasi-static rolling has it: the subset S whose contacts push (multipliers N > 0) while the
+/// motion they leave, gravity projected on the directions they allow, moves away from the others
+/// (v . n_j >= 0). Returns the subset as a bit mask; all m bits with m = 3: at rest. -1: none
+/// fits (rounding at a degenerate configuration). A tiny non-negative least-squares problem,
+/// solved by trying the subsets, largest first.
+int choose_supports(const Vec3* n, int m) {
+  constexpr Real kPush = 1e-12, kAway = -1e-9;
+  const Vec3 ez{0, 0, 1};
+  auto away = [&](const Vec3& v, int mask) {
+    for (int j = 0; j < m; ++j)
+      if (!(mask >> j & 1) && dot(v, n[j]) < kAway) return false;
+    return true;
+  };
+  if (m == 3) {
+    const Real det = dot(n[0], cross(n[1], n[2]));
+    if (std::abs(det) > 1e-12) {
+      const Real N0 = cross(n[1], n[2]).z / det, N1 = cross(n[2], n[0]).z / det,
+                 N2 = cross(n[0], n[1]).z / det;
+      if (N0 >= 0 && N1 >= 0 && N2 >= 0) return 7;
+    }
+  }
+  // pairs: N from the 2 x 2 Gram system, v = -ez + N_a n_a + N_b n_b along their groove
+  for (int a = 0; a < m; ++a)
+    for (int b = a + 1; b < m; ++b) {
+      const Real k = dot(n[a], n[b]);
+      if (1 - k * k < 1e-12) continue;
+      const Real Na = (n[a].z - k * n[b].z) / (1 - k * k), Nb = (n[b].z - k * n[a].z) / (1 - k * k);
+      if (Na <= kPush || Nb <= kPush) continue;
+      if (away(n[a] * Na + n[b] * Nb - ez, 1 << a | 1 << b)) return 1 << a | 1 << b;
+    }
+  for (int a = 0; a < m; ++a)
+    if (n[a].z > kPush && away(n[a] * n[a].z - ez, 1 << a)) return 1 << a;
+  if (away(-ez, 0)) return 0;
+  return -1;
+}
+
+class Packer {
+ public:
+  explicit Packer(const BedRegion& R) : R_(R) {}
+  BedPacking run();
+
+ private:
+  // where a grain of radius r dropped at (x, y) comes to rest; false: discarded
+  bool drop(Real x, Real y, Real r, Vec3& rest);
+  // the highest contact below z_max on the vertical line at (x, y): a grain, or kFloor
+  int fall(Real x, Real y, Real r, Real z_max, int exclude, Real& z) const;
+  Real floor_rest(Real x, Real y, Real r) const;
+  // the first contact met along the arc (not one of `held`), and where (t); kInf when none
+  void first_contact(const Arc& arc, Real r, const int* held, int n_held, Real& t, int& id) const;
+  Vec3 normal(int id, const Vec3& p, Real r) const;
+  // gap along the arc of contact id: k + a cos t + b sin t
+  void gap(int id, const Arc& arc, Real r, Real& k, Real& a, Real& b) const;
+  void insert(const Vec3& p, Real r);
+
+  // (clamped before the cast, which then truncates as floor would: std::floor is a libm call
+  // without SSE4.1, and these run in the innermost loops)
+  static int index(Real u, int n) {
+    return u <= 0 ? 0 : (u >= n - 1 ? n - 1 : static_cast<int>(u));
+  }
+  int column_x(Real x) const { return index((x - R_.x0) * inv_cs_, nx_); }
+  int column_y(Real y) const { return index((y - R_.y0) * inv_cs_, ny_); }
+  int layer(Real z) const { return index((z - z0_) * inv_cs_, nz_); }
+  std::size_t cell(int ix, int iy, int iz) const {
+    return (static_cast<std::size_t>(iy) * nx_ + ix) * nz_ + iz;
+  }
+
+  const BedRegion& R_;
+  Map floor_, top_;
+  bool flat_floor_ = false;
+  Real cs_ = 0, inv_cs_ = 0, z0_ = 0;
+  int nx_ = 1, ny_ = 1, nz_ = 1;
+  // Each cell holds its first three grains inline, in one cache line (coordinates as floats
+  // relative to the cell's low corner: within 6e-8 of its width, far below the 1e-6 d the
+  // contacts are exact to), and chains the rest through next_ (rare: a cell holds 1.15 grains
+  // on average at this packing). A scan reads a cell's line, not a list spread over memory.
+  struct alignas(64) Slots {
+    float x[3], y[3], z[3], r[3];
+    std::int32_t id[3] = {-1, -1, -1};
+    std::int32_t more = -1;
+  };
+  static_assert(sizeof(Slots) == 64);
+  std::vector<Slots> cells_;
+  std::vector<std::int32_t> next_;
+  /// Calls f(id, x, y, z, r) for every grain of cell (ix, iy, iz).
+  template <class F>
+  void visit(int ix, int iy, int iz, F&& f) const {
+    const Slots& s = cells_[cell(ix, iy, iz)];
+    const Real cx = R_.x0 + ix * cs_, cy = R_.y0 + iy * cs_, cz = z0_ + iz * cs_;
+    for (int k = 0; k < 3; ++k) {
+      if (s.id[k] < 0) return;
+      f(s.id[k], cx + s.x[k], cy + s.y[k], cz + s.z[k], static_cast<Real>(s.r[k]));
+    }
+    for (std::int32_t q = s.more; q >= 0; q = next_[q]) f(q, g_[q].x, g_[q].y, g_[q].z, g_[q].r);
+  }
+  std::vector<std::int32_t> col_top_;  ///< per column: highest layer holding a grain, or -1
+  std::vector<Real> col_floor_;        ///< per column: the highest floor within r_hi of it
+  std::vector<Cell> g_;
+  // the walls' planes for the grain being dropped: n . p >= w
+  std::array<Vec3, 4> wall_n_{Vec3{1, 0, 0}, Vec3{-1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, -1, 0}};
+  std::array<Real, 4> wall_w_{};
+};
+
+Real Packer::floor_rest(Real x, Real y, Real r) const {
+  if (flat_floor_) return floor_.lo + r;
+  // a tangent plane at the centre: exact on a plane, conservative on a bump, within r^2 / R_c in
+  // a hollow of curvature radius R_c
+  Real fx, fy;
+  const Real f = floor_.eval(x, y, fx, fy);
+  const Real g2 = fx * fx + fy * fy;
+  if (g2 <= 1) return f + r * std::sqrt(1 + g2);
+  // steeper than 45 degrees (a step, the flank of an obstacle), where a tangent plane would lift
+  // the grain into the air: the floor at points r / 4 apart under the grain ("nails"), between
+  // which it sinks at most (r / 4)^2 / (2 r) = r / 32 into a plane
+  Real best = f + r;
+  const Real h = r / 4;
+  for (int j = -4; j <= 4; ++j)
+    for (int i = -4; i <= 4; ++i) {
+      const Real rho2 = (i * i + j * j) * h * h;
+      if (rho2 >= r * r) continue;
+      best = std::max(best, floor_.value(x + i * h, y + j * h) + std::sqrt(r * r - rho2));
+    }
+  return best;
+}
+
+int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Real& z) const {
+  Real best = floor_rest(x, y, r);
+  int hit = kFloor;
+  const int cx = column_x(x), cy = column_y(y);
+  const int jx0 = std::max(cx - 1, 0), jx1 = std::min(cx + 1, nx_ - 1);
+  const int jy0 = std::max(cy - 1, 0), jy1 = std::min(cy + 1, ny_ - 1);
+  int top = -1;
+  for (int jy = jy0; jy <= jy1; ++jy)
+    for (int jx = jx0; jx <= jx1; ++jx)
+      top = std::max(top, col_top_[static_cast<std::size_t>(jy) * nx_ + jx]);
+  if (z_max < kInf) top = std::min(top, layer(z_max + r + R_.r_hi));
+  // layer by layer from the highest of the 3 x 3 columns down: every grain of layer iz and below
+  // lies under z0 + (iz + 1) cs, so none of them can be met higher than that plus two radii
+  for (int iz = top; iz >= 0 && z0_ + (iz + 1) * cs_ + r + R_.r_hi > best; --iz)
+    for (int jy = jy0; jy <= jy1; ++jy)
+      for (int jx = jx0; jx <= jx1; ++jx)
+        visit(jx, jy, iz, [&](std::int32_t k, Real ox, Real oy, Real oz, Real orad) {
+          const Real dx = ox - x, dy = oy - y, s = r + orad;
+          const Real rho2 = dx * dx + dy * dy;
+          if (rho2 >= s * s || k == exclude) return;
+          const Real zc = oz + std::sqrt(s * s - rho2);
+          if (zc > best && zc < z_max - 1e-10 * cs_) {
+            best = zc;
+            hit = k;
+          }
+        });
+  z = std::min(best, z_max);
+  return hit;
+}
+
+Vec3 Packer::normal(int id, const Vec3& p, Real r) const {
+  if (is_wall(id)) return wall_n_[wall_index(id)];
+  const Cell& o = g_[id];
+  return (p - Vec3{o.x, o.y, o.z}) / (r + o.r);
+}
+
+void Packer::gap(int id, const Arc& arc, Real r, Real& k, Real& a, Real& b) const {
+  if (is_wall(id)) {
+    const int w = wall_index(id);
+    const Vec3& n = wall_n_[w];
+    k = dot(n, arc.c) - wall_w_[w];
+    a = arc.rho * dot(n, arc.e1);
+    b = arc.rho * dot(n, arc.e2);
+    return;
+  }
+  const Cell& o = g_[id];
+  const Vec3 d = arc.c - Vec3{o.x, o.y, o.z};
+  const Real s = r + o.r;
+  k = dot(d, d) + arc.rho * arc.rho - s * s;
+  a = 2 * arc.rho * dot(d, arc.e1);
+  b = 2 * arc.rho * dot(d, arc.e2);
+}
+
+void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, Real& t,
+                           int& id) const {
+  t = kInf;
+  id = kFloor;
+  auto is_held = [&](int q) {
+    for (int h = 0; h < n_held; ++h)
+      if (held[h] == q) return true;
+    return false;
+  };
+  // Whether g(t) = k + a cos t + b sin t, positive at 0, falls through 0 by t = T (T <= pi,
+  // cos T and sin T given), without trigonometry: at T, or at its minimum (t = phi + pi, where
+  // (cos t, sin t) = -(a, b) / R) if that lies in [0, T] and is below 0.
+  const Real T = arc.t_max;
+  const Real cT = std::cos(T), sT = std::sin(T);
+  const bool narrow = T <= kPi;
+  auto within = [&](Real k, Real a, Real b) {
+    if (!narrow || (k + a <= 0 && b < 0)) return true;  // (first_entry decides)
+    if (k + a * cT + b * sT <= 0) return true;
+    // the direction (-a, -b) in the sector [0, T]: at or above the t = 0 axis, and not past T
+    return -b >= 0 && (-a) * sT - (-b) * cT >= 0 && k * k < a * a + b * b;
+  };
+  // the walls
+  for (int w = 0; w < 4; ++w) {
+    const int q = kWall0 - w;
+    if (is_held(q)) continue;
+    Real k, a, b;
+    gap(q, arc, r, k, a, b);
+    if (!within(k, a, b)) continue;
+    const Real tw = first_entry(k, a, b, T);
+    if (tw < t) t = tw, id = q;
+  }
+  // the grains near the arc: the cells of its bounding box widened by a contact's reach; the
+  // box holds the two ends and, on each axis, the circle's extreme point if the arc passes it
+  const Vec3 p0 = arc.at(0), p1 = arc.c + (arc.e1 * cT + arc.e2 * sT) * arc.rho;
+  Vec3 lo = min(p0, p1), hi = max(p0, p1);
+  for (int ax = 0; ax < 3; ++ax) {
+    const Real u = arc.e1[ax], v = arc.e2[ax];  // coordinate: c + rho (u cos t + v sin t)
+    const Real m = std::sqrt(u * u + v * v);
+    // the maximum is at direction (u, v), the minimum at (-u, -v)
+    for (Real sgn : {1.0, -1.0}) {
+      const Real du = sgn * u, dv = sgn * v;
+      const bool in = !narrow || (dv >= 0 && du * sT - dv * cT >= 0);
+      if (!in) continue;
+      const Real e = arc.c[ax] + sgn * m * arc.rho;
+      if (sgn > 0)
+        hi[ax] = std::max(hi[ax], e);
+      else
+        lo[ax] = std::min(lo[ax], e);
+    }
+  }
+  const Real reach = r + R_.r_hi;
+  const int ix0 = column_x(lo.x - reach), ix1 = column_x(hi.x + reach);
+  const int iy0 = column_y(lo.y - reach), iy1 = column_y(hi.y + reach);
+  const int iz0 = layer(lo.z - reach), iz1 = layer(hi.z + reach);
+  for (int iy = iy0; iy <= iy1; ++iy)
+    for (int ix = ix0; ix <= ix1; ++ix) {
+      const int top = std::min(iz1, col_top_[static_cast<std::size_t>(iy) * nx_ + ix]);
+      for (int iz = iz0; iz <= top; ++iz)
+        visit(ix, iy, iz, [&](std::int32_t q, Real ox, Real oy, Real oz, Real orad) {
+          const Real s = r + orad;
+          // (the arc's box widened by this grain's reach: most grains of the cells are outside)
+          if (ox < lo.x - s || ox > hi.x + s || oy < lo.y - s || oy > hi.y + s || oz < lo.z - s ||
+              oz > hi.z + s)
+            return;
+          const Vec3 d = arc.c - Vec3{ox, oy, oz};
+          const Real k = dot(d, d) + arc.rho * arc.rho - s * s;
+          const Real a = 2 * arc.rho * dot(d, arc.e1);
+          const Real b = 2 * arc.rho * dot(d, arc.e2);
+          if (k > 0 && k * k >= a * a + b * b) return;  // never within reach of the circle
+          if (!within(k, a, b) || is_held(q)) return;
+          const Real tq = first_entry(k, a, b, std::min(t, T));
+          if (tq < t) t = tq, id = q;
+        });
+    }
+}
+
+bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
+  wall_w_ = {R_.x0 + r, -(R_.x1 - r), R_.y0 + r, -(R_.y1 - r)};
+  Vec3 p{x, y, kInf};
+  int held[3];
+  int n_held = 0;
+  int exclude = kFloor;
+  const Vec3 ez{0, 0, 1};
+  auto on_floor = [&](const Vec3& q) { return q.z <= floor_rest(q.x, q.y, r); };
+
+  for (int step = 0; step < kMaxArcs; ++step) {
+    // no grain among the supports: fall straight down (a wall does not hold a grain up)
+    bool any_grain = false;
+    for (int h = 0; h < n_held; ++h) any_grain = any_grain || !is_wall(held[h]);
+    if (!any_grain) {
+      Real z;
+      const int hit = fall(p.x, p.y, r, p.z, exclude, z);
+      p.z = z;
+      if (hit == kFloor) {
+        rest = p;
+        return true;
+      }
+      held[0] = hit;
+      n_held = 1;  // (walls touched on the way are met again at once if the roll closes on them)
+      exclude = kFloor;
+      continue;
+    }
+
+    // the arc the grain follows on its supports: over one grain, or in the groove of two (a grain
+    // and a grain, or a grain and a wall)
+    Arc arc;
+    int other = kFloor;
+    if (n_held == 1) {
+      const Cell& o = g_[held[0]];
+      const Vec3 a{o.x, o.y, o.z};
+      const Real s = r + o.r;
+      Vec3 e1 = p - a;
+      e1 = e1 / norm(e1);
+      p = a + e1 * s;
+      if (e1.z <= 1e-12) {  // at or below its equator: it leaves the grain
+        exclude = held[0];
+        n_held = 0;
+        continue;
+      }
+      Vec3 t = e1 * e1.z - ez;  // steepest descent on the sphere
+      Real tn = norm(t);
+      if (tn < 1e-12) {  // dropped exactly on the top: any way down
+        t = Vec3{1, 0, 0} - e1 * e1.x;
+        tn = norm(t);
+      }
+      arc.c = a;
+      arc.rho = s;
+      arc.e1 = e1;
+      arc.e2 = t / tn;
+      // the equator: p.z - a.z = rho (e1.z cos t + e2.z sin t) falls through 0
+      arc.t_max = first_entry(0, s * arc.e1.z, s * arc.e2.z, kPi);
+      if (arc.t_max == kInf) arc.t_max = kPi / 2;
+      other = kFloor - 1;  // (the equator)
+    } else {
+      int gi = held[0], wj = held[1];
+      if (is_wall(gi)) std::swap(gi, wj);
+      const Cell& o = g_[gi];
+      const Vec3 a{o.x, o.y, o.z};
+      const Real sa = r + o.r;
+      Vec3 u;
+      Real along, rho2;
+      if (is_wall(wj)) {
+        const int w = wall_index(wj);
+        u = wall_n_[w];
+        along = wall_w_[w] - dot(u, a);
+        rho2 = sa * sa - along * along;
+      } else {
+        const Cell& ob = g_[wj];
+        u = Vec3{ob.x, ob.y, ob.z} - a;
+        const Real L = norm(u);
+        u = u / L;
+        const Real sb = r + ob.r;
+        along = (L * L + sa * sa - sb * sb) / (2 * L);
+        rho2 = sa * sa - along * along;
+      }
+      if (!(rho2 > 0)) return false;  // (rounding: the two cannot both be touched)
+      arc.c = a + u * along;
+      arc.rho = std::sqrt(rho2);
+      Vec3 e1 = p - arc.c;
+      e1 = e1 - u * dot(u, e1);
+      e1 = e1 / norm(e1);
+      p = arc.c + e1 * arc.rho;
+      Vec3 e2 = cross(u, e1);
+      if (e2.z > 0) e2 = -e2;
+      arc.e1 = e1;
+      arc.e2 = e2;
+      // the support each contact gives: N_q ~ n_q.ez - k n_other.ez with k = n_0 . n_1, constant
+      // on the circle; n_q.ez = (c.z - x_q.z + rho (e1.z cos t + e2.z sin t)) / s_q for a grain
+      const Vec3 n0 = normal(held[0], p, r), n1 = normal(held[1], p, r);
+      const Real kk = dot(n0, n1);
+      Real zk[2], za[2], zb[2];
+      for (int h = 0; h < 2; ++h) {
+        if (is_wall(held[h])) {
+          zk[h] = za[h] = zb[h] = 0;
+          continue;
+        }
+        const Cell& q = g_[held[h]];
+        const Real s = r + q.r;
+        zk[h] = (arc.c.z - q.z) / s;
+        za[h] = arc.rho * e1.z / s;
+        zb[h] = arc.rho * e2.z / s;
+      }
+      // the lowest point of the circle bounds the arc (no grain rests on two: it is left first)
+      arc.t_max = first_entry(0, -arc.rho * e2.z, arc.rho * e1.z, kTwoPi);
+      if (arc.t_max == kInf) arc.t_max = kPi;
+      Real t_off = kInf;
+      for (int h = 0; h < 2; ++h) {
+        const Real to = first_entry(zk[h] - kk * zk[1 - h], za[h] - kk * za[1 - h],
+                                    zb[h] - kk * zb[1 - h], arc.t_max);
+        if (to < t_off) t_off = to, other = held[h];
+      }
+      if (t_off < kInf)
+        arc.t_max = t_off;
+      else
+        other = held[zk[0] < zk[1] ? 0 : 1];
+    }
+
+    // along the arc: the first new contact, else its end (the equator, a lift-off)
+    Real t;
+    int hit;
+    first_contact(arc, r, held, n_held, t, hit);
+    if (t == kInf) t = arc.t_max;
+    Vec3 q = arc.at(t);
+    // the floor met on the way: the grain rests there
+    const int col = column_y(q.y) * nx_ + column_x(q.x);
+    if (q.z - r <= col_floor_[static_cast<std::size_t>(col)] && on_floor(q)) {
+      Real lo = 0, hi = t;
+      for (int it = 0; it < 48 && hi - lo > 1e-12; ++it) {
+        const Real mid = 0.5 * (lo + hi);
+        (on_floor(arc.at(mid)) ? hi : lo) = mid;
+      }
+      rest = arc.at(hi);  // (the first point of the arc found on the floor, to 1e-12 rad)
+      return true;
+    }
+    p = q;
+    if (hit == kFloor) {
+      // the end of the arc: off the equator (fall), or a lift-off (roll on the other)
+      if (n_held == 1) {
+        exclude = held[0];
+        n_held = 0;
+      } else {
+        const int keep = held[0] == other ? held[1] : held[0];
+        exclude = other;
+        held[0] = keep;
+        n_held = 1;
+      }
+      continue;
+    }
+    held[n_held++] = hit;
+    // which of the contacts now touching hold it: all three (at rest), two (a groove), one or none
+    Vec3 n[3];
+    for (int h = 0; h < n_held; ++h) n[h] = normal(held[h], p, r);
+    const int mask = choose_supports(n, n_held);
+    if (mask < 0) return false;
+    if (n_held == 3 && mask == 7) {
+      rest = p;
+      return true;
+    }
+    int kept = 0;
+    exclude = kFloor;
+    for (int h = 0; h < n_held; ++h) {
+      if (mask >> h & 1)
+        held[kept++] = held[h];
+      else if (!is_wall(held[h]))
+        exclude = held[h];  // (for a fall: the grain it leaves)
+    }
+    n_held = kept;
+  }
+  return false;
+}
+
+void Packer::insert(const Vec3& p, Real r) {
+  const auto k = static_cast<std::int32_t>(g_.size());
+  g_.push_back({p.x, p.y, p.z, r});
+  const int ix = column_x(p.x), iy = column_y(p.y), iz = layer(p.z);
+  Slots& s = cells_[cell(ix, iy, iz)];
+  next_.push_back(-1);
+  int slot = 0;
+  while (slot < 3 && s.id[slot] >= 0) ++slot;
+  if (slot < 3) {
+    s.id[slot] = k;
+    s.x[slot] = static_cast<float>(p.x - (R_.x0 + ix * cs_));
+    s.y[slot] = static_cast<float>(p.y - (R_.y0 + iy * cs_));
+    s.z[slot] = static_cast<float>(p.z - (z0_ + iz * cs_));
+    s.r[slot] = static_cast<float>(r);
+    // (the float radius may round up or down by 3e-8 r: the contacts stay within 1e-7 d)
+  } else {
+    next_.back() = s.more;
+    s.more = k;
+  }
+  int& top = col_top_[static_cast<std::size_t>(iy) * nx_ + ix];
+  top = std::max(top, iz);
+}
+
+BedPacking Packer::run() {
+  check_region(R_);
+  floor_ = sample_map(R_, R_.floor, "floor");
+  top_ = sample_map(R_, R_.top, "top");
+  const Real estimate = estimate_from_maps(R_, floor_, top_);
+  if (estimate > R_.max_grains)
+    throw std::length_error("bed packing: the region would hold about " +
+                            std::to_string(static_cast<long long>(estimate)) +
+                            " grains, more than the limit of " +
+                            std::to_string(static_cast<long long>(R_.max_grains)));
+  flat_floor_ = floor_.lo == floor_.hi;
+
+  // the grid: cells 2 r_hi wide, from under the lowest floor to over the highest top
+  cs_ = 2 * R_.r_hi;
+  inv_cs_ = 1 / cs_;
+  nx_ = std::max(1, static_cast<int>(std::ceil((R_.x1 - R_.x0) / cs_)));
+  ny_ = std::max(1, static_cast<int>(std::ceil((R_.y1 - R_.y0) / cs_)));
+  z0_ = floor_.lo - cs_;
+  const Real layers = std::ceil((std::max(top_.hi, floor_.lo) - z0_) / cs_) + 1;
+  const Real cells = layers * nx_ * ny_;
+  if (cells > std::max(8 * estimate, 1.0e6) || cells > 2.0e9)
+    throw std::length_error("bed packing: the region's bounding box (" +
+                            std::to_string(static_cast<long long>(cells)) +
+                            " cells) is too large for the grains it holds");
+  nz_ = static_cast<int>(layers);
+  cells_.assign(static_cast<std::size_t>(cells), Slots{});
+  col_top_.assign(static_cast<std::size_t>(nx_) * ny_, -1);
+  col_floor_.assign(col_top_.size(), -kInf);
+  for (int j = 0; j < floor_.my; ++j)  // each column's highest floor, with a grain's reach
+    for (int i = 0; i < floor_.mx; ++i) {
+      const Real x = floor_.x0 + i * floor_.hx, y = floor_.y0 + j * floor_.hy;
+      for (int iy = column_y(y - R_.r_hi - floor_.hy); iy <= column_y(y + R_.r_hi + floor_.hy);
+           ++iy)
+        for (int ix = column_x(x - R_.r_hi - floor_.hx); ix <= column_x(x + R_.r_hi + floor_.hx);
+             ++ix) {
+          Real& f = col_floor_[static_cast<std::size_t>(iy) * nx_ + ix];
+          f = std::max(f, floor_.at(i, j));
+        }
+    }
+  if (flat_floor_) std::fill(col_floor_.begin(), col_floor_.end(), floor_.lo);
+  // (a tangent plane lies at most r (sqrt(2) - 1) above the samples: it is used up to 45 degrees)
+  for (Real& f : col_floor_) f += (std::sqrt(2.0) - 1) * R_.r_hi + 1e-12;
+  const auto reserve = static_cast<std::size_t>(std::min(estimate * 1.1 + 16, R_.max_grains));
+  g_.reserve(reserve);
+  next_.reserve(reserve);
+
+  // the cells drops are made in, each open until `patience` drops in a row fail there
+  std::vector<std::int32_t> open;
+  std::vector<std::uint16_t> fails(col_top_.size(), 0);
+  for (int iy = 0; iy < ny_; ++iy)
+    for (int ix = 0; ix < nx_; ++ix) {
+      // closed at once where no grain fits under the top anywhere in the cell
+      const int i0 = static_cast<int>(std::floor(ix * cs_ / floor_.hx));
+      const int i1 =
+          std::min(floor_.mx - 1, static_cast<int>(std::ceil((ix + 1) * cs_ / floor_.hx)));
+      const int j0 = static_cast<int>(std::floor(iy * cs_ / floor_.hy));
+      const int j1 =
+          std::min(floor_.my - 1, static_cast<int>(std::ceil((iy + 1) * cs_ / floor_.hy)));
+      bool room = false;
+      for (int j = j0; j <= j1 && !room; ++j)
+        for (int i = i0; i <= i1 && !room; ++i)
+          room = top_.at(i, j) - floor_.at(i, j) >= 2 * R_.r_lo;
+      if (room) open.push_back(iy * nx_ + ix);
+    }
+
+  BedPacking out;
+  Rng rng(R_.seed);
+  while (!open.empty()) {
+    const auto pick = static_cast<std::size_t>(rng.uniform() * static_cast<Real>(open.size()));
+    const std::size_t slot = std::min(pick, open.size() - 1);
+    const int c = open[slot];
+    const int ix = c % nx_, iy = c / nx_;
+    const Real r = R_.r_hi > R_.r_lo ? rng.uniform(R_.r_lo, R_.r_hi) : R_.r_lo;
+    const Real ux = rng.uniform(), uy = rng.uniform();
+    // a point of the cell where the grain lies inside the footprint
+    const Real xa = std::max(R_.x0 + ix * cs_, R_.x0 + r),
+               xb = std::min(R_.x0 + (ix + 1) * cs_, R_.x1 - r);
+    const Real ya = std::max(R_.y0 + iy * cs_, R_.y0 + r),
+               yb = std::min(R_.y0 + (iy + 1) * cs_, R_.y1 - r);
+    ++out.drops;
+    bool kept = false, blocked = false;
+    Vec3 p;
+    if (xb >= xa && yb >= ya && drop(xa + ux * (xb - xa), ya + uy * (yb - ya), r, p)) {
+      if (p.z > top_.value(p.x, p.y) - r) {
+        ++out.discarded;
+      } else if (R_.blocked && R_.blocked(p, r)) {
+        ++out.discarded;
+        ++out.blocked;
+        blocked = true;
+      } else {
+        if (static_cast<Real>(g_.size()) >= R_.max_grains)
+          throw std::length_error("bed packing: more grains than the limit of " +
+                                  std::to_string(static_cast<long long>(R_.max_grains)));
+        insert(p, r);
+        kept = true;
+      }
+    } else {
+      ++out.discarded;
+    }
+    // A drop refused by an obstacle counts an eighth of one that found the top: the flanks of an
+    // obstacle refuse drops until the sand around has grown up to them, and must not close the
+    // cells over it before (a cell inside an obstacle closes after 8 patience drops)
+    std::uint16_t& fail = fails[static_cast<std::size_t>(c)];
+    if (kept) {
+      fail = 0;
+    } else if ((fail += blocked ? 1 : 8) >= 8 * R_.patience) {
+      open[slot] = open.back();
+      open.pop_back();
+    }
+  }
+  out.x.resize(g_.size());
+  out.r.resize(g_.size());
+  for (std::size_t k = 0; k < g_.size(); ++k) {
+    out.x[k] = {g_[k].x, g_[k].y, g_[k].z};
+    out.r[k] = g_[k].r;
+  }
+  return out;
+}
+
+}  // namespace
+
+Real estimate_bed_grains(const BedRegion& region) {
+  check_region(region);
+  return estimate_from_maps(region, sample_map(region, region.floor, "floor"),
+                            sample_map(region, region.top, "top"));
+}
+
+BedPacking pack_bed(const BedRegion& region) {
+  return Packer(region).run();
+}
+
+Real packing_fraction_in(const std::vector<Vec3>& x, const std::vector<Real>& r, const Vec3& lo,
+                         const Vec3& hi) {
+  Real v = 0;
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (x[i].x >= lo.x && x[i].x < hi.x && x[i].y >= lo.y && x[i].y < hi.y && x[i].z >= lo.z &&
+        x[i].z < hi.z)
+      v += 4.0 / 3.0 * kPi * r[i] * r[i] * r[i];
+  const Vec3 e = hi - lo;
+  return v / (e.x * e.y * e.z);
+}
+
+Real largest_overlap(const std::vector<Vec3>& x, const std::vector<Real>& r) {
+  if (x.empty()) return 0;
+  Vec3 lo = x[0], hi = x[0];
+  Real r_max = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    lo = min(lo, x[i]);
+    hi = max(hi, x[i]);
+    r_max = std::max(r_max, r[i]);
+  }
+  const Real cs = 2 * r_max;
+  auto n_of = [&](Real a, Real b) {
+    return static_cast<std::int64_t>(std::floor((b - a) / cs)) + 1;
+  };
+  const std::int64_t nx = n_of(lo.x, hi.x), ny = n_of(lo.y, hi.y), nz = n_of(lo.z, hi.z);
+  auto idx = [&](const Vec3& p, std::int64_t& i, std::int64_t& j, std::int64_t& k) {
+    i = static_cast<std::int64_t>(std::floor((p.x - lo.x) / cs));
+    j = static_cast<std::int64_t>(std::floor((p.y - lo.y) / cs));
+    k = static_cast<std::int64_t>(std::floor((p.z - lo.z) / cs));
+  };
+  // grains sorted by cell (counting sort over a hashed cell index keeps memory bounded)
+  const std::size_t buckets = x.size() * 2 + 1;
+  auto hash = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    return static_cast<std::size_t>(((i * ny + j) * nz + k) % static_cast<std::int64_t>(buckets));
+  };
+  std::vector<std::uint32_t> start(buckets + 1, 0), order(x.size());
+  for (const Vec3& p : x) {
+    std::int64_t i, j, k;
+    idx(p, i, j, k);
+    ++start[hash(i, j, k) + 1];
+  }
+  for (std::size_t b = 0; b < buckets; ++b) start[b + 1] += start[b];
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t n = 0; n < x.size(); ++n) {
+    std::int64_t i, j, k;
+    idx(x[n], i, j, k);
+    order[fill[hash(i, j, k)]++] = static_cast<std::uint32_t>(n);
+  }
+  Real worst = 0;
+  for (std::size_t n = 0; n < x.size(); ++n) {
+    std::int64_t i, j, k;
+    idx(x[n], i, j, k);
+    for (std::int64_t a = i - 1; a <= i + 1; ++a)
+      for (std::int64_t b = j - 1; b <= j + 1; ++b)
+        for (std::int64_t c = k - 1; c <= k + 1; ++c) {
+          if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
+          const std::size_t h = hash(a, b, c);
+          for (std::uint32_t q = start[h]; q < start[h + 1]; ++q) {
+            const std::uint32_t m = order[q];
+            if (m <= n) continue;
+            const Real s = r[n] + r[m];
+            const Real d2 = norm2(x[n] - x[m]);
+            if (d2 >= s * s) continue;
+            worst = std::max(worst, (s - std::sqrt(d2)) / (2 * std::min(r[n], r[m])));
+          }
+        }
+  }
+  return worst;
+}
+
+}  // namespace sandflow

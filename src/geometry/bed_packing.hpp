@@ -1,0 +1,97 @@
+// A packed bed of grains at rest, built without a DEM run (docs/design.md §7, issue 26): random
+// sequential gravitational deposition with rolling, "drop and roll" (Visscher & Bolsterli 1972,
+// Jodrey & Tory 1979). Each grain is dropped at a random (x, y) of the footprint, falls vertically
+// to its first contact (a grain or the floor), then rolls down in steepest descent: over one sphere
+// until it touches a second, in the groove of two until it touches a third, and stops where it is
+// stably supported (gravity inside the cone of its three contact normals: for three spheres, its
+// centre's projection inside their triangle) or where it touches the floor. The footprint's four
+// sides are vertical walls, which support a grain like a sphere does (a grain in the groove of a
+// sphere and a wall). It leaves one support when the other two would have to pull (the normal
+// force of a contact turns negative), and falls again off a sphere's equator. Every motion is an
+// arc of a circle, and every event along it (a new contact, a lift-off, the equator) the first
+// root of a cos t + b sin t = c: the contacts are exact touches, up to rounding.
+//
+// A drop that would come to rest with its centre above top - r, or that `blocked` refuses (an
+// obstacle there), is discarded. The footprint is cut into square cells of the grid's width
+// (2 r_hi); drops are made at random points of the cells still open, and a cell closes after
+// `patience` discarded drops in a row made in it (while every cell is open, the drops are uniform
+// over the footprint). Why this fills the top everywhere: a drop that lands in a cell and rolls to
+// rest below top - r proves a hole was left; one that cannot means the surface under it is full
+// up to a grain below the top. A hole covering half a cell survives 6 drops with probability
+// 0.5^6 = 1.6 %, and a grain fitting a smaller hole would rest within a grain of the top anyway.
+// Measured (2026-11-26, a 40 d x 40 d bed 10 d deep, equal grains): patience 4, 8 and 16 give
+// 16,438, 16,446 and 16,443 grains, the same bulk packing fraction (0.583), and every 2 d x 2 d
+// patch of the top has a grain reaching within 0.62 d of it (median 0.11 d): the top is full, not
+// ragged, already at 4, while 16 makes 1.8 times the drops of 4. The default, 6, keeps a margin.
+// A cell where the top lies below the floor + 2 r_lo at every sample never opens.
+//
+// Speed: a uniform grid of cells 2 r_hi wide, filed column by column (z fastest), with each
+// column's highest filled cell, so that a fall scans only the top of 3 x 3 columns; an arc scans
+// the cells of its bounding box widened by a contact's reach. One core, no threads: the result
+// depends on the seed only.
+//
+// The floor and the top are sampled once on a grid of spacing r_lo (bilinear between samples;
+// at most 2^22 samples each, coarser on a larger footprint). A grain rests on the floor where its
+// centre is r sqrt(1 + |grad f|^2) above the bilinear floor (a tangent plane: exact on planes, a
+// hollow of curvature radius R_c is met within about r^2 / R_c); where the floor is steeper than
+// 45 degrees (a step, an obstacle's flank), on the highest of its points r / 4 apart under the
+// grain (within r / 32). A grain that touches the floor stops there.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "core/vec3.hpp"
+
+namespace sandflow {
+
+/// The region a bed fills and its grains.
+struct BedRegion {
+  Real x0 = 0, y0 = 0, x1 = 1, y1 = 1;  ///< the footprint: grains lie wholly inside it [m]
+  /// The solid top the bed rests on at (x, y) [m]; finite everywhere on the footprint.
+  std::function<Real(Real, Real)> floor;
+  /// The bed's upper surface at (x, y) [m]: grain centres stay at or below top - r.
+  std::function<Real(Real, Real)> top;
+  /// Optional: true when a grain centred at c with radius r would intersect an obstacle.
+  std::function<bool(const Vec3&, Real)> blocked;
+  Real r_lo = 0.005, r_hi = 0.005;  ///< radii uniform in [r_lo, r_hi] [m]
+  std::uint64_t seed = 1;
+  int patience = 6;  ///< discarded drops in a row that close a cell (see above); a drop refused
+                     ///< by `blocked` counts an eighth
+  /// Refused (std::length_error) before any grain is placed when the region's volume would hold
+  /// more grains than this (estimate_bed_grains).
+  Real max_grains = 2147483647.0;
+};
+
+struct BedPacking {
+  std::vector<Vec3> x;         ///< centres [m]
+  std::vector<Real> r;         ///< radii [m]
+  std::int64_t drops = 0;      ///< grains dropped, kept or not
+  std::int64_t discarded = 0;  ///< of them: came to rest above the top, or did not settle
+  std::int64_t blocked = 0;    ///< of them: refused by `blocked`
+  std::size_t size() const { return x.size(); }
+};
+
+/// Grains the region holds at a packing fraction of 0.60, from its sampled floor and top: what
+/// max_grains is checked against.
+Real estimate_bed_grains(const BedRegion& region);
+
+/// Packs the region (see the top of this file). Throws std::invalid_argument on a malformed
+/// region (empty footprint, r_lo > r_hi, a non-finite floor or top, no floor or top function),
+/// std::length_error past max_grains.
+BedPacking pack_bed(const BedRegion& region);
+
+// ---- Measurements of a packing (tests, bench) -------------------------------------------------
+
+/// Volume of the grains whose centres lie in [lo, hi], over the box's volume: the packing fraction
+/// of a box well inside a bed (the grains straddling its sides count in or out by their centres,
+/// which is unbiased on average).
+Real packing_fraction_in(const std::vector<Vec3>& x, const std::vector<Real>& r, const Vec3& lo,
+                         const Vec3& hi);
+
+/// The largest overlap r_i + r_j - |x_i - x_j| of any two grains, over the smaller diameter (0 when
+/// none overlap), found through a grid of cells 2 max(r) wide.
+Real largest_overlap(const std::vector<Vec3>& x, const std::vector<Real>& r);
+
+}  // namespace sandflow

@@ -1,0 +1,168 @@
+// The bed emitter (sim/emitters.hpp): a bed's count is its packing's, in both modes; in plain DEM
+// the bed stays at rest; in surface mode it is born in the static layer (the top layer ACTIVE at
+// rest, as R_min has it) and the first updates neither erode nor wake it; --grains keeps a bed;
+// the state does not depend on the thread count, and a restart continues it exactly.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "core/error.hpp"
+#include "sim/world.hpp"
+#include "support/test_scenes.hpp"
+
+namespace sandflow {
+namespace {
+
+constexpr Real kD = 0.02;  // 2 cm grains (dt ~ 1.2e-4 s) keep these runs short
+
+// A bed 8 x 8 grains wide, 4 deep, in a box container whose inside is its footprint (a bed's
+// sides are vertical walls: free-standing, its edges would slump).
+SceneConfig bed_scene(Mode mode) {
+  SceneConfig s = test::grains_on_floor("bed", mode, kD);
+  GeometryConfig box = test::box_entry({0, 0, 0.1}, {8 * kD, 8 * kD, 0.2});
+  box.container = true;
+  s.geometry = {box};
+  EmitterConfig e;
+  e.type = EmitterType::Bed;
+  e.center = {0, 0, 0};
+  e.size = {8 * kD, 8 * kD, 0};
+  e.height = 4 * kD;
+  s.emitters = {e};
+  s.output.frames = 6;  // 0.2 s
+  resolve_beds(s);
+  return s;
+}
+
+// The bed's grains as packed, by id (ids follow the packing's order).
+BedPacking packed(const SceneConfig& s) {
+  BedPacking b;
+  const Geometry g = Geometry::from_config(s.geometry, s.material, s.path);
+  EXPECT_FALSE(pack_bed_emitter(s.emitters[0], s.material, g, bed_seed(s.simulation.seed, 0), b));
+  return b;
+}
+
+TEST(BedEmitter, TheCountIsThePackingsInBothModes) {
+  for (Mode mode : {Mode::Dem, Mode::Surface}) {
+    const SceneConfig s = bed_scene(mode);
+    const std::int64_t n = s.emitters[0].count;
+    EXPECT_EQ(n, static_cast<std::int64_t>(packed(s).size()));
+    // about 8 x 8 x 4 d^3 at a packing fraction of 0.5 (walls and top loosen the edges)
+    EXPECT_GT(n, 200);
+    EXPECT_LT(n, 300);
+    EXPECT_EQ(s.total_grains(), n);
+    // the box of its grains, for the domain and the height field's extent
+    EXPECT_NEAR(s.emitters[0].center.z - s.emitters[0].size.z / 2, 0, 1e-9);
+    EXPECT_LE(s.emitters[0].center.z + s.emitters[0].size.z / 2, 4 * kD + 1e-12);
+    World w(s);
+    const FrameStats st = w.advance_frame();
+    EXPECT_EQ(st.n_total, n);
+    EXPECT_EQ(w.total_grains(), n);
+    if (mode == Mode::Dem) {
+      EXPECT_EQ(st.n_active, n);
+    }
+  }
+}
+
+TEST(BedEmitter, StaysAtRestInPlainDem) {
+  const SceneConfig s = bed_scene(Mode::Dem);
+  const BedPacking b = packed(s);
+  World w(s);
+  FrameStats st;
+  for (int f = 0; f < *s.output.frames; ++f) st = w.advance_frame();
+  // Born touching without overlap, the grains sink into their contacts under the bed's weight:
+  // m g / k_n = 1.1e-5 m (5e-4 d) a contact, a few contacts deep, so a few thousandths of d. The
+  // packing's stability is geometric (frictionless): a small grain wedged on three floor grains
+  // whose centres lie a tenth of d below its own pushes them apart until friction holds them, and
+  // sinks by up to 0.03 d (measured: one such grain of the 240). A grain that left its seat
+  // would roll off into the next hollow, half a diameter away: 0.05 d lies between the two.
+  const Real m = s.material.density * kPi / 6 * kD * kD * kD;
+  Real moved = 0;
+  const Grains& g = w.grains();
+  for (std::size_t i = 0; i < g.size(); ++i) moved = std::max(moved, norm(g.x[i] - b.x[g.id[i]]));
+  EXPECT_LT(moved, 0.05 * kD);
+  // and the oscillation of that sinking has died out: the kinetic energy per grain is below a
+  // millionth of m g d (the weight's work over a diameter)
+  EXPECT_LT(st.kinetic_energy / static_cast<Real>(b.size()), 1e-6 * m * 9.81 * kD);
+  EXPECT_LT(st.max_overlap_rel, 0.01);
+}
+
+TEST(BedEmitter, IsBornInTheStaticLayerInSurfaceMode) {
+  const SceneConfig s = bed_scene(Mode::Surface);
+  const std::int64_t n = s.emitters[0].count;
+  World w(s);
+  TransitionCounts total;
+  FrameStats first;
+  for (int f = 0; f < *s.output.frames; ++f) {
+    const FrameStats st = w.advance_frame();
+    if (f == 0) first = st;
+    EXPECT_EQ(st.n_total, n);
+    total += st.transitions;
+  }
+  // most grains are static or frozen; the ACTIVE ones are the top layer (R_min keeps the static
+  // top one diameter under the surface), at rest
+  EXPECT_GT(first.n_static, n / 3);
+  EXPECT_GT(first.n_interface, 0);
+  const Real H = s.emitters[0].center.z + s.emitters[0].size.z / 2;
+  const Grains& g = w.grains();
+  for (std::size_t i = 0; i < g.size(); ++i)
+    if (g.state[i] == GrainState::Active) {
+      EXPECT_GT(g.x[i].z, H - 2 * kD) << "grain " << g.id[i];
+    }
+  EXPECT_LT(w.kinetic_energy(), 1e-9);
+  // the updates neither erode the bed nor wake it
+  EXPECT_EQ(total.dislodged, 0);
+  EXPECT_EQ(total.woken, 0);
+  EXPECT_EQ(total.trapped, 0);
+}
+
+TEST(BedEmitter, GrainsScalingKeepsTheBed) {
+  SceneConfig s = bed_scene(Mode::Surface);
+  const std::int64_t bed = s.emitters[0].count;
+  s.emitters.push_back(test::disk_pour({0, 0, 0.3}, 0.05, 1000, 500, {0, 0, 0}));
+  scale_grain_count(s, bed + 100);
+  EXPECT_EQ(s.emitters[0].count, bed);
+  EXPECT_EQ(s.emitters[1].count, 100);
+  EXPECT_EQ(s.total_grains(), bed + 100);
+  EXPECT_THROW(scale_grain_count(s, bed), InputError);  // nothing left for the pour
+  SceneConfig only = bed_scene(Mode::Surface);
+  scale_grain_count(only, bed);  // (the beds' own count: nothing to do)
+  EXPECT_EQ(only.emitters[0].count, bed);
+  EXPECT_THROW(scale_grain_count(only, 2 * bed), InputError);
+}
+
+std::uint64_t hash_after(const SceneConfig& s, int threads, int frames) {
+  omp_set_num_threads(threads);
+  World w(s);
+  for (int f = 0; f < frames; ++f) w.advance_frame();
+  omp_set_num_threads(omp_get_num_procs());
+  return w.state_hash();
+}
+
+TEST(BedEmitter, OneAndTwoThreadsAndARestartGiveTheSameState) {
+  for (Mode mode : {Mode::Surface, Mode::Dem}) {
+    SceneConfig s = bed_scene(mode);
+    // a block dropped onto the bed, so that the state moves
+    EmitterConfig block;
+    block.type = EmitterType::Block;
+    block.center = {0, 0, 0.14};
+    block.size = {3 * kD, 3 * kD, 3 * kD};
+    block.count = 8;
+    block.velocity = {0, 0, -1};
+    s.emitters.push_back(block);
+    const std::uint64_t h1 = hash_after(s, 1, 4);
+    EXPECT_EQ(hash_after(s, 2, 4), h1);
+    // a restart after 2 frames continues exactly
+    World a(s);
+    for (int f = 0; f < 2; ++f) a.advance_frame();
+    World b(s);
+    b.restore_state(a.save_state());
+    for (int f = 0; f < 2; ++f) b.advance_frame();
+    EXPECT_EQ(b.state_hash(), h1);
+  }
+}
+
+}  // namespace
+}  // namespace sandflow
