@@ -52,27 +52,25 @@ SurfaceFlow::Seating SurfaceFlow::seat_bed(Grains& hot, StaticStore& st,
   // H: the top of the bed's grains in each column they reach (above its level)
   std::vector<Real> H = hf_.surface(), h = hf_.static_top();
   std::vector<std::uint8_t> bed(hf_.columns(), 0);
-  Real r_max = 0;
   for (std::size_t k = 0; k < x.size(); ++k) {
-    r_max = std::max(r_max, r[k]);
     hf_.for_each_ray_hit(x[k], r[k], [&](std::size_t c, Real, Real top) {
       if (x[k].z < L[c]) return;
       H[c] = std::max(H[c], top);
       bed[c] = 1;
     });
   }
-  // h: R_min below H, as exchange() leaves a column at rest, so that the next update neither
-  // erodes nor wakes the bed
-  for (std::size_t c = 0; c < bed.size(); ++c)
-    if (bed[c]) h[c] = std::max(h[c], H[c] - p_.grid.rolling_min);
+  // h: at H, and the bed's columns closed, as a column at rest is (nothing has moved there), so
+  // that the next update neither erodes nor wakes the bed
   hf_.set_surface(H);
+  for (std::size_t c = 0; c < bed.size(); ++c)
+    if (bed[c]) {
+      h[c] = H[c];
+      hf_.close(c);
+    }
   hf_.set_static_top(h);
 
-  // each grain to its layer: ACTIVE above h, INTERFACE in the band, STATIC below it and below the
-  // reach of any ACTIVE grain (two radii and an allowance of a diameter: the invariant of the
-  // layers holds from the first rebuild on)
-  const Real T = p_.interface.thickness, m = p_.interface.margin;
-  const Real reach = 4 * r_max;
+  // each grain to its layer: ACTIVE above h (or outside the height field's reach), STATIC below
+  // it; the invariant of the layers wakes, at the first rebuild, what an ACTIVE grain can reach
   const Real density = p_.interface.density;
   seated_.clear();
   for (std::size_t k = 0; k < x.size(); ++k) {
@@ -82,13 +80,9 @@ SurfaceFlow::Seating SurfaceFlow::seat_bed(Grains& hot, StaticStore& st,
       hot.add(ids[k], x[k], Vec3{}, r[k], density);
       seated_.push_back(ids[k]);
       ++out.active;
-    } else if (x[k].z < top - T - m - reach) {
+    } else {
       st.add(ids[k], x[k], r[k], static_cast<std::uint32_t>(c));
       ++out.statics;
-    } else {
-      hot.add(ids[k], x[k], Vec3{}, r[k], density);
-      hot.state.back() = GrainState::Interface;
-      ++out.interface;
     }
   }
   std::sort(seated_.begin(), seated_.end());

@@ -57,13 +57,12 @@ class SurfaceFlow {
   Transitions wake_within_reach(Grains& hot, StaticStore& st, const DemSolver& dem, Real dt);
 
   /// A bed born at rest (sim/emitters.hpp, docs/design.md §7): new grains ids[k] at x[k] with
-  /// radii r[k] go straight to the layers an update would keep a resting pile in. H, where they
-  /// lie, rises to their top; h to H - rolling_min (the R_min of a column at rest, as exchange()
-  /// holds it); a grain above h is ACTIVE at rest, one in the band [h - T, h] (widened down by the
-  /// reach of an ACTIVE grain, so that no STATIC grain starts within it) INTERFACE, a deeper one
-  /// STATIC; a grain outside the grid or under its column's level is ACTIVE. The ACTIVE grains
-  /// count in the next measure of H though the DEM has not yet seen their contacts. Returns how
-  /// many went to each state.
+  /// radii r[k] go straight to the layers an update would keep a pile at rest in. H, where they
+  /// lie, rises to their top, and so does h: their columns start closed (HeightField::closed), so
+  /// every grain is STATIC but one outside the grid or under its column's level, which is ACTIVE;
+  /// the invariant of the layers wakes what such a grain can reach at the first rebuild. The ACTIVE
+  /// grains count in the next measure of H though the DEM has not yet seen their contacts. Returns
+  /// how many went to each state.
   struct Seating {
     std::int64_t active = 0, interface = 0, statics = 0;
   };

@@ -1,6 +1,6 @@
 // The bed emitter (sim/emitters.hpp): a bed's count is its packing's, in both modes; in plain DEM
-// the bed stays at rest; in surface mode it is born in the static layer (the top layer ACTIVE at
-// rest, as R_min has it) and the first updates neither erode nor wake it; --grains keeps a bed;
+// the bed stays at rest; in surface mode it is born in the static layer, closed, and stays there
+// a second, and a disturbance wakes only the bed near it; --grains keeps a bed;
 // the state does not depend on the thread count, and a restart continues it exactly.
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -20,16 +20,16 @@ constexpr Real kD = 0.02;  // 2 cm grains (dt ~ 1.2e-4 s) keep these runs short
 
 // A bed 8 x 8 grains wide, 4 deep, in a box container whose inside is its footprint (a bed's
 // sides are vertical walls: free-standing, its edges would slump).
-SceneConfig bed_scene(Mode mode) {
+SceneConfig bed_scene(Mode mode, Real width = 8, Real depth = 4) {
   SceneConfig s = test::grains_on_floor("bed", mode, kD);
-  GeometryConfig box = test::box_entry({0, 0, 0.1}, {8 * kD, 8 * kD, 0.2});
+  GeometryConfig box = test::box_entry({0, 0, 0.1}, {width * kD, width * kD, 0.2});
   box.container = true;
   s.geometry = {box};
   EmitterConfig e;
   e.type = EmitterType::Bed;
   e.center = {0, 0, 0};
-  e.size = {8 * kD, 8 * kD, 0};
-  e.height = 4 * kD;
+  e.size = {width * kD, width * kD, 0};
+  e.height = depth * kD;
   s.emitters = {e};
   s.output.frames = 6;  // 0.2 s
   resolve_beds(s);
@@ -89,22 +89,25 @@ TEST(BedEmitter, StaysAtRestInPlainDem) {
   EXPECT_LT(st.max_overlap_rel, 0.01);
 }
 
-TEST(BedEmitter, IsBornInTheStaticLayerInSurfaceMode) {
-  const SceneConfig s = bed_scene(Mode::Surface);
+TEST(BedEmitter, IsBornInTheStaticLayerInSurfaceModeAndStaysThereASecond) {
+  SceneConfig s = bed_scene(Mode::Surface);
+  s.output.frames = 30;  // 1 s
   const std::int64_t n = s.emitters[0].count;
   World w(s);
   TransitionCounts total;
   FrameStats first;
+  std::int64_t fewest_static = n;
   for (int f = 0; f < *s.output.frames; ++f) {
     const FrameStats st = w.advance_frame();
     if (f == 0) first = st;
     EXPECT_EQ(st.n_total, n);
+    fewest_static = std::min(fewest_static, st.n_static);
     total += st.transitions;
   }
-  // most grains are static or frozen; the ACTIVE ones are the top layer (R_min keeps the static
-  // top one diameter under the surface), at rest
-  EXPECT_GT(first.n_static, n / 3);
-  EXPECT_GT(first.n_interface, 0);
+  // the bed is born closed: every grain static, in every frame of a second (a bed at rest costs
+  // nothing)
+  EXPECT_EQ(first.n_static, n);
+  EXPECT_EQ(fewest_static, n);
   const Real H = s.emitters[0].center.z + s.emitters[0].size.z / 2;
   const Grains& g = w.grains();
   for (std::size_t i = 0; i < g.size(); ++i)
@@ -116,6 +119,44 @@ TEST(BedEmitter, IsBornInTheStaticLayerInSurfaceMode) {
   EXPECT_EQ(total.dislodged, 0);
   EXPECT_EQ(total.woken, 0);
   EXPECT_EQ(total.trapped, 0);
+}
+
+TEST(BedEmitter, ADisturbanceWakesOnlyTheBedNearIt) {
+  // a bed 20 x 20 grains wide, 3 deep; a block of 8 grains dropped on one corner of it at 2 m/s,
+  // against the same bed left alone (grains in columns whose centre lies on the container's wall
+  // stay simulated in both: docs/known-issues.md)
+  SceneConfig alone = bed_scene(Mode::Surface, 20, 3);
+  alone.output.frames = 9;  // 0.3 s
+  const std::int64_t n_bed = alone.emitters[0].count;
+  const Vec3 hit{5 * kD, 5 * kD, 0};
+  SceneConfig s = alone;
+  EmitterConfig block;
+  block.type = EmitterType::Block;
+  block.name = "block";
+  block.count = 8;
+  block.center = {hit.x, hit.y, 5 * kD};
+  block.size = {3 * kD, 3 * kD, 3 * kD};
+  block.velocity = {0, 0, -2};
+  s.emitters.push_back(block);
+  World w(s), w0(alone);
+  std::int64_t woken = 0;
+  Real farthest = 0;  // the farthest bed grain from the hit that left the static layer for it
+  for (int f = 0; f < *s.output.frames; ++f) {
+    w.advance_frame();
+    w0.advance_frame();
+    std::vector<std::uint8_t> hot0(static_cast<std::size_t>(n_bed), 0);
+    for (GrainId id : w0.grains().id) hot0[id] = 1;
+    const Grains& g = w.grains();
+    for (std::size_t i = 0; i < g.size(); ++i)
+      if (static_cast<std::int64_t>(g.id[i]) < n_bed && !hot0[g.id[i]]) {
+        ++woken;
+        farthest = std::max(farthest, std::hypot(g.x[i].x - hit.x, g.x[i].y - hit.y));
+      }
+  }
+  // the hit opened the bed, but only near it: within 10 diameters of the hit (the block's grains
+  // splash up to 8 here), where the far corner of the bed lies 21 diameters away
+  EXPECT_GT(woken, 0);
+  EXPECT_LT(farthest, 10 * kD);
 }
 
 TEST(BedEmitter, GrainsScalingKeepsTheBed) {
