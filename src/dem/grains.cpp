@@ -200,14 +200,14 @@ std::uint32_t StaticStore::add(GrainId gid, const Vec3& pos, Real radius, std::u
 }
 
 void StaticStore::remove(std::span<const std::uint32_t> slots) {
+  ++revision_;
   for (std::uint32_t k : slots) {
     if (!holds(k))
       throw std::invalid_argument(fmt::format("StaticStore::remove: slot {} holds no grain", k));
     id_[k] = kNoGrain;
+    --live_;
+    ++empty_;
   }
-  live_ -= slots.size();
-  empty_ += slots.size();
-  ++revision_;
   if (tail_column_.size() + empty_ >= tail_max_) merge();
 }
 
