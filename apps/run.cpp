@@ -22,6 +22,7 @@
 #include "commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/memory.hpp"
 #include "io/export_formats.hpp"
 #include "io/folder_lock.hpp"
 #include "io/frame_exporter.hpp"
@@ -217,6 +218,14 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
       {"grains_inside_geometry", inside},
       {"grains_left_domain", world.left_domain()},
       {"state_hash", fmt::format("{:016x}", world.state_hash())},
+      // the static store's allocated bytes per static grain (dem/grains.hpp), and the process's
+      // peak resident memory
+      {"bytes_per_static_grain",
+       world.static_grains().size() > 0
+           ? static_cast<double>(world.static_grains().allocated_bytes()) /
+                 static_cast<double>(world.static_grains().size())
+           : 0.0},
+      {"peak_memory_bytes", peak_memory_bytes()},
       {"exports", exporter.summary()},
   };
   if (const SurfaceFlow* sf = world.surface()) {
@@ -650,6 +659,9 @@ int run_command(const RunOptions& o) {
   }
   fmt::print("inside geometry  {}\n", s["grains_inside_geometry"].get<std::int64_t>());
   fmt::print("max overlap      {:.2f} % of a diameter\n", 100 * s["max_overlap_rel"].get<double>());
+  fmt::print("memory           {:.1f} bytes per static grain, peak {:.1f} MB\n",
+             s["bytes_per_static_grain"].get<double>(),
+             static_cast<double>(s["peak_memory_bytes"].get<std::int64_t>()) / 1e6);
   fmt::print("state hash       {}\n", s["state_hash"].get<std::string>());
   fmt::print("output           {}/ (stats.csv, summary.json, frames/)\n", out);
   std::vector<std::string> exports;

@@ -86,6 +86,10 @@ class Writer {
     count(a.size());
     for (std::uint32_t v : a) u32(v);
   }
+  void u64s(const std::vector<std::uint64_t>& a) {
+    count(a.size());
+    for (std::uint64_t v : a) u64(v);
+  }
   void u8s(const std::vector<std::uint8_t>& a) {
     count(a.size());
     out.append(reinterpret_cast<const char*>(a.data()), a.size());
@@ -163,11 +167,12 @@ std::string section(std::uint32_t tag, const Checkpoint& c) {
       w.reals(g.inv_I, "a grain's 1/inertia");
       break;
     }
-    case kSections[3]:  // STAT
+    case kSections[3]:  // STAT: the store's compact form (dem/grains.hpp), 12 bytes a grain
+      w.u32s(s.statics.column_slots);
       w.u32s(s.statics.id);
-      w.vecs(s.statics.x, "a static grain's position");
-      w.reals(s.statics.r, "a static grain's radius");
-      w.u32s(s.statics.column);
+      w.u64s(s.statics.code);
+      w.u32s(s.statics.tail_column);
+      w.u64(s.statics.capacity);
       break;
     case kSections[4]: {  // DEM
       const DemState& d = s.dem;
@@ -265,6 +270,11 @@ class Reader {
   std::vector<std::uint32_t> u32s(const char* what) {
     std::vector<std::uint32_t> a(count(4, what));
     for (auto& v : a) v = u32(what);
+    return a;
+  }
+  std::vector<std::uint64_t> u64s(const char* what) {
+    std::vector<std::uint64_t> a(count(8, what));
+    for (auto& v : a) v = u64(what);
     return a;
   }
   std::vector<std::uint8_t> u8s(const char* what) {
@@ -374,10 +384,11 @@ void read_section(std::uint32_t tag, Reader& r, Checkpoint& c) {
       break;
     }
     case kSections[3]:  // STAT
+      s.statics.column_slots = r.u32s("the static grains per column");
       s.statics.id = r.u32s("the static grain ids");
-      s.statics.x = r.vecs("the static grain positions");
-      s.statics.r = r.reals("the static grain radii");
-      s.statics.column = r.u32s("the static grain columns");
+      s.statics.code = r.u64s("the static grain codes");
+      s.statics.tail_column = r.u32s("the static grains' tail columns");
+      s.statics.capacity = r.u64("the static store's capacity");
       break;
     case kSections[4]: {  // DEM
       DemState& d = s.dem;
@@ -546,6 +557,9 @@ std::uint64_t scene_hash(const World& world, std::string_view start_record) {
     h.add(hf.ny());
     h.add(hf.cell());
     h.add(hf.initial_terrain_hash());  // (a solid removed since changes the tops, not the scene)
+    // the static store's frame: its codes mean positions and radii in it
+    const StaticFrame& f = world.static_grains().frame();
+    for (Real v : {f.x0, f.y0, f.cell, f.z_lo, f.z_hi, f.r_lo, f.r_hi}) h.add(v);
   }
   return h.value();
 }
@@ -575,10 +589,16 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   for (std::size_t len : {g.state.size(), g.x.size(), g.v.size(), g.w.size(), g.r.size(),
                           g.m.size(), g.inv_m.size(), g.inv_I.size()})
     if (len != n) fail(fmt::format("the hot grains' arrays have {} and {} entries", n, len));
-  const StaticStore& st = s.statics;
-  const std::size_t ns = st.size();
-  for (std::size_t len : {st.x.size(), st.r.size(), st.column.size()})
-    if (len != ns) fail(fmt::format("the static grains' arrays have {} and {} entries", ns, len));
+  // the static grains: the layout of the store (counts, columns, heights ascending, its tail),
+  // before anything is decoded; a code decodes inside the store's frame whatever its bits
+  const SurfaceFlow* sf = world.surface();
+  if (static_cast<bool>(sf) != s.surface.has_value())
+    fail(sf ? "it has no height field, but the scene runs in surface mode"
+            : "it has a height field, but the scene runs in DEM mode");
+  const StaticStore::State& st = s.statics;
+  if (const std::string e = world.static_grains().state_error(st); !e.empty()) fail(e);
+  std::size_t ns = 0;
+  for (GrainId id : st.id) ns += id != StaticStore::kNoGrain;
   if (n + ns > std::numeric_limits<GrainId>::max()) fail("too many grains");
   // a grain may be at most a domain's width outside it (it left during the frame's last step);
   // along an unbounded axis, a million diameters: far beyond any grain of a run, and near enough
@@ -604,11 +624,9 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
         !near(g.inv_I[i], 1 / (0.4 * m * r * r)) || !inside(g.x[i]))
       fail(fmt::format("hot grain {} has a radius, mass or position out of range", g.id[i]));
   }
-  for (std::size_t k = 0; k < ns; ++k)
-    if (!(st.r[k] >= r_lo && st.r[k] <= r_hi) || !inside(st.x[k]))
-      fail(fmt::format("static grain {} has a radius or position out of range", st.id[k]));
   std::vector<GrainId> ids(g.id);
-  ids.insert(ids.end(), st.id.begin(), st.id.end());
+  for (GrainId id : st.id)
+    if (id != StaticStore::kNoGrain) ids.push_back(id);
   std::sort(ids.begin(), ids.end());
   if (std::adjacent_find(ids.begin(), ids.end()) != ids.end()) fail("a grain id appears twice");
   if (!ids.empty() && ids.back() >= s.next_id)
@@ -683,15 +701,8 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
         !inside(d.x_at_build[i]))
       fail("a reference position or allowance is out of range");
 
-  // the surface flow: one entry per column, and static grains only where it files them
-  const SurfaceFlow* sf = world.surface();
-  if (static_cast<bool>(sf) != s.surface.has_value())
-    fail(sf ? "it has no height field, but the scene runs in surface mode"
-            : "it has a height field, but the scene runs in DEM mode");
-  if (!sf) {
-    if (ns > 0) fail("static grains in DEM mode");
-    return;
-  }
+  // the surface flow: one entry per column (the static grains were checked against the store)
+  if (!sf) return;
   const std::size_t nc = sf->height_field().columns();
   const HeightField::State& hf = s.surface->columns;
   for (const auto* a : {&hf.L, &hf.H, &hf.h, &hf.R, &hf.theta, &hf.Gamma, &hf.rest})
@@ -700,8 +711,6 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   for (const auto* a : {&s.surface->h_seen, &s.surface->L_seen})
     if (!a->empty() && a->size() != nc)
       fail(fmt::format("the interface's memory has {} columns, the grid {}", a->size(), nc));
-  for (std::uint32_t col : st.column)
-    if (col >= nc) fail(fmt::format("a static grain is filed in column {} of {}", col, nc));
 }
 
 }  // namespace

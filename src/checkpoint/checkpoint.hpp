@@ -8,9 +8,10 @@
 //            (tag, byte size), the CRC-32 of the payload and the CRC-32 of the header itself;
 //   payload  the sections in a fixed order: RUN (the statistics of every frame so far), WRLD
 //            (counters, random state, emitters' progress, stage timings), GRNS (hot grains in
-//            their storage order), STAT (static grains), DEM (neighbour, wall and boundary lists
-//            with their contact history, reference positions, allowances, rebuild counters) and
-//            SURF (height-field columns and the interface's memory).
+//            their storage order), STAT (static grains as their store packs them, slot for slot),
+//            DEM (neighbour, wall and boundary lists with their contact history, reference
+//            positions, allowances, rebuild counters) and SURF (height-field columns and the
+//            interface's memory).
 //
 // Every value is named and written field by field (no raw structs, no padding). The reader takes
 // bytes and trusts none of them: every count is checked against the bytes left in its section
@@ -31,7 +32,8 @@
 namespace sandflow {
 
 /// 4: the stage timings are those of the eight stages of World::step (core/timer.hpp), not five.
-/// 5: the height field keeps each column's time at rest (closed columns).
+/// 5: STAT holds the static store's compact form (12 bytes a grain), not doubles; the height
+///    field keeps each column's time at rest (closed columns).
 constexpr std::uint32_t kCheckpointFormat = 5;
 
 struct Checkpoint {

@@ -211,6 +211,33 @@ void scene_domain(const SceneConfig& scene, const Geometry& geometry, Vec3& lo, 
       hi.x = hi.y = kInf;
     }
 }
+// The static store's frame (dem/grains.hpp): the height field's columns, the domain's heights
+// widened by its height on both sides (as the checkpoint reader allows a grain), the material's
+// radii. A frame that cannot hold a grain within 0.1 % of the smallest diameter is refused.
+StaticFrame static_store_frame(const SceneConfig& scene, const HeightField& hf, Real lo, Real hi) {
+  const MaterialConfig& mat = scene.material;
+  const Real height = hi - lo;
+  const StaticFrame f =
+      static_frame(hf, lo - height, hi + height, 0.5 * mat.diameter * (1 - mat.diameter_spread),
+                   0.5 * mat.diameter * (1 + mat.diameter_spread));
+  if (const std::string e = f.error(); !e.empty())
+    throw InputError(
+        fmt::format("{}: the static layer cannot be stored: {} (simulation.domain, "
+                    "surface, material.diameter)",
+                    scene.path, e));
+  const Real bound = 1e-3 * mat.diameter * (1 - mat.diameter_spread);
+  if (!(f.position_error() <= bound && f.radius_error() <= bound))
+    throw InputError(fmt::format(
+        "{}: the static layer would store a grain's centre within {:.3g} m and its radius within "
+        "{:.3g} m, more than 0.1 % of the smallest diameter ({:.3g} m): its {} height steps span "
+        "{:.4g} m (simulation.domain along z, {:.4g} m, widened by as much on either side) and its "
+        "{} steps across a column {:.4g} m (surface.cell_size); narrow the domain along z, or "
+        "the columns",
+        scene.path, f.position_error(), f.radius_error(), bound,
+        std::uint64_t{1} << StaticStore::kZBits, f.z_hi - f.z_lo, height, 1u << StaticStore::kXBits,
+        f.cell));
+  return f;
+}
 }  // namespace
 
 World::World(const SceneConfig& scene)
@@ -242,6 +269,9 @@ World::World(const SceneConfig& scene)
     emitters_.back().set_bed(std::move(bed), where);
   }
   scene_domain(scene_, geometry_, domain_lo_, domain_hi_);
+  if (surface_)
+    static_ = StaticStore(
+        static_store_frame(scene_, surface_->height_field(), domain_lo_.z, domain_hi_.z));
   // a solid removed at time t goes at the first step that starts at or after t
   for (const GeometryConfig& g : scene_.geometry)
     removal_step_.push_back(
@@ -299,7 +329,7 @@ void World::emit() {
         }
       };
       for (std::size_t i = 0; i < grains_.size(); ++i) consider(grains_.x[i], grains_.r[i]);
-      for (std::size_t k = 0; k < static_.size(); ++k) consider(static_.x[k], static_.r[k]);
+      static_.for_each([&](const StaticGrain& g) { consider(g.x, g.r); });
       for (const NewGrain& g : new_grains_) consider(g.x, g.r);
     }
     if (e.type() == EmitterType::Bed && surface_) {
@@ -563,8 +593,12 @@ Real World::kinetic_energy() const {
 void World::all_grains(std::vector<Vec3>& x, std::vector<Real>& r) const {
   x = grains_.x;
   r = grains_.r;
-  x.insert(x.end(), static_.x.begin(), static_.x.end());
-  r.insert(r.end(), static_.r.begin(), static_.r.end());
+  x.reserve(x.size() + static_.size());
+  r.reserve(r.size() + static_.size());
+  static_.for_each([&](const StaticGrain& g) {
+    x.push_back(g.x);
+    r.push_back(g.r);
+  });
 }
 
 FrameData World::visible_frame() const {
@@ -581,13 +615,13 @@ FrameData World::visible_frame() const {
 
 FrameData World::all_grains_frame() const {
   FrameData f = visible_frame();
-  for (std::size_t k = 0; k < static_.size(); ++k) {
-    f.position.push_back(static_.x[k]);
-    f.radius.push_back(static_.r[k]);
+  static_.for_each([&](const StaticGrain& g) {
+    f.position.push_back(g.x);
+    f.radius.push_back(g.r);
     f.velocity.push_back({});
-    f.id.push_back(static_.id[k]);
+    f.id.push_back(g.id);
     f.state.push_back(static_cast<std::uint8_t>(GrainState::Static));
-  }
+  });
   return f;
 }
 
@@ -601,7 +635,7 @@ std::uint64_t World::state_hash() const {
   std::vector<Ref> refs;
   refs.reserve(total_grains());
   for (std::uint32_t i = 0; i < grains_.size(); ++i) refs.push_back({grains_.id[i], true, i});
-  for (std::uint32_t i = 0; i < static_.size(); ++i) refs.push_back({static_.id[i], false, i});
+  static_.for_each([&](const StaticGrain& g) { refs.push_back({g.id, false, g.slot}); });
   std::sort(refs.begin(), refs.end(), [](const Ref& a, const Ref& b) { return a.id < b.id; });
   Hasher h;
   for (const Ref& ref : refs) {
@@ -611,7 +645,7 @@ std::uint64_t World::state_hash() const {
       h.add(grains_.v[ref.slot]);
       h.add(grains_.w[ref.slot]);
     } else {
-      h.add(static_.x[ref.slot]);
+      h.add(static_.position(ref.slot));
     }
   }
   return h.value();
@@ -624,10 +658,7 @@ namespace sandflow {
 WorldState World::save_state() const {
   WorldState s;
   s.grains = grains_;
-  s.statics.id = static_.id;
-  s.statics.x = static_.x;
-  s.statics.r = static_.r;
-  s.statics.column = static_.column;
+  s.statics = static_.save_state();
   s.dem = dem_.save_state();
   if (surface_) s.surface = surface_->save_state();
   for (const Emitter& e : emitters_) s.emitters.push_back(e.progress());
@@ -642,14 +673,8 @@ WorldState World::save_state() const {
 
 void World::restore_state(WorldState s) {
   grains_ = std::move(s.grains);
-  static_.id = std::move(s.statics.id);
-  static_.x = std::move(s.statics.x);
-  static_.r = std::move(s.statics.r);
-  static_.column = std::move(s.statics.column);
-  static_.column_start.clear();
-  static_.by_column.clear();
-  // the column index is a counting sort of `column`: filed again exactly as the run had it
-  if (surface_ && static_.size() > 0) static_.file_by_column(surface_->height_field().columns());
+  // (slot for slot, as the run had it: the same grains wake in the same order)
+  static_.restore(std::move(s.statics));
   // the solids removed before the checkpoint (at its step, the next step() removes them, as the
   // run did), before the DEM's lists and the height field are restored over them
   remove_due_geometry(s.step, false);

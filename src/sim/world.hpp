@@ -84,7 +84,7 @@ struct FrameStats {
 /// and history, the height field, the emitters' progress, the random state and the counters.
 struct WorldState {
   Grains grains;
-  StaticStore statics;  ///< id, x, r, column (the column index is filed again)
+  StaticStore::State statics;  ///< the static store's compact form, slot for slot
   DemState dem;
   std::optional<SurfaceState> surface;  ///< surface mode only
   std::vector<Emitter::Progress> emitters;

@@ -1,7 +1,6 @@
 #include "surface/interface_layer.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 
 #include "dem/neighbor_list.hpp"  // kParallelMinGrains
@@ -12,24 +11,39 @@ Real vertical_band(Real thickness, Real theta) {
   return thickness / std::cos(std::min(std::abs(theta), deg_to_rad(60.0)));
 }
 
+StaticFrame static_frame(const HeightField& hf, Real z_lo, Real z_hi, Real r_lo, Real r_hi) {
+  StaticFrame f;
+  f.x0 = hf.params().x0;
+  f.y0 = hf.params().y0;
+  f.cell = hf.cell();
+  f.nx = static_cast<std::uint32_t>(hf.nx());
+  f.ny = static_cast<std::uint32_t>(hf.ny());
+  f.z_lo = z_lo;
+  f.z_hi = z_hi;
+  f.r_lo = r_lo;
+  f.r_hi = r_hi;
+  return f;
+}
+
 const std::vector<Real>& InterfaceLayer::static_tops(const HeightField& hf,
                                                      const StaticStore& st) {
   if (tops_follow(st) && tops_.size() == hf.columns() && tops_L_ == hf.terrain()) return tops_;
   tops_ = tops_L_ = hf.terrain();
   tops_r_max_ = 0;
-  // each thread takes its share of the grains into its own copy, then the copies are joined: a
+  // each thread takes its share of the columns into its own copy, then the copies are joined: a
   // maximum, so the result does not depend on the thread count
-  const std::size_t n = st.size();
+  const std::size_t n = st.size(), nc = st.columns();
 #pragma omp parallel if (n >= kParallelMinGrains)
   {
     std::vector<Real> mine(tops_);
     Real r_max = 0;
 #pragma omp for schedule(static) nowait
-    for (std::size_t k = 0; k < n; ++k) {
-      hf.for_each_ray_hit(st.x[k], st.r[k],
-                          [&](std::size_t c, Real, Real top) { mine[c] = std::max(mine[c], top); });
-      r_max = std::max(r_max, st.r[k]);
-    }
+    for (std::size_t c = 0; c < nc; ++c)
+      st.for_each_in_column(c, [&](const StaticGrain& g) {
+        hf.for_each_ray_hit(
+            g.x, g.r, [&](std::size_t cc, Real, Real top) { mine[cc] = std::max(mine[cc], top); });
+        r_max = std::max(r_max, g.r);
+      });
 #pragma omp critical
     {
       for (std::size_t c = 0; c < tops_.size(); ++c) tops_[c] = std::max(tops_[c], mine[c]);
@@ -43,9 +57,10 @@ const std::vector<Real>& InterfaceLayer::static_tops(const HeightField& hf,
 void InterfaceLayer::recompute_tops(const HeightField& hf, const StaticStore& st,
                                     const std::vector<std::uint8_t>& dirty) {
   // a grain filed in column c reaches the columns whose centres are closer than r + cell/2 to
-  // its centre, which is within the column: at most `reach` columns away
+  // its centre, which is within the column (or its margin): at most `reach` columns away
   const int nx = hf.nx(), ny = hf.ny();
-  const int reach = static_cast<int>(std::ceil((tops_r_max_ + 0.5 * hf.cell()) / hf.cell() - 0.5));
+  const int reach = static_cast<int>(
+      std::ceil((tops_r_max_ + 0.5 * hf.cell()) / hf.cell() - 0.5 + StaticStore::kMargin));
   std::vector<std::uint8_t> scan(dirty.size(), 0);
   for (std::size_t c = 0; c < dirty.size(); ++c) {
     if (!dirty[c]) continue;
@@ -57,12 +72,11 @@ void InterfaceLayer::recompute_tops(const HeightField& hf, const StaticStore& st
   }
   for (std::size_t c = 0; c < scan.size(); ++c) {
     if (!scan[c]) continue;
-    for (std::uint32_t q = st.column_start[c]; q < st.column_start[c + 1]; ++q) {
-      const std::uint32_t k = st.by_column[q];
-      hf.for_each_ray_hit(st.x[k], st.r[k], [&](std::size_t cc, Real, Real top) {
+    st.for_each_in_column(c, [&](const StaticGrain& g) {
+      hf.for_each_ray_hit(g.x, g.r, [&](std::size_t cc, Real, Real top) {
         if (dirty[cc]) tops_[cc] = std::max(tops_[cc], top);
       });
-    }
+    });
   }
 }
 
@@ -123,14 +137,16 @@ Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticS
                !(contacts[i] & DemSolver::kNearActive)) {
       // (an active grain within reach would sink into it: static grains push nothing; in a
       // closed column no grain moves, and the invariant wakes what one comes near)
-      if (tops_follow(st)) {
-        hf.for_each_ray_hit(x, hot.r[i], [&](std::size_t cc, Real, Real top) {
+      const bool follow = tops_follow(st);
+      // the tops follow the grain as stored (within the store's bound of where it slept)
+      const StaticGrain g = st.grain(st.add(hot.id[i], x, hot.r[i], static_cast<std::uint32_t>(c)));
+      if (follow) {
+        hf.for_each_ray_hit(g.x, g.r, [&](std::size_t cc, Real, Real top) {
           tops_[cc] = std::max(tops_[cc], top);
         });
-        tops_r_max_ = std::max(tops_r_max_, hot.r[i]);
+        tops_r_max_ = std::max(tops_r_max_, g.r);
         ++tops_of_;
       }
-      st.add(hot.id[i], x, hot.r[i], static_cast<std::uint32_t>(c));
       changes.push_back({hot.id[i], GrainState::Interface, GrainState::Static});
       ++n.slept;
       continue;
@@ -159,20 +175,18 @@ Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticS
   }
   h_seen_ = h_now;
   L_seen_ = L_now;
-  if (n.slept > 0 || st.column_start.size() != nc + 1) st.file_by_column(nc);
   if (!any) return out;
 
-  std::vector<std::uint8_t> flagged(st.size(), 0);
+  std::vector<std::uint32_t> flagged;
   for (std::size_t c = 0; c < nc; ++c) {
     if (!fell[c]) continue;
     const Real band = vertical_band(T, hf.slope()[c]);
-    for (std::uint32_t q = st.column_start[c]; q < st.column_start[c + 1]; ++q) {
-      const std::uint32_t k = st.by_column[q];
-      if (st.x[k].z > hf.static_top_at(st.x[k].x, st.x[k].y) - band || st.x[k].z < L_now[c])
-        flagged[k] = 1;
-    }
+    st.for_each_in_column(c, [&](const StaticGrain& g) {
+      if (g.x.z > hf.static_top_at(g.x.x, g.x.y) - band || g.x.z < L_now[c])
+        flagged.push_back(g.slot);
+    });
   }
-  n.woken = wake(hf, hot, st, flagged, changes);
+  n.woken = wake(hf, hot, st, std::move(flagged), changes);
   return out;
 }
 
@@ -184,56 +198,54 @@ Transitions InterfaceLayer::wake_within_reach(const HeightField& hf, Grains& hot
   Real reach = 0;
   for (std::size_t i = 0; i < nh; ++i)
     if (hot.state[i] == GrainState::Active) reach = std::max(reach, hot.r[i] + allow[i]);
-  if (st.column_start.size() != hf.columns() + 1) st.file_by_column(hf.columns());
   reach_.prepare(hf, st, reach);
-  std::vector<std::uint8_t> flagged(st.size(), 0);
-  // (flags set by several threads: each write is the same 1, and the set does not depend on the
-  // order)
-#pragma omp parallel for schedule(dynamic, 512) if (nh >= kParallelMinGrains)
-  for (std::size_t i = 0; i < nh; ++i) {
-    if (hot.state[i] != GrainState::Active) continue;
-    reach_.for_each_within(hf, st, hot.x[i], hot.r[i] + allow[i], [&](std::uint32_t k) {
-      std::atomic_ref<std::uint8_t>(flagged[k]).store(1, std::memory_order_relaxed);
-    });
+  // (each thread lists what it finds; wake() sorts the lists' union, so the set and its order do
+  // not depend on the threads)
+  std::vector<std::uint32_t> flagged;
+#pragma omp parallel if (nh >= kParallelMinGrains)
+  {
+    std::vector<std::uint32_t> mine;
+#pragma omp for schedule(dynamic, 512) nowait
+    for (std::size_t i = 0; i < nh; ++i) {
+      if (hot.state[i] != GrainState::Active) continue;
+      reach_.for_each_within(hf, st, hot.x[i], hot.r[i] + allow[i],
+                             [&](std::uint32_t k) { mine.push_back(k); });
+    }
+#pragma omp critical
+    flagged.insert(flagged.end(), mine.begin(), mine.end());
   }
-  out.counts.woken_by_reach = wake(hf, hot, st, flagged, out.changes);
+  out.counts.woken_by_reach = wake(hf, hot, st, std::move(flagged), out.changes);
   return out;
 }
 
 std::int64_t InterfaceLayer::wake(const HeightField& hf, Grains& hot, StaticStore& st,
-                                  const std::vector<std::uint8_t>& flagged,
+                                  std::vector<std::uint32_t> slots,
                                   std::vector<StateChange>& changes) {
+  if (slots.empty()) return 0;
+  // in slot order, each once: the hot store receives them in an order the threads do not decide
+  std::sort(slots.begin(), slots.end());
+  slots.erase(std::unique(slots.begin(), slots.end()), slots.end());
   const std::size_t nc = hf.columns();
   // the tops of the columns the woken grains reached are computed again from the grains that stay
   const bool follow = tops_follow(st) && tops_.size() == nc;
   std::vector<std::uint8_t> dirty(follow ? nc : 0, 0);
-  std::vector<std::uint32_t> stay;
-  stay.reserve(st.size());
-  std::int64_t woken = 0;
-  for (std::uint32_t k = 0; k < st.size(); ++k) {
-    if (!flagged[k]) {
-      stay.push_back(k);
-      continue;
-    }
+  for (std::uint32_t k : slots) {
+    const StaticGrain g = st.grain(k);
     if (follow)  // (a column's top is one of its hits: only the highest one's leaving lowers it)
-      hf.for_each_ray_hit(st.x[k], st.r[k], [&](std::size_t c, Real, Real top) {
+      hf.for_each_ray_hit(g.x, g.r, [&](std::size_t c, Real, Real top) {
         if (top >= tops_[c]) dirty[c] = 1;
       });
-    hot.add(st.id[k], st.x[k], Vec3{}, st.r[k], p_.density);
+    hot.add(g.id, g.x, Vec3{}, g.r, p_.density);
     // (one below its column's level moves on its own; transfer() makes it ACTIVE next time)
     hot.state.back() = GrainState::Interface;
-    changes.push_back({st.id[k], GrainState::Static, GrainState::Interface});
-    ++woken;
+    changes.push_back({g.id, GrainState::Static, GrainState::Interface});
   }
-  if (woken > 0) {
-    st.permute(stay);
-    st.file_by_column(nc);
-    if (follow) {
-      tops_of_ = st.size();
-      recompute_tops(hf, st, dirty);
-    }
+  st.remove(slots);
+  if (follow) {
+    tops_of_ = st.size();
+    recompute_tops(hf, st, dirty);
   }
-  return woken;
+  return static_cast<std::int64_t>(slots.size());
 }
 
 }  // namespace sandflow

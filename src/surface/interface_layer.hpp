@@ -75,6 +75,10 @@ struct InterfaceParams {
 /// cos theta, with theta at most 60 degrees (a column beside a wall sees the wall as its slope).
 Real vertical_band(Real thickness, Real theta);
 
+/// The frame of the static store filed by `hf`'s columns: static centres in [z_lo, z_hi] and
+/// radii in [r_lo, r_hi] [m].
+StaticFrame static_frame(const HeightField& hf, Real z_lo, Real z_hi, Real r_lo, Real r_hi);
+
 class InterfaceLayer {
  public:
   explicit InterfaceLayer(const InterfaceParams& p) : p_(p) {}
@@ -124,10 +128,10 @@ class InterfaceLayer {
   /// Recomputes the tops of the marked columns from the static grains (filed by column).
   void recompute_tops(const HeightField& hf, const StaticStore& st,
                       const std::vector<std::uint8_t>& dirty);
-  /// Moves the static grains flagged in `wake` to the hot grains as INTERFACE, each added to
-  /// `changes`; returns how many.
+  /// Moves the static grains in `slots` (in any order, repeats allowed) to the hot grains as
+  /// INTERFACE, in slot order, each added to `changes`; returns how many.
   std::int64_t wake(const HeightField& hf, Grains& hot, StaticStore& st,
-                    const std::vector<std::uint8_t>& wake, std::vector<StateChange>& changes);
+                    std::vector<std::uint32_t> slots, std::vector<StateChange>& changes);
 
   StaticReach reach_;  ///< the static grains near a point, for wake_within_reach
 };

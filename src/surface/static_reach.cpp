@@ -4,12 +4,14 @@ namespace sandflow {
 
 void StaticReach::prepare(const HeightField& hf, const StaticStore& st, Real reach) {
   const std::size_t nc = hf.columns();
-  Real r_max = 0;
-  for (Real r : st.r) r_max = std::max(r_max, r);
+  // (the largest radius the store may hold: the searches below stay exact, and an index of a
+  // store whose largest grain left needs no pass to know it)
+  const Real r_max = st.size() > 0 ? st.frame().r_hi : 0.0;
   // a grain within reach of x lies at most this many columns from x's own
-  const int span = static_cast<int>(std::ceil((reach + r_max) / hf.cell()));
-  if (revision_ == st.revision && columns_ == nc && span_ == span && r_max_ == r_max) return;
-  revision_ = st.revision;
+  // (and a stored centre lies at most StaticStore::kMargin cells outside its column)
+  const int span = static_cast<int>(std::ceil((reach + r_max) / hf.cell() + StaticStore::kMargin));
+  if (revision_ == st.revision() && columns_ == nc && span_ == span && r_max_ == r_max) return;
+  revision_ = st.revision();
   columns_ = nc;
   span_ = span;
   r_max_ = r_max;
@@ -19,8 +21,8 @@ void StaticReach::prepare(const HeightField& hf, const StaticStore& st, Real rea
   // touches)
   constexpr Real kNone = -std::numeric_limits<Real>::infinity();
   top_.assign(nc, kNone);
-  for (std::size_t k = 0; k < st.size(); ++k)
-    top_[st.column[k]] = std::max(top_[st.column[k]], st.x[k].z + st.r[k]);
+  st.for_each(
+      [&](const StaticGrain& g) { top_[g.column] = std::max(top_[g.column], g.x.z + g.r); });
   const std::vector<Real>& top = top_;
   const int nx = hf.nx(), ny = hf.ny();
   std::vector<Real> along_x(nc, kNone);

@@ -1,7 +1,7 @@
 // Which STATIC grains lie near a point: the question the invariant of the layers asks of the
 // static store at every rebuild of the pair list (InterfaceLayer::wake_within_reach). The store
-// files its grains by height-field column, each column's in ascending z
-// (StaticStore::file_by_column). This index adds, per column, the highest top of the static
+// files its grains by height-field column, each column's main body in ascending z
+// (dem/grains.hpp). This index adds, per column, the highest top of the static
 // grains within `reach` of it, so that the many ACTIVE grains well above the static layer are
 // passed over with one look; for the others a binary search finds the band of heights in each
 // column near them. Tested against brute force (tests/surface/test_static_reach.cpp).
@@ -25,18 +25,18 @@ class StaticReach {
   /// does nothing when neither the store nor the columns the reach spans changed since.
   void prepare(const HeightField& hf, const StaticStore& st, Real reach);
 
-  /// Calls f(k) for every static grain k with |x - x_k| < extra + r_k; `extra` at most the
-  /// reach prepare() was given.
+  /// Calls f(k) for the slot k of every static grain with |x - x_k| < extra + r_k; `extra` at
+  /// most the reach prepare() was given.
   template <class F>
   void for_each_within(const HeightField& hf, const StaticStore& st, const Vec3& x, Real extra,
                        F&& f) const;
 
-  /// The largest radius of a static grain [m] (0 for an empty store).
+  /// The largest radius a static grain may have [m] (the store's frame; 0 for an empty store).
   Real r_max() const { return r_max_; }
 
  private:
   static constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
-  std::uint64_t revision_ = kNever;  ///< StaticStore::revision the index was built for
+  std::uint64_t revision_ = kNever;  ///< StaticStore::revision() the index was built for
   std::size_t columns_ = 0;
   int span_ = -1;                    ///< columns the reach covers on each side
   Real r_max_ = 0;
@@ -54,9 +54,11 @@ void StaticReach::for_each_within(const HeightField& hf, const StaticStore& st, 
   if (own >= 0 && !(near_top_[static_cast<std::size_t>(own)] > x.z - extra)) return;
   const Real R = extra + r_max_;  // horizontal and vertical reach of the centres
   const Real cell = hf.cell();
+  // (a stored centre lies at most StaticStore::kMargin cells outside its column's square)
+  const Real edge = StaticStore::kMargin * cell, Rc = R + edge;
   const HeightFieldParams& g = hf.params();
-  const Real fx0 = std::floor((x.x - R - g.x0) / cell), fx1 = std::floor((x.x + R - g.x0) / cell);
-  const Real fy0 = std::floor((x.y - R - g.y0) / cell), fy1 = std::floor((x.y + R - g.y0) / cell);
+  const Real fx0 = std::floor((x.x - Rc - g.x0) / cell), fx1 = std::floor((x.x + Rc - g.x0) / cell);
+  const Real fy0 = std::floor((x.y - Rc - g.y0) / cell), fy1 = std::floor((x.y + Rc - g.y0) / cell);
   if (!(fx1 >= 0 && fy1 >= 0 && fx0 < g.nx && fy0 < g.ny)) return;  // (NaN too)
   const int i0 = static_cast<int>(std::max(fx0, 0.0)), i1 = static_cast<int>(std::min<Real>(fx1, g.nx - 1));
   const int j0 = static_cast<int>(std::max(fy0, 0.0)), j1 = static_cast<int>(std::min<Real>(fy1, g.ny - 1));
@@ -65,18 +67,17 @@ void StaticReach::for_each_within(const HeightField& hf, const StaticStore& st, 
     for (int i = i0; i <= i1; ++i) {
       const std::size_t c = static_cast<std::size_t>(j) * g.nx + i;
       if (!(top_[c] > x.z - extra)) continue;  // (every grain of the column is too low)
-      // the column's square lies further than R from x: none of its centres is near
-      const Real dx = std::max({g.x0 + i * cell - x.x, x.x - (g.x0 + (i + 1) * cell), 0.0});
-      const Real dy = std::max({g.y0 + j * cell - x.y, x.y - (g.y0 + (j + 1) * cell), 0.0});
+      // the column's square (with its margin) lies further than R from x: none of its centres
+      // is near
+      const Real dx =
+          std::max({g.x0 + i * cell - edge - x.x, x.x - (g.x0 + (i + 1) * cell + edge), 0.0});
+      const Real dy =
+          std::max({g.y0 + j * cell - edge - x.y, x.y - (g.y0 + (j + 1) * cell + edge), 0.0});
       if (dx * dx + dy * dy >= R * R) continue;
-      const auto begin = st.by_column.begin() + st.column_start[c];
-      const auto end = st.by_column.begin() + st.column_start[c + 1];
-      auto q = std::partition_point(begin, end, [&](std::uint32_t k) { return st.x[k].z <= z_lo; });
-      for (; q != end && st.x[*q].z < z_hi; ++q) {
-        const std::uint32_t k = *q;
-        const Real reach = extra + st.r[k];
-        if (norm2(x - st.x[k]) < reach * reach) f(k);
-      }
+      st.for_each_in_column_between(c, z_lo, z_hi, [&](const StaticGrain& s) {
+        const Real reach = extra + s.r;
+        if (norm2(x - s.x) < reach * reach) f(s.slot);
+      });
     }
 }
 

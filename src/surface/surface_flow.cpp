@@ -86,7 +86,6 @@ SurfaceFlow::Seating SurfaceFlow::seat_bed(Grains& hot, StaticStore& st,
     }
   }
   std::sort(seated_.begin(), seated_.end());
-  if (out.statics > 0) st.file_by_column(hf_.columns());
   return out;
 }
 

@@ -107,7 +107,8 @@ std::vector<std::string> lines(const fs::path& p) {
 void expect_same_run(const fs::path& want, const fs::path& got) {
   auto summary = [](const fs::path& dir) {
     auto j = nlohmann::json::parse(read_text(dir / "summary.json"));
-    for (const char* timing : {"wall_seconds", "seconds_per_frame", "stage_seconds", "threads"})
+    for (const char* timing :
+         {"wall_seconds", "seconds_per_frame", "stage_seconds", "threads", "peak_memory_bytes"})
       j.erase(timing);
     return j;
   };

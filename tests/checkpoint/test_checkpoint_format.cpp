@@ -93,6 +93,11 @@ void reseal(std::string& b) {
   put_u32(b, h - 4, crc(b, 0, h - 4));
 }
 
+/// The last main-body slot of column 0 of a static store's compact form.
+std::size_t state_last(const StaticStore::State& t) {
+  return t.column_slots[0] - 1;
+}
+
 std::string parse_error(const std::string& bytes) {
   try {
     parse_checkpoint(bytes, "ck.bin");
@@ -152,9 +157,13 @@ TEST(CheckpointFormat, GarbageAndOtherFormatsAreNamed) {
             std::string::npos);
   std::string b = sample().bytes;
   put_u32(b, 8, kCheckpointFormat + 1);
-  const std::string msg = parse_error(b);
+  std::string msg = parse_error(b);
   EXPECT_NE(msg.find("format version " + std::to_string(kCheckpointFormat + 1)), std::string::npos)
       << msg;
+  // the format before the compact static store (4) is refused the same way
+  put_u32(b, 8, 4);
+  msg = parse_error(b);
+  EXPECT_NE(msg.find("format version 4; this sandflow"), std::string::npos) << msg;
 }
 
 TEST(CheckpointFormat, AnotherVersionOrSceneIsRefusedWithWhatDiffers) {
@@ -227,6 +236,54 @@ TEST(CheckpointFormat, IndicesOutOfRangeAreRefusedBeforeTheWorldIsTouched) {
   refused([](Checkpoint& c) { c.world.surface->columns.h.pop_back(); }, "height-field array");
   refused([](Checkpoint& c) { c.world.step += 1; }, "a frame has");
   refused([](Checkpoint& c) { c.frames.pop_back(); }, "statistics of 2 frames");
+}
+
+TEST(CheckpointFormat, StaticGrainsTakeTwelveBytesEachAndTheirLayoutIsChecked) {
+  // a bed of 20,000 static grains in the sample's columns: STAT holds the store's compact form,
+  // 12 bytes a slot (id and code), 4 a column and 4 a tail grain, so a checkpoint of a big bed is
+  // proportionally small
+  const Sample s = sample();
+  Checkpoint c = parse_checkpoint(s.bytes, "ck.bin");
+  const World w(s.scene);
+  const StaticFrame& f = w.static_grains().frame();
+  const auto nc = static_cast<std::uint32_t>(f.columns());
+  StaticStore st(f);
+  for (GrainId k = 0; k < 20000; ++k) {
+    const std::uint32_t col = k % nc;
+    const Vec3 x{f.x0 + f.cell * ((col % f.nx) + 0.5), f.y0 + f.cell * ((col / f.nx) + 0.5),
+                 0.005 + 0.01 * (k / nc)};
+    st.add(k, x, 0.005, col);
+  }
+  c.world.statics = st.save_state();
+  const StaticStore::State& state = c.world.statics;
+  const std::string b = encode_checkpoint(c);
+  const std::size_t stat = section_at(b, 4) - section_at(b, 3);
+  EXPECT_EQ(stat,
+            5 * 8 + 4 * std::size_t{nc} + 12 * state.id.size() + 4 * state.tail_column.size());
+  EXPECT_LT(static_cast<double>(stat - 4 * nc) / 20000, 12.1);
+  const Checkpoint back = parse_checkpoint(b, "ck.bin");
+  EXPECT_EQ(back.world.statics.column_slots, state.column_slots);
+  EXPECT_EQ(back.world.statics.id, state.id);
+  EXPECT_EQ(back.world.statics.code, state.code);
+  EXPECT_EQ(back.world.statics.tail_column, state.tail_column);
+  EXPECT_EQ(back.world.statics.capacity, state.capacity);
+
+  // a layout the store would not have made is refused before anything else of it is believed
+  auto refused = [&](auto&& edit, const char* expect) {
+    Checkpoint e = c;
+    edit(e.world.statics);
+    const std::string msg = restore_error(s.scene, encode_checkpoint(e), s.hash);
+    EXPECT_NE(msg.find(expect), std::string::npos) << expect << ": " << msg;
+  };
+  ASSERT_GT(state.column_slots[0], 1u);
+  refused([](StaticStore::State& t) { std::swap(t.code[0], t.code[state_last(t)]); },
+          "do not ascend in height");
+  ASSERT_FALSE(state.tail_column.empty());
+  refused([&](StaticStore::State& t) { t.tail_column[0] = nc; }, "is filed in column");
+  refused([](StaticStore::State& t) { t.column_slots.pop_back(); }, "columns of static grains");
+  refused([](StaticStore::State& t) { t.capacity = std::uint64_t{1} << 40; }, "room for");
+  // (and then its ids with the hot grains': this bed's 0..19999 repeat the sample's)
+  refused([](StaticStore::State&) {}, "a grain id appears twice");
 }
 
 TEST(CheckpointFormat, RandomEditsNeverCrash) {

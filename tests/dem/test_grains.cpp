@@ -8,12 +8,24 @@
 namespace sandflow {
 namespace {
 
+// one column of 1 cm, heights [-1, 1] m, radii [4, 6] mm
+StaticFrame frame() {
+  StaticFrame f;
+  f.cell = 0.01;
+  f.nx = f.ny = 1;
+  f.z_lo = -1;
+  f.z_hi = 1;
+  f.r_lo = 0.004;
+  f.r_hi = 0.006;
+  return f;
+}
+
 // grains 0-3 hot (1 INTERFACE), 4-5 static: six of the seven ids given, one left the domain
 void fill(Grains& hot, StaticStore& statics) {
   for (GrainId id : {0u, 3u, 1u, 2u}) hot.add(id, {0, 0, 0.01 * id}, {}, 0.005, 2600);
   hot.state[2] = GrainState::Interface;
-  statics.add(5, {0, 0, -0.01}, 0.005, 0);
-  statics.add(4, {0, 0, -0.02}, 0.005, 0);
+  statics.add(5, {0.005, 0.005, -0.01}, 0.005, 0);
+  statics.add(4, {0.005, 0.005, -0.02}, 0.005, 0);
 }
 
 bool says(const std::string& error, const std::string& what) {
@@ -22,7 +34,7 @@ bool says(const std::string& error, const std::string& what) {
 
 TEST(Stores, EveryGrainOnceInTheStoreOfItsState) {
   Grains hot;
-  StaticStore statics;
+  StaticStore statics(frame());
   fill(hot, statics);
   EXPECT_EQ(store_error(hot, statics, 7, 6), "");
   EXPECT_TRUE(says(store_error(hot, statics, 7, 7), "are 6, not 7"));
@@ -30,16 +42,16 @@ TEST(Stores, EveryGrainOnceInTheStoreOfItsState) {
 
 TEST(Stores, AGrainInBothStoresIsNamed) {
   Grains hot;
-  StaticStore statics;
+  StaticStore statics(frame());
   fill(hot, statics);
-  statics.add(3, {0, 0, -0.03}, 0.005, 0);  // a sleeping grain that stayed hot
+  statics.add(3, {0.005, 0.005, -0.03}, 0.005, 0);  // a sleeping grain that stayed hot
   const std::string e = store_error(hot, statics, 7, 7);
   EXPECT_TRUE(says(e, "grain 3 is in the static store and in the hot store")) << e;
 }
 
 TEST(Stores, AStaticGrainInTheHotStoreOrATwiceHeldOneIsNamed) {
   Grains hot;
-  StaticStore statics;
+  StaticStore statics(frame());
   fill(hot, statics);
   hot.state[1] = GrainState::Static;
   EXPECT_TRUE(says(store_error(hot, statics, 7, 6), "grain 3 is STATIC but in the hot store"));

@@ -15,7 +15,7 @@ constexpr Real kR = 0.005;
 struct Fixture {
   HeightField hf;
   Grains hot;
-  StaticStore st;
+  StaticStore st{static_frame(hf, -1.0, 1.0, 0.004, 0.006)};
   InterfaceLayer layer;
 
   // a flat static top at h_level over a 10 x 10 grid of 1 cm columns, sand up to h_level + 1 cm
@@ -47,14 +47,17 @@ struct Fixture {
   GrainState state_of(GrainId id) const {
     for (std::size_t i = 0; i < hot.size(); ++i)
       if (hot.id[i] == id) return hot.state[i];
-    for (std::size_t k = 0; k < st.size(); ++k)
-      if (st.id[k] == id) return GrainState::Static;
+    bool held = false;
+    st.for_each([&](const StaticGrain& g) { held = held || g.id == id; });
+    if (held) return GrainState::Static;
     ADD_FAILURE() << "grain " << id << " was lost";
     return GrainState::Static;
   }
   void expect_conserved(std::size_t n) const {
     std::set<GrainId> ids(hot.id.begin(), hot.id.end());
-    for (GrainId id : st.id) EXPECT_TRUE(ids.insert(id).second) << "grain " << id << " is twice";
+    st.for_each([&](const StaticGrain& g) {
+      EXPECT_TRUE(ids.insert(g.id).second) << "grain " << g.id << " is twice";
+    });
     EXPECT_EQ(ids.size(), n);
   }
 };
@@ -83,7 +86,8 @@ TEST(Interface, ErosionDislodgesAndDeepGrainsSleep) {
   TransitionCounts n = f.transfer();
   EXPECT_EQ(n.slept, 1);
   EXPECT_EQ(f.state_of(1), GrainState::Static);
-  EXPECT_EQ(f.st.column[0], 5u * 10 + 5);  // filed by its column
+  ASSERT_EQ(f.st.size(), 1u);
+  EXPECT_EQ(f.st.grain(0).column, 5u * 10 + 5);  // filed by its column
   EXPECT_EQ(f.state_of(0), GrainState::Interface);
 
   // erosion: h falls 2 cm; grain 0 is now above h (dislodged), the static one within T (woken)
@@ -101,8 +105,7 @@ TEST(Interface, WithoutListChangesOnlyTrappingHappensAndTheRestWaits) {
   // two frozen grains only leaves it at the next rebuild); dislodging, sleeping and waking wait
   Fixture f(0.05);
   f.hot.add(0, {0.05, 0.05, 0.045}, {0.01, 0, 0}, kR, 2600);  // slow, below h: trapped
-  f.st.add(2, {0.03, 0.03, 0.035}, kR, 3 * 10 + 3);            // static
-  f.st.file_by_column(100);
+  f.st.add(2, {0.03, 0.03, 0.035}, kR, 3 * 10 + 3);           // static
   EXPECT_EQ(f.transfer().trapped, 1);
   f.hot.add(1, {0.05, 0.05, 0.005}, {}, kR, 2600);  // frozen, deep below the new h - T - m
   f.hot.state[1] = GrainState::Interface;
@@ -185,7 +188,6 @@ TEST(Interface, StaticTopsFollowSleepAndWakeAsIfComputedAfresh) {
     const Vec3 x{rng.uniform(0, 0.1), rng.uniform(0, 0.1), rng.uniform(0.0, 0.03)};
     f.st.add(id, x, rng.uniform(0.0045, 0.0055), static_cast<std::uint32_t>(f.hf.column_of(x.x, x.y)));
   }
-  f.st.file_by_column(100);
   for (int k = 0; k < 100; ++k, ++id) {  // frozen grains, some deep enough to sleep
     f.hot.add(id, {rng.uniform(0, 0.1), rng.uniform(0, 0.1), rng.uniform(0.01, 0.05)}, {},
               rng.uniform(0.0045, 0.0055), 2600);

@@ -24,7 +24,7 @@ struct Creep {
   InterfaceLayer layer{InterfaceParams{}};
   DemSolver dem;
   Grains hot;
-  StaticStore st;
+  StaticStore st{static_frame(hf, -1.0, 1.0, 0.004, 0.006)};
   Vec3 n;  // the slope's normal
   Real dt = 1e-5;
 
@@ -56,7 +56,6 @@ struct Creep {
           const Vec3 x = e1 * (u * a) + e2 * (v * a) - n * ((k + 0.5) * a);
           st.add(id++, x, kR, static_cast<std::uint32_t>(hf.column_of(x.x, x.y)));
         }
-    st.file_by_column(hf.columns());
     hot.add(id, n * (kR + 0.1 * kD), n * -0.2, kR, 2600);
   }
   // one step as World::step takes it: the invariant before each rebuild, then the DEM.
@@ -81,8 +80,9 @@ struct Creep {
     Real worst = 0;
     for (std::size_t i = 0; i < hot.size(); ++i) {
       if (hot.state[i] != GrainState::Active) continue;
-      for (std::size_t k = 0; k < st.size(); ++k)
-        worst = std::max(worst, hot.r[i] + st.r[k] - norm(hot.x[i] - st.x[k]));
+      st.for_each([&](const StaticGrain& g) {
+        worst = std::max(worst, hot.r[i] + g.r - norm(hot.x[i] - g.x));
+      });
     }
     return worst;
   }
@@ -172,7 +172,7 @@ TEST(LayerInvariant, TheBandIsMeasuredNormalToTheSlope) {
     ip.margin = 0.25 * kD;
     InterfaceLayer layer(ip);
     Grains hot;
-    StaticStore st;
+    StaticStore st(static_frame(hf, -1.0, 1.0, 0.004, 0.006));
     const Vec3 at{0.05, 0.05, 0};
     hot.add(0, {at.x, at.y, hf.static_top_at(at.x, at.y) - 1.15 * kD - ip.margin}, {}, kR, 2600);
     hot.state[0] = GrainState::Interface;

@@ -100,7 +100,7 @@ TopGrain top_grain(Real speed, Real spin = 0, bool pocket = true, bool h_above =
 
   const HeightField& hf = flow.height_field();
   Grains hot;
-  StaticStore st;
+  StaticStore st(static_frame(hf, -1.0, 1.0, 0.004, 0.006));
   GrainId id = 0;
   for (int layer = 0; layer < 3; ++layer)
     for (int j = -3; j <= 3; ++j)
@@ -113,7 +113,6 @@ TopGrain top_grain(Real speed, Real spin = 0, bool pocket = true, bool h_above =
           hot.state.back() = GrainState::Interface;
         }
       }
-  st.file_by_column(hf.columns());
   // pressed in by a hair, so that it touches: between four grains, or on top of one
   const Vec3 top = pocket ? Vec3{0.5 * kD, 0.5 * kD, 5 * kR + std::sqrt(2.0) * kR - 1e-5}
                           : Vec3{0, 0, 7 * kR - 1e-5};

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/rng.hpp"
+#include "surface/interface_layer.hpp"
 #include "surface/static_reach.hpp"
 
 namespace sandflow {
@@ -20,13 +21,12 @@ TEST(StaticReach, FindsWhatBruteForceFinds) {
   p.y0 = -0.04;
   HeightField hf(p, std::vector<Real>(static_cast<std::size_t>(p.nx * p.ny), 0.0));
   Rng rng(7);
-  StaticStore st;
+  StaticStore st(static_frame(hf, -1.0, 1.0, 0.004, 0.006));
   // a rough pile: grains in the grid, their heights spread over 8 cm
   for (GrainId id = 0; id < 600; ++id) {
     const Vec3 x{rng.uniform(-0.06, 0.06), rng.uniform(-0.04, 0.05), rng.uniform(0.0, 0.08)};
     st.add(id, x, rng.uniform(0.0045, 0.0055), static_cast<std::uint32_t>(hf.column_of(x.x, x.y)));
   }
-  st.file_by_column(hf.columns());
   StaticReach reach;
   const Real extra_max = 0.012;
   reach.prepare(hf, st, extra_max);
@@ -39,8 +39,9 @@ TEST(StaticReach, FindsWhatBruteForceFinds) {
     reach.for_each_within(hf, st, x, extra, [&](std::uint32_t k) {
       EXPECT_TRUE(fast.insert(k).second) << "grain " << k << " found twice";
     });
-    for (std::uint32_t k = 0; k < st.size(); ++k)
-      if (norm(x - st.x[k]) < extra + st.r[k]) brute.insert(k);
+    st.for_each([&](const StaticGrain& g) {
+      if (norm(x - g.x) < extra + g.r) brute.insert(g.slot);
+    });
     EXPECT_EQ(fast, brute) << "query " << q;
     found_any += !brute.empty();
   }
@@ -52,9 +53,8 @@ TEST(StaticReach, FollowsTheStoreAsItChanges) {
   p.cell = 0.01;
   p.nx = p.ny = 5;
   HeightField hf(p, std::vector<Real>(25, 0.0));
-  StaticStore st;
+  StaticStore st(static_frame(hf, -1.0, 1.0, 0.004, 0.006));
   st.add(0, {0.025, 0.025, 0.005}, 0.005, 12);
-  st.file_by_column(25);
   StaticReach reach;
   reach.prepare(hf, st, 0.01);
   int n = 0;
@@ -62,10 +62,9 @@ TEST(StaticReach, FollowsTheStoreAsItChanges) {
   reach.for_each_within(hf, st, above, 0.01, [&](std::uint32_t) { ++n; });
   EXPECT_EQ(n, 0);
   // a grain higher in the same column: the index must see it (a stale top would hide it)
-  st.add(1, {0.025, 0.025, 0.02}, 0.005, 12);
-  st.file_by_column(25);
+  const std::uint32_t higher = st.add(1, {0.025, 0.025, 0.02}, 0.005, 12);
   reach.prepare(hf, st, 0.01);
-  reach.for_each_within(hf, st, above, 0.01, [&](std::uint32_t k) { n += k == 1; });
+  reach.for_each_within(hf, st, above, 0.01, [&](std::uint32_t k) { n += k == higher; });
   EXPECT_EQ(n, 1);
 }
 

@@ -42,7 +42,7 @@ TEST(TransitionEnergy, TrappingCountsTheKineticEnergyItRemoves) {
   hf.set_static_top(std::vector<Real>(16, 0.02));
   InterfaceLayer layer{InterfaceParams{}};
   Grains hot;
-  StaticStore st;
+  StaticStore st(static_frame(hf, -1.0, 1.0, 0.004, 0.006));
   hot.add(0, {0.015, 0.015, 0.01}, {0.03, -0.04, 0.0}, kR, kDensity);  // below h, slow
   hot.w[0] = {2, 0, 1};
   const Real kinetic =
