@@ -161,6 +161,21 @@ TEST(SurfaceMode, OneAndTwoThreadsGiveTheSameState) {
   EXPECT_GT(one.energy_trapped, 0);
 }
 
+// Every ACTIVE grain left is outside the height field's grid, or at rest there but for a spin
+// about the vertical (the contact law has no twisting resistance: in plain DEM such grains spin
+// on) — most of them; a few lie still where the static top stays below them. The INTERFACE
+// grains left are the frozen ones within reach of those; and all of them are few.
+void expect_only_strays_simulated(const World& w) {
+  const HeightField& hf = w.surface()->height_field();
+  const Grains& g = w.grains();
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    if (g.state[i] != GrainState::Active || hf.column_of(g.x[i].x, g.x[i].y) < 0) continue;
+    EXPECT_LT(norm(g.v[i]), 1e-3) << "grain " << g.id[i];
+    EXPECT_LT(norm(Vec3{g.w[i].x, g.w[i].y, 0}) * g.r[i], 1e-3) << "grain " << g.id[i];
+  }
+  EXPECT_LT(static_cast<std::int64_t>(g.size()), w.total_grains() / 10);
+}
+
 TEST(SurfaceMode, SettledHeapKeepsItsShapeAndSleeps) {
   // a cube of 1 cm grains at rest collapses into a low heap (four grains deep) and settles
   SceneConfig s = coarse_pour(1200, 1);
@@ -198,10 +213,10 @@ TEST(SurfaceMode, SettledHeapKeepsItsShapeAndSleeps) {
   // asleep and closed: in the last second no grain changes state, and the heap is static (a heap
   // at rest costs nothing). What stays simulated: grains that rolled out beyond the grid, and
   // lone grains on the floor spinning about the vertical (the contact law has no twisting
-  // resistance: in plain DEM they spin on too), 26 of 1,200 here; 3 % allows for them
+  // resistance: in plain DEM they spin on too)
   EXPECT_EQ(late.total(), 0) << late.trapped << " " << late.dislodged << " " << late.slept << " "
                              << late.woken;
-  EXPECT_GE(st.n_static, st.n_total - 3 * st.n_total / 100);
+  expect_only_strays_simulated(w);
 }
 
 TEST(SurfaceMode, AHeapAtRestStaysOpenUntilCloseAfter) {
@@ -221,7 +236,7 @@ TEST(SurfaceMode, AHeapAtRestStaysOpenUntilCloseAfter) {
   for (int f = 0; f < 60; ++f) st = w.advance_frame();  // 2 s
   EXPECT_GT(st.n_active, st.n_total / 10);
   for (int f = 0; f < 75; ++f) st = w.advance_frame();        // 4.5 s
-  EXPECT_GE(st.n_static, st.n_total - 3 * st.n_total / 100);  // (as above)
+  expect_only_strays_simulated(w);                            // (as above)
 }
 
 }  // namespace
