@@ -8,17 +8,13 @@
 #include <unordered_set>
 #include <vector>
 
+#include "analysis/grain_cells.hpp"
 #include "analysis/statistics.hpp"
 
 namespace sandflow {
 namespace {
 
-constexpr double kMaxCellIndex = 1 << 30;  // keeps cell keys exact; far beyond any scene
 constexpr double kRimReach = 3.0;          // the rim is sought out to this many crater radii
-
-std::uint64_t key(std::int64_t i, std::int64_t j) {
-  return (static_cast<std::uint64_t>(i) << 32) | static_cast<std::uint32_t>(j);
-}
 
 struct Cell {
   std::int64_t i = 0, j = 0;
@@ -33,28 +29,13 @@ CraterFit measure_crater(const std::vector<Vec3>& pos, const std::vector<Real>& 
   if (pos.size() != radius.size())
     throw std::invalid_argument("measure_crater: positions and radii have different lengths");
   CraterFit fit;
-  std::vector<std::size_t> use;
-  double sum_r = 0;
-  for (std::size_t k = 0; k < pos.size(); ++k)
-    if (is_finite(pos[k]) && std::isfinite(radius[k]) && radius[k] > 0) {
-      use.push_back(k);
-      sum_r += radius[k];
-    }
-  if (use.empty()) {
-    fit.reason = "no grains";
+  const GrainCells map = grain_cells(pos, radius);
+  if (!map.problem.empty()) {
+    fit.reason = map.problem;
     return fit;
   }
-  const double d = 2.0 * sum_r / static_cast<double>(use.size());
-  Vec3 lo = pos[use[0]], hi = pos[use[0]];
-  for (std::size_t k : use) {
-    lo = min(lo, pos[k]);
-    hi = max(hi, pos[k]);
-  }
-  const double x0 = lo.x - 0.5 * d, y0 = lo.y - 0.5 * d;
-  if ((hi.x - x0) / d > kMaxCellIndex || (hi.y - y0) / d > kMaxCellIndex) {
-    fit.reason = "grains spread over too many cells (stray grains far from the bed?)";
-    return fit;
-  }
+  const std::vector<std::size_t>& use = map.use;
+  const double d = map.d, x0 = map.x0, y0 = map.y0;
 
   // 1. the top-surface map, smoothed by a 3x3 median
   std::unordered_map<std::uint64_t, std::size_t> index;
@@ -62,13 +43,13 @@ CraterFit measure_crater(const std::vector<Vec3>& pos, const std::vector<Real>& 
   for (std::size_t k : use) {
     const auto i = static_cast<std::int64_t>(std::floor((pos[k].x - x0) / d));
     const auto j = static_cast<std::int64_t>(std::floor((pos[k].y - y0) / d));
-    auto [it, inserted] = index.try_emplace(key(i, j), cells.size());
+    auto [it, inserted] = index.try_emplace(cell_key(i, j), cells.size());
     if (inserted) cells.push_back({i, j});
     Cell& c = cells[it->second];
     c.top = std::max(c.top, pos[k].z + radius[k]);
   }
   auto find = [&](std::int64_t i, std::int64_t j) -> const Cell* {
-    const auto it = index.find(key(i, j));
+    const auto it = index.find(cell_key(i, j));
     return it == index.end() ? nullptr : &cells[it->second];
   };
   auto centre_of = [&](const Cell& c) {
@@ -97,7 +78,7 @@ CraterFit measure_crater(const std::vector<Vec3>& pos, const std::vector<Real>& 
   // 3. the centre: the connected cells more than a diameter deep around the lowest one
   if (std::isnan(cx) || std::isnan(cy)) {
     std::vector<const Cell*> stack{&cells[lowest]};
-    std::unordered_set<std::uint64_t> seen{key(cells[lowest].i, cells[lowest].j)};
+    std::unordered_set<std::uint64_t> seen{cell_key(cells[lowest].i, cells[lowest].j)};
     Vec3 sum;
     double weight = 0;
     while (!stack.empty()) {
@@ -109,7 +90,8 @@ CraterFit measure_crater(const std::vector<Vec3>& pos, const std::vector<Real>& 
       for (std::int64_t di = -1; di <= 1; ++di)
         for (std::int64_t dj = -1; dj <= 1; ++dj) {
           const Cell* n = find(c->i + di, c->j + dj);
-          if (n && n->smooth < z_ref - d && seen.insert(key(n->i, n->j)).second) stack.push_back(n);
+          if (n && n->smooth < z_ref - d && seen.insert(cell_key(n->i, n->j)).second)
+            stack.push_back(n);
         }
     }
     cx = sum.x / weight;

@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "analysis/grain_cells.hpp"
 #include "analysis/statistics.hpp"
 
 namespace sandflow {
@@ -19,17 +20,12 @@ namespace {
 // grains (a spread-out layer, a pancake), whatever line fits it.
 constexpr double kMinBandDiameters = 2.0;
 constexpr int kMinFlankPoints = 4;
-constexpr double kMaxCellIndex = 1 << 30;  // keeps cell keys exact; far beyond any scene
 
 struct Cell {
   std::int64_t i = 0, j = 0;
   double h = 0;       // highest grain top above the floor [m]
   double smooth = 0;  // 3x3 median of h
 };
-
-std::uint64_t key(std::int64_t i, std::int64_t j) {
-  return (static_cast<std::uint64_t>(i) << 32) | static_cast<std::uint32_t>(j);
-}
 
 struct ProfilePoint {
   double r = 0;  // median distance from the apex [m]
@@ -48,34 +44,17 @@ HeapFit measure_heap(const std::vector<Vec3>& pos, const std::vector<Real>& radi
   }
   HeapFit fit;
 
-  // Usable grains: finite centre and a positive radius.
-  std::vector<std::size_t> use;
-  use.reserve(pos.size());
-  double sum_r = 0;
-  for (std::size_t k = 0; k < pos.size(); ++k) {
-    if (is_finite(pos[k]) && std::isfinite(radius[k]) && radius[k] > 0) {
-      use.push_back(k);
-      sum_r += radius[k];
-    }
-  }
-  if (use.empty()) {
-    fit.reason = "no grains";
+  // Usable grains and the cells over them.
+  const GrainCells map = grain_cells(pos, radius);
+  if (!map.problem.empty()) {
+    fit.reason = map.problem;
     return fit;
   }
-  const double d = 2.0 * sum_r / static_cast<double>(use.size());
-  Vec3 lo = pos[use[0]], hi = pos[use[0]];
-  double lowest = pos[use[0]].z - radius[use[0]];
-  for (std::size_t k : use) {
-    lo = min(lo, pos[k]);
-    hi = max(hi, pos[k]);
-    lowest = std::min(lowest, pos[k].z - radius[k]);
-  }
-  if (std::isnan(floor_z)) floor_z = lowest;
-  // Cells are centred half a cell in, so grains on a lattice of spacing d fall mid-cell.
-  const double x0 = lo.x - 0.5 * d, y0 = lo.y - 0.5 * d;
-  if ((hi.x - x0) / d > kMaxCellIndex || (hi.y - y0) / d > kMaxCellIndex) {
-    fit.reason = "grains spread over too many cells (stray grains far from the heap?)";
-    return fit;
+  const std::vector<std::size_t>& use = map.use;
+  const double d = map.d, x0 = map.x0, y0 = map.y0;
+  if (std::isnan(floor_z)) {
+    floor_z = pos[use[0]].z - radius[use[0]];
+    for (std::size_t k : use) floor_z = std::min(floor_z, pos[k].z - radius[k]);
   }
 
   // 1. Top-surface map: highest grain top per occupied cell.
@@ -85,7 +64,7 @@ HeapFit measure_heap(const std::vector<Vec3>& pos, const std::vector<Real>& radi
     const auto i = static_cast<std::int64_t>(std::floor((pos[k].x - x0) / d));
     const auto j = static_cast<std::int64_t>(std::floor((pos[k].y - y0) / d));
     const double top = pos[k].z + radius[k] - floor_z;
-    auto [it, inserted] = index.try_emplace(key(i, j), cells.size());
+    auto [it, inserted] = index.try_emplace(cell_key(i, j), cells.size());
     if (inserted) {
       cells.push_back({i, j, top, 0});
     } else {
@@ -93,7 +72,7 @@ HeapFit measure_heap(const std::vector<Vec3>& pos, const std::vector<Real>& radi
     }
   }
   auto find = [&](std::int64_t i, std::int64_t j) -> const Cell* {
-    const auto it = index.find(key(i, j));
+    const auto it = index.find(cell_key(i, j));
     return it == index.end() ? nullptr : &cells[it->second];
   };
   auto centre = [&](const Cell& c) {
@@ -118,7 +97,7 @@ HeapFit measure_heap(const std::vector<Vec3>& pos, const std::vector<Real>& radi
   // Refine x, y: centroid of the connected cells within half a diameter of the summit.
   {
     std::vector<const Cell*> stack{&cells[top]};
-    std::unordered_set<std::uint64_t> seen{key(cells[top].i, cells[top].j)};
+    std::unordered_set<std::uint64_t> seen{cell_key(cells[top].i, cells[top].j)};
     Vec3 sum;
     int count = 0;
     while (!stack.empty()) {
@@ -129,7 +108,7 @@ HeapFit measure_heap(const std::vector<Vec3>& pos, const std::vector<Real>& radi
       for (std::int64_t di = -1; di <= 1; ++di) {
         for (std::int64_t dj = -1; dj <= 1; ++dj) {
           const Cell* n = find(c->i + di, c->j + dj);
-          if (n && n->smooth >= h_max - 0.5 * d && seen.insert(key(n->i, n->j)).second) {
+          if (n && n->smooth >= h_max - 0.5 * d && seen.insert(cell_key(n->i, n->j)).second) {
             stack.push_back(n);
           }
         }

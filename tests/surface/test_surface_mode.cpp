@@ -176,8 +176,10 @@ void expect_only_strays_simulated(const World& w) {
   EXPECT_LT(static_cast<std::int64_t>(g.size()), w.total_grains() / 10);
 }
 
-TEST(SurfaceMode, SettledHeapKeepsItsShapeAndSleeps) {
-  // a cube of 1 cm grains at rest collapses into a low heap (four grains deep) and settles
+// A cube of 1,200 grains of 1 cm at rest that collapses into a low heap (four grains deep) and
+// settles within a second; its columns close after `close_after` at rest. The grid reaches
+// 0.25 m out (outside the grid grains stay simulated).
+SceneConfig collapsing_cube(Real close_after) {
   SceneConfig s = coarse_pour(1200, 1);
   s.material.diameter = 0.01;
   EmitterConfig& e = s.emitters[0];
@@ -185,9 +187,14 @@ TEST(SurfaceMode, SettledHeapKeepsItsShapeAndSleeps) {
   e.size = {0.12, 0.12, 0.12};
   e.center = {0, 0, 0.061};
   e.velocity = {};
-  // (the heap settles within a second: after half a second at rest a column closes)
-  s.surface.close_after = 0.5;
-  s.surface.extent = {{-0.25, -0.25, 0.25, 0.25}};  // (outside the grid grains stay simulated)
+  s.surface.close_after = close_after;
+  s.surface.extent = {{-0.25, -0.25, 0.25, 0.25}};
+  return s;
+}
+
+TEST(SurfaceMode, SettledHeapKeepsItsShapeAndSleeps) {
+  // (after half a second at rest a column closes)
+  const SceneConfig s = collapsing_cube(0.5);
   World w(s);
   for (int f = 0; f < 45; ++f) w.advance_frame();  // 1.5 s
   const SurfaceParams& sp = w.surface()->params();
@@ -222,16 +229,7 @@ TEST(SurfaceMode, SettledHeapKeepsItsShapeAndSleeps) {
 TEST(SurfaceMode, AHeapAtRestStaysOpenUntilCloseAfter) {
   // the same heap with close_after 3 s: at 2 s its top layer is still ACTIVE (R_min holds: the
   // grains a pour would roll over can move), and it closes within a second after 3 s at rest
-  SceneConfig s = coarse_pour(1200, 1);
-  s.material.diameter = 0.01;
-  EmitterConfig& e = s.emitters[0];
-  e.type = EmitterType::Lattice;
-  e.size = {0.12, 0.12, 0.12};
-  e.center = {0, 0, 0.061};
-  e.velocity = {};
-  s.surface.close_after = 3.0;
-  s.surface.extent = {{-0.25, -0.25, 0.25, 0.25}};
-  World w(s);
+  World w(collapsing_cube(3.0));
   FrameStats st;
   for (int f = 0; f < 60; ++f) st = w.advance_frame();  // 2 s
   EXPECT_GT(st.n_active, st.n_total / 10);
