@@ -49,6 +49,15 @@ void Grains::permute(std::span<const std::uint32_t> perm) {
 // ---------------------------------------------------------------------------------
 
 namespace {
+/// Gives v exactly this capacity (at least its size), keeping its contents: reserve() only grows.
+template <class T>
+void set_capacity(std::vector<T>& v, std::size_t capacity) {
+  std::vector<T> w;
+  w.reserve(capacity);
+  w.assign(v.begin(), v.end());
+  v.swap(w);
+}
+
 // x and y in cells of their column, over [-kMargin, 1 + kMargin]
 constexpr Real kMargin = StaticStore::kMargin;
 constexpr std::uint64_t kXMax = (1u << StaticStore::kXBits) - 1;
@@ -112,23 +121,12 @@ void StaticStore::fit_capacity(std::uint32_t main) {
   const std::size_t lo = std::size_t{main} + tail_max_, hi = std::size_t{main} + 4 * tail_max_;
   if (code_.capacity() < lo || code_.capacity() > hi) {
     const std::size_t room = std::size_t{main} + 3 * tail_max_;
-    std::vector<GrainId> id;
-    std::vector<std::uint64_t> code;
-    id.reserve(room);
-    code.reserve(room);
-    id.assign(id_.begin(), id_.end());
-    code.assign(code_.begin(), code_.end());
-    id_.swap(id);
-    code_.swap(code);
+    set_capacity(id_, room);
+    set_capacity(code_, room);
   }
   if (tail_column_.capacity() != tail_max_) {
-    std::vector<std::uint32_t> column, next;
-    column.reserve(tail_max_);
-    next.reserve(tail_max_);
-    column.assign(tail_column_.begin(), tail_column_.end());
-    next.assign(tail_next_.begin(), tail_next_.end());
-    tail_column_.swap(column);
-    tail_next_.swap(next);
+    set_capacity(tail_column_, tail_max_);
+    set_capacity(tail_next_, tail_max_);
   }
 }
 
