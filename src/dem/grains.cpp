@@ -194,7 +194,19 @@ std::uint32_t StaticStore::add(GrainId gid, const Vec3& pos, Real radius, std::u
   tail_last_[col] = t;
   ++live_;
   ++revision_;
+  changed(col);
   return main_ + t;
+}
+
+void StaticStore::changed(std::uint32_t c) {
+  if (all_changed_) return;
+  // (bounded: past one change per column, "any may have" costs no more to follow)
+  if (changed_.size() >= f_.columns()) {
+    changed_.clear();
+    all_changed_ = true;
+    return;
+  }
+  changed_.push_back(c);
 }
 
 void StaticStore::remove(std::span<const std::uint32_t> slots) {
@@ -202,6 +214,7 @@ void StaticStore::remove(std::span<const std::uint32_t> slots) {
   for (std::uint32_t k : slots) {
     if (!holds(k))
       throw std::invalid_argument(fmt::format("StaticStore::remove: slot {} holds no grain", k));
+    if (!all_changed_) changed(column(k));
     id_[k] = kNoGrain;
     --live_;
     ++empty_;
@@ -407,6 +420,8 @@ void StaticStore::restore(State s) {
   for (GrainId id : id_) empty_ += id == kNoGrain;
   live_ = id_.size() - empty_;
   ++revision_;
+  changed_.clear();
+  all_changed_ = true;
 }
 
 std::string store_error(const Grains& hot, const StaticStore& statics, GrainId next_id,

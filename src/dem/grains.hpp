@@ -161,6 +161,16 @@ class StaticStore {
 
   /// Counts every change, so that an index built on the store knows when it is stale.
   std::uint64_t revision() const { return revision_; }
+  /// The columns whose grains changed (added or removed) since the last forget_changes(), with
+  /// repeats, for the one index that follows the store column by column (the reach of the static
+  /// layer); null when any may have (a new or restored store, or more changes than columns).
+  const std::vector<std::uint32_t>* changed_columns() const {
+    return all_changed_ ? nullptr : &changed_;
+  }
+  void forget_changes() {
+    changed_.clear();
+    all_changed_ = false;
+  }
   /// Bytes the store has allocated: the capacity of every array it holds.
   std::size_t allocated_bytes() const;
   /// The invariants of the layout (sizes, each column ascending in height, the tail's lists,
@@ -197,7 +207,11 @@ class StaticStore {
   std::uint32_t tail_max_ = 0;                 ///< tail + empty slots that make a merge
   std::size_t live_ = 0, empty_ = 0;           ///< grains held, empty slots
   std::uint64_t revision_ = 0;
+  std::vector<std::uint32_t> changed_;  ///< see changed_columns()
+  bool all_changed_ = true;
   static constexpr std::uint32_t kNone = 0xffffffffu;
+  /// Notes a change of column c (see changed_columns()).
+  void changed(std::uint32_t c);
 
   static std::uint32_t tail_limit(std::uint32_t main);
   std::uint64_t encode(GrainId gid, const Vec3& pos, Real radius, std::uint32_t col) const;

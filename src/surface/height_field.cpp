@@ -52,6 +52,34 @@ HeightField::HeightField(const HeightFieldParams& p, TerrainColumns terrain)
   Gamma_.assign(columns(), 0);
   // every column starts open (a bed born at rest closes its own: close())
   rest_.assign(columns(), 0);
+  for (ColumnSet* set : {&measured_, &pending_, &evaluate_, &flow_all_, &moved_})
+    set->resize(columns());
+  hit_slot_.assign(columns(), kNoSlot);
+  everything_changed();
+}
+
+void HeightField::everything_changed() {
+  everything_ = true;
+  moved_all_ = true;
+  moved_.clear();
+}
+
+void HeightField::moved(std::size_t c) {
+  if (!moved_all_) moved_.add(static_cast<std::uint32_t>(c));
+  // its slope and its neighbours' (the exchange's upwind slopes reach one column)
+  const int i = static_cast<int>(c % p_.nx), j = static_cast<int>(c / p_.nx);
+  pending_.add(static_cast<std::uint32_t>(c));
+  if (i > 0) pending_.add(static_cast<std::uint32_t>(c - 1));
+  if (i + 1 < p_.nx) pending_.add(static_cast<std::uint32_t>(c + 1));
+  if (j > 0) pending_.add(static_cast<std::uint32_t>(c - p_.nx));
+  if (j + 1 < p_.ny) pending_.add(static_cast<std::uint32_t>(c + p_.nx));
+}
+
+void HeightField::take_moved(std::vector<std::uint32_t>& out, bool& all) {
+  all = moved_all_;
+  out = moved_.list();
+  moved_.clear();
+  moved_all_ = false;
 }
 
 void HeightField::set_solids(TerrainColumns terrain) {
@@ -74,6 +102,8 @@ void HeightField::set_solids(TerrainColumns terrain) {
     H_[c] = h_[c] = L_[c];
     R_[c] = 0;
   }
+  ++level_revision_;
+  everything_changed();
 }
 
 std::int64_t HeightField::column_of(Real x, Real y) const {
@@ -105,57 +135,70 @@ Real HeightField::static_top_at(Real x, Real y) const {
 }
 
 void HeightField::measure(const Grains& hot, const std::vector<Real>& static_top,
-                          const std::vector<std::uint8_t>& counts) {
+                          const std::vector<std::uint8_t>& counts,
+                          const std::vector<std::uint32_t>* changed_tops) {
   auto skip = [&](std::size_t i) { return !counts.empty() && !counts[i]; };
-  const std::size_t nc = columns();
-  // File every ray hit by column (counting sort), then walk each column from the bottom up. Each
-  // thread counts and files the hits of its own share of the grains; a column holds the shares
-  // in thread order, so its hits are in grain order for any thread count.
+  // 1. every counted grain's ray hits: each thread lists those of its share of the grains, in
+  // grain order, so the threads' lists joined in thread order are in grain order for any count
   const std::size_t n = hot.size();
-  hit_start_.assign(nc + 1, 0);
 #pragma omp parallel if (n >= kParallelMinGrains)
   {
-    const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
-    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
 #pragma omp single
-    hit_fill_.assign(threads * nc, 0);
-    std::uint32_t* mine = hit_fill_.data() + t * nc;
-#pragma omp for schedule(static)
-    for (std::size_t i = 0; i < n; ++i)
-      if (!skip(i))
-        for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) { ++mine[c]; });
-#pragma omp single
-    {
-      std::uint32_t at = 0;
-      for (std::size_t c = 0; c < nc; ++c) {
-        for (std::size_t u = 0; u < threads; ++u) {
-          const std::uint32_t count = hit_fill_[u * nc + c];
-          hit_fill_[u * nc + c] = at;
-          at += count;
-        }
-        hit_start_[c + 1] = at;
-      }
-      hits_.resize(at);
-    }
+    thread_hits_.resize(static_cast<std::size_t>(omp_get_num_threads()));
+    std::vector<ColumnHit>& mine = thread_hits_[static_cast<std::size_t>(omp_get_thread_num())];
+    mine.clear();
 #pragma omp for schedule(static)
     for (std::size_t i = 0; i < n; ++i)
       if (!skip(i))
         for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real bottom, Real top) {
-          hits_[mine[c]++] = {bottom, top};
+          mine.push_back({static_cast<std::uint32_t>(c), bottom, top});
         });
   }
+  // 2. filed by column (a counting sort over the columns hit, not the grid)
+  hit_columns_.clear();
+  hit_start_.assign(1, 0);
+  for (const std::vector<ColumnHit>& list : thread_hits_)
+    for (const ColumnHit& e : list) {
+      std::uint32_t& slot = hit_slot_[e.column];
+      if (slot == kNoSlot) {
+        slot = static_cast<std::uint32_t>(hit_columns_.size());
+        hit_columns_.push_back(e.column);
+        hit_start_.push_back(0);
+      }
+      ++hit_start_[slot + 1];
+    }
+  for (std::size_t k = 1; k < hit_start_.size(); ++k) hit_start_[k] += hit_start_[k - 1];
+  hits_.resize(hit_start_.back());
+  hit_fill_.assign(hit_start_.begin(), hit_start_.end() - 1);
+  for (const std::vector<ColumnHit>& list : thread_hits_)
+    for (const ColumnHit& e : list) hits_[hit_fill_[hit_slot_[e.column]]++] = {e.bottom, e.top};
 
+  // 3. H where it can change: columns hit now or at the last measure, or whose static top changed
+  // (added to those measured since the last exchange)
+  if (everything_ || !changed_tops) {
+    measured_.add_all();
+  } else {
+    measured_.add(hit_columns_);
+    measured_.add(hit_before_);
+    measured_.add(*changed_tops);
+  }
+  const std::vector<std::uint32_t>& walk = measured_.list();
+  relevelled_.assign(walk.size(), 0);
   // (columns are independent: each thread walks its own)
 #pragma omp parallel for schedule(dynamic, 256) if (hits_.size() >= 4096)
-  for (std::size_t c = 0; c < nc; ++c) {
-    std::sort(hits_.begin() + hit_start_[c], hits_.begin() + hit_start_[c + 1],
+  for (std::size_t w = 0; w < walk.size(); ++w) {
+    const std::size_t c = walk[w];
+    const std::uint32_t slot = hit_slot_[c];
+    const std::uint32_t q0 = slot == kNoSlot ? 0 : hit_start_[slot];
+    const std::uint32_t q1 = slot == kNoSlot ? 0 : hit_start_[slot + 1];
+    std::sort(hits_.begin() + q0, hits_.begin() + q1,
               [](const Hit& a, const Hit& b) { return a.bottom < b.bottom; });
     // the level: the highest solid with sand on it, else the highest solid
     const std::size_t k0 = solids_.start[c], k1 = solids_.start[c + 1];
     std::size_t level = k1 - 1;
-    Real H = walk_up(c, level, static_top[c]);
+    Real H = walk_up(c, level, static_top[c], q0, q1);
     for (std::size_t k = k1 - 1; k-- > k0 && !(H > solids_.top[level]);) {
-      const Real Hk = walk_up(c, k, static_top[c]);
+      const Real Hk = walk_up(c, k, static_top[c], q0, q1);
       if (Hk > solids_.top[k]) level = k, H = Hk;
     }
     if (!(H > solids_.top[level])) level = k1 - 1, H = solids_.top[level];
@@ -163,17 +206,28 @@ void HeightField::measure(const Grains& hot, const std::vector<Real>& static_top
       // a new level: its static layer starts empty
       L_[c] = solids_.top[level];
       h_[c] = L_[c];
+      relevelled_[w] = 1;
     }
     H_[c] = H;
   }
+  bool relevelled = false;
+  for (std::size_t w = 0; w < walk.size(); ++w)
+    if (relevelled_[w]) {
+      relevelled = true;
+      moved(walk[w]);
+    }
+  level_revision_ += relevelled;
+  for (std::uint32_t c : hit_columns_) hit_slot_[c] = kNoSlot;
+  hit_before_.swap(hit_columns_);
 }
 
-Real HeightField::walk_up(std::size_t c, std::size_t k, Real static_top) const {
+Real HeightField::walk_up(std::size_t c, std::size_t k, Real static_top, std::uint32_t q0,
+                          std::uint32_t q1) const {
   Real top = std::max(solids_.top[k], static_top);
   const Real ceiling = k + 1 < solids_.start[c + 1] ? solids_.bottom[k + 1]
                                                     : std::numeric_limits<Real>::infinity();
   if (static_top >= ceiling) top = solids_.top[k];  // static grains of a higher level
-  for (std::uint32_t q = hit_start_[c]; q < hit_start_[c + 1]; ++q) {
+  for (std::uint32_t q = q0; q < q1; ++q) {
     // hits below the solid's top are grains of a lower level: they raise nothing
     if (hits_[q].bottom > top + p_.gap || hits_[q].bottom >= ceiling) break;  // in flight
     top = std::max(top, hits_[q].top);
@@ -184,6 +238,7 @@ Real HeightField::walk_up(std::size_t c, std::size_t k, Real static_top) const {
 void HeightField::set_surface(std::vector<Real> H) {
   if (H.size() != columns()) throw InputError("height field: H needs one height per column");
   for (std::size_t c = 0; c < H.size(); ++c) H_[c] = std::max(H[c], L_[c]);
+  everything_changed();
 }
 
 void HeightField::set_static_top(std::vector<Real> h) {
@@ -192,6 +247,7 @@ void HeightField::set_static_top(std::vector<Real> h) {
     h_[c] = std::clamp(h[c], L_[c], std::max(H_[c], L_[c]));
     R_[c] = H_[c] - h_[c];
   }
+  everything_changed();
 }
 
 void HeightField::restore(State s) {
@@ -202,12 +258,35 @@ void HeightField::restore(State s) {
   theta_ = std::move(s.theta);
   Gamma_ = std::move(s.Gamma);
   rest_ = std::move(s.rest);
+  ++level_revision_;
+  everything_changed();
 }
 
 void HeightField::exchange(Real dt, const std::vector<std::uint8_t>& flowing) {
+  flow_all_.clear();
+  for (std::size_t c = 0; c < columns(); ++c)
+    if (flowing.empty() || flowing[c]) flow_all_.add(static_cast<std::uint32_t>(c));
+  exchange(dt, flow_all_);
+}
+
+void HeightField::exchange(Real dt, const ColumnSet& flowing) {
   const int nx = p_.nx, ny = p_.ny;
   const Real dx = p_.cell;
   const Real tan0 = std::tan(p_.theta0);
+  // the columns that can change (see the top of the file)
+  evaluate_.clear();
+  if (everything_) {
+    evaluate_.add_all();
+  } else {
+    evaluate_.add(measured_.list());
+    evaluate_.add(pending_.list());
+    evaluate_.add(flowing.list());
+  }
+  measured_.clear();
+  pending_.clear();
+  everything_ = false;
+  const std::vector<std::uint32_t>& todo = evaluate_.list();
+  evaluated_ = todo.size();
   // slope of the static top h on the edges (MAC): s_x between (i, j) and (i+1, j), etc.
   auto sx = [&](int i, int j) {
     return (h_[static_cast<std::size_t>(j) * nx + i + 1] - h_[static_cast<std::size_t>(j) * nx + i]) / dx;
@@ -215,57 +294,65 @@ void HeightField::exchange(Real dt, const std::vector<std::uint8_t>& flowing) {
   auto sy = [&](int i, int j) {
     return (h_[static_cast<std::size_t>(j + 1) * nx + i] - h_[static_cast<std::size_t>(j) * nx + i]) / dx;
   };
-  std::vector<Real> h_new(h_.size());
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      const std::size_t c = static_cast<std::size_t>(j) * nx + i;
-      // the column's slope, downhill from it: on each axis the steeper of its two edges where h
-      // falls away from the column (upwind). A peak then sees its full slope and erodes, a pit
-      // sees none and fills, so no checkerboard can hide from the exchange as it would from a
-      // central difference; on a plane it is the exact gradient.
-      Real gx = 0, gy = 0;
-      if (i > 0) gx = std::max(gx, sx(i - 1, j));       // h falls towards i - 1
-      if (i + 1 < nx) gx = std::max(gx, -sx(i, j));     // h falls towards i + 1
-      if (j > 0) gy = std::max(gy, sy(i, j - 1));
-      if (j + 1 < ny) gy = std::max(gy, -sy(i, j));
-      const Real tan_theta = std::sqrt(gx * gx + gy * gy);
-      const Real theta = std::atan(tan_theta);
-      theta_[c] = theta;
+  h_new_.resize(todo.size());
+  for (std::size_t w = 0; w < todo.size(); ++w) {
+    const std::size_t c = todo[w];
+    const int i = static_cast<int>(c % nx), j = static_cast<int>(c / nx);
+    // the column's slope, downhill from it: on each axis the steeper of its two edges where h
+    // falls away from the column (upwind). A peak then sees its full slope and erodes, a pit
+    // sees none and fills, so no checkerboard can hide from the exchange as it would from a
+    // central difference; on a plane it is the exact gradient.
+    Real gx = 0, gy = 0;
+    if (i > 0) gx = std::max(gx, sx(i - 1, j));    // h falls towards i - 1
+    if (i + 1 < nx) gx = std::max(gx, -sx(i, j));  // h falls towards i + 1
+    if (j > 0) gy = std::max(gy, sy(i, j - 1));
+    if (j + 1 < ny) gy = std::max(gy, -sy(i, j));
+    const Real tan_theta = std::sqrt(gx * gx + gy * gy);
+    const Real theta = std::atan(tan_theta);
+    theta_[c] = theta;
 
-      const Real R = std::max(H_[c] - h_[c], 0.0);
-      Real dh = 0;
-      if (H_[c] > L_[c]) {
-        // BCRE exchange dR/dt = gamma R (theta - theta_c), integrated exactly over dt with the
-        // slope held: stable for any dt, and a deposit never takes more than R. theta_c is
-        // theta0 under a flowing layer and theta_max under one at rest: grains that stopped on
-        // a slope between the two stay there in DEM, so they join the static layer.
-        const bool flows = flowing.empty() || flowing[c];
-        const Real theta_c = flows ? p_.theta0 : p_.theta_max;
-        dh = -R * std::expm1(p_.gamma * (theta - theta_c) * dt);
-        // a deposit stops where the column's own downhill slope would pass theta_c: otherwise it
-        // builds a step that the next update erodes again, and the grains on it flip between
-        // trapped and dislodged at every update
-        if (dh > 0) dh = std::min(dh, 0.5 * dx * std::max(std::tan(theta_c) - tan_theta, 0.0));
-        // an avalanche: a static slope above theta_max erodes even with no rolling layer
-        if (theta > p_.theta_max) dh -= p_.gamma * p_.avalanche_depth * (theta - p_.theta_max) * dt;
-        // erosion stops where the slope would fall below theta0 (no overshoot between updates)
-        if (dh < 0) dh = std::max(dh, -0.5 * dx * std::max(tan_theta - tan0, 0.0));
-      }
-      h_new[c] = std::max(h_[c] + dh, L_[c]);  // erosion never digs below the terrain
-      Gamma_[c] = -(h_new[c] - h_[c]) / dt;
+    const Real R = std::max(H_[c] - h_[c], 0.0);
+    Real dh = 0;
+    if (H_[c] > L_[c]) {
+      // BCRE exchange dR/dt = gamma R (theta - theta_c), integrated exactly over dt with the
+      // slope held: stable for any dt, and a deposit never takes more than R. theta_c is
+      // theta0 under a flowing layer and theta_max under one at rest: grains that stopped on
+      // a slope between the two stay there in DEM, so they join the static layer.
+      const bool flows = flowing.contains(c);
+      const Real theta_c = flows ? p_.theta0 : p_.theta_max;
+      dh = -R * std::expm1(p_.gamma * (theta - theta_c) * dt);
+      // a deposit stops where the column's own downhill slope would pass theta_c: otherwise it
+      // builds a step that the next update erodes again, and the grains on it flip between
+      // trapped and dislodged at every update
+      if (dh > 0) dh = std::min(dh, 0.5 * dx * std::max(std::tan(theta_c) - tan_theta, 0.0));
+      // an avalanche: a static slope above theta_max erodes even with no rolling layer
+      if (theta > p_.theta_max) dh -= p_.gamma * p_.avalanche_depth * (theta - p_.theta_max) * dt;
+      // erosion stops where the slope would fall below theta0 (no overshoot between updates)
+      if (dh < 0) dh = std::max(dh, -0.5 * dx * std::max(tan_theta - tan0, 0.0));
     }
+    h_new_[w] = std::max(h_[c] + dh, L_[c]);  // erosion never digs below the terrain
+    Gamma_[c] = -(h_new_[w] - h_[c]) / dt;
+  }
   const Real flowing_min = p_.flowing_floor();
-  for (std::size_t c = 0; c < h_.size(); ++c) {
+  for (std::size_t w = 0; w < todo.size(); ++w) {
+    const std::size_t c = todo[w];
     // R_min: the visible surface is made of grains that can move, until the column has been at
     // rest for close_after (then nothing there moves: its top joins the static layer). Where grains
     // flow, DEM shears a layer several grains deep (docs/physics.md, "The flowing layer"): a static
     // top one grain below the surface would hold up grains that DEM lets slide, and the heap grows
     // steep.
-    const bool flows = flowing.empty() || flowing[c];
+    const bool flows = flowing.contains(c);
     rest_[c] = flows ? 0 : std::min(rest_[c] + dt, p_.close_after);
     const Real r_min = flows ? flowing_min : closed(c) ? 0 : p_.rolling_min;
-    h_[c] = std::max(std::min(h_new[c], H_[c] - r_min), L_[c]);
+    const Real h = std::max(std::min(h_new_[w], H_[c] - r_min), L_[c]);
+    const bool changed = h != h_[c];
+    h_[c] = h;
     R_[c] = H_[c] - h_[c];
+    // (an open column counts its rest; a changed one, and its neighbours, may change again)
+    if (changed)
+      moved(c);
+    else if (!closed(c) || flows)
+      pending_.add(static_cast<std::uint32_t>(c));
   }
 }
 

@@ -1,12 +1,20 @@
-// The height field of the static layer (docs/design.md §4): a uniform grid of columns over the scene.
-// Per column, at its centre: L (terrain top), H (top of the sand, measured from the grains), h (top
-// of the static layer) and R = H - h (the rolling layer). Slopes live on the edges between
-// columns, as on a MAC grid. One update runs the paper's order H -> theta -> Gamma -> h -> R -> R_min.
+// The height field of the static layer (docs/design.md §4): a uniform grid of columns over the
+// scene. Per column, at its centre: L (terrain top), H (top of the sand, measured from the grains),
+// h (top of the static layer) and R = H - h (the rolling layer). Slopes live on the edges between
+// columns, as on a MAC grid. One update runs the paper's order H -> theta -> Gamma -> h -> R ->
+// R_min.
 //
 // The terrain is multi-valued: a column may cross several solids (a bowl above the floor, the
 // back of an obstacle above the ground below it). Its sand rests on one of their tops, the
 // column's level: the highest top with sand on it, or the highest top while there is none. L is
 // that top and H never reaches the solid above it (the column's ceiling).
+//
+// Only what can change is updated (docs/design.md §4): a column is measured when grains hit it
+// now or at the last update, or its static top changed; the exchange evaluates the measured
+// columns, the flowing ones, the open ones and those beside a column whose h changed. Any other
+// column is closed, at rest, with none of its inputs changed since an update that left it as it
+// was: the update would leave it so again, so skipping it changes nothing (tested against
+// updating every column), and a bed at rest costs nothing however large.
 #pragma once
 
 #include <algorithm>
@@ -16,6 +24,7 @@
 
 #include "core/vec3.hpp"
 #include "dem/grains.hpp"
+#include "surface/column_set.hpp"
 
 namespace sandflow {
 
@@ -80,19 +89,27 @@ class HeightField {
   /// count only where `counts` is nonzero (empty: all count), and from the bottom up only while
   /// no gap separates them from what lies below: grains in flight never lift the surface. Also
   /// picks each column's level; where it changes, h starts afresh at the new L.
+  /// `changed_tops` lists the columns whose static top changed since the last measure (null: any
+  /// may have).
   void measure(const Grains& hot, const std::vector<Real>& static_top,
-               const std::vector<std::uint8_t>& counts = {});
+               const std::vector<std::uint8_t>& counts = {},
+               const std::vector<std::uint32_t>* changed_tops = nullptr);
   /// Steps 2-6 over a time dt: slopes, exchange, h, R, and the R_min floor (flowing_min under a
   /// flowing layer, none in a closed column: see close_after). `flowing` marks the
   /// columns whose rolling layer holds moving grains (empty: all flow). A rolling layer at rest
   /// deposits up to theta_max, the steepest a static slope stands; a flowing one erodes the
   /// static layer down to theta0 (the hysteresis of the angle of repose).
   void exchange(Real dt, const std::vector<std::uint8_t>& flowing = {});
+  /// As above, with the flowing columns listed (each once): the update's work follows them.
+  void exchange(Real dt, const ColumnSet& flowing);
   /// Lowers h of column c to at most z (never below L): the static layer cannot reach up to where
   /// grains are moving.
   void limit_static_top(std::size_t c, Real z) {
-    h_[c] = std::max(std::min(h_[c], z), L_[c]);
+    const Real h = std::max(std::min(h_[c], z), L_[c]);
+    if (h == h_[c]) return;
+    h_[c] = h;
     R_[c] = H_[c] - h_[c];
+    moved(c);
   }
   /// The geometry changed (a solid was removed): new solid intervals per column. A column whose
   /// level is no longer a top drops to the highest top below it (or the highest there is), with
@@ -134,22 +151,59 @@ class HeightField {
   bool closed(std::size_t c) const { return rest_[c] >= p_.close_after; }
   /// Closes column c now, as if at rest for close_after (a bed born at rest).
   void close(std::size_t c) { rest_[c] = p_.close_after; }
+  /// Counts the changes of any column's level (L): what the static tops follow.
+  std::uint64_t level_revision() const { return level_revision_; }
+  /// The columns whose h or L changed since the last call (where static grains may have to
+  /// wake), into `out`; `all` when any may have (a new field, new solids, a restore).
+  void take_moved(std::vector<std::uint32_t>& out, bool& all);
+  /// The columns the last exchange evaluated (for tests: the work of an update).
+  std::size_t evaluated_columns() const { return evaluated_; }
+
   /// Volume of the static layer above the terrain [m^3].
   Real static_volume() const;
   /// Columns where there is sand (H above L).
   std::size_t sand_columns() const;
 
  private:
-  /// H of column c with its sand resting on solid k (no higher than the solid above).
-  Real walk_up(std::size_t c, std::size_t k, Real static_top) const;
+  /// H of column c with its sand resting on solid k (no higher than the solid above), from its
+  /// hits [q0, q1) sorted by bottom.
+  Real walk_up(std::size_t c, std::size_t k, Real static_top, std::uint32_t q0,
+               std::uint32_t q1) const;
+  /// h or L of column c changed: its neighbours' slopes did, and static grains there may wake.
+  void moved(std::size_t c);
+  /// Every column may have changed: the next update evaluates them all.
+  void everything_changed();
 
   HeightFieldParams p_;
   TerrainColumns solids_;
   std::uint64_t initial_terrain_hash_ = 0;
   std::vector<Real> L_, H_, h_, R_, theta_, Gamma_, rest_;
-  // scratch of measure(): ray hits filed by column
-  std::vector<std::uint32_t> hit_start_;
-  std::vector<std::uint32_t> hit_fill_;  ///< per thread and column: where its next hit goes
+  std::uint64_t level_revision_ = 0;
+
+  // what can change (see the top of the file)
+  bool everything_ = true;  ///< the next update evaluates every column
+  ColumnSet measured_;      ///< columns measure() computed H for, for the next exchange
+  ColumnSet pending_;       ///< columns the next exchange evaluates besides those
+  ColumnSet evaluate_;      ///< scratch of exchange(): the columns it evaluates
+  ColumnSet flow_all_;      ///< scratch of exchange(flowing bytes)
+  ColumnSet moved_;         ///< columns whose h or L changed since take_moved()
+  bool moved_all_ = true;
+  std::size_t evaluated_ = 0;
+  std::vector<Real> h_new_;
+
+  // scratch of measure(): ray hits filed by column, for the columns hit only
+  struct ColumnHit {
+    std::uint32_t column;
+    Real bottom, top;
+  };
+  std::vector<std::vector<ColumnHit>> thread_hits_;  ///< per thread, its grains' hits in order
+  static constexpr std::uint32_t kNoSlot = 0xffffffffu;
+  std::vector<std::uint32_t> hit_slot_;     ///< per column: its place in hit_columns_, or kNoSlot
+  std::vector<std::uint32_t> hit_columns_;  ///< the columns hit, as first met
+  std::vector<std::uint32_t> hit_before_;   ///< the columns hit at the last measure
+  std::vector<std::uint32_t> hit_start_;    ///< per column hit (+1): offsets into hits_
+  std::vector<std::uint32_t> hit_fill_;
+  std::vector<std::uint8_t> relevelled_;  ///< per measured column: its level changed
   struct Hit { Real bottom, top; };
   std::vector<Hit> hits_;
 };

@@ -27,9 +27,13 @@ StaticFrame static_frame(const HeightField& hf, Real z_lo, Real z_hi, Real r_lo,
 
 const std::vector<Real>& InterfaceLayer::static_tops(const HeightField& hf,
                                                      const StaticStore& st) {
-  if (tops_follow(st) && tops_.size() == hf.columns() && tops_L_ == hf.terrain()) return tops_;
+  if (tops_follow(st) && tops_.size() == hf.columns() && tops_level_ == hf.level_revision())
+    return tops_;
   tops_ = tops_L_ = hf.terrain();
+  tops_level_ = hf.level_revision();
   tops_r_max_ = 0;
+  tops_all_changed_ = true;
+  tops_changed_.resize(hf.columns());
   // each thread takes its share of the columns into its own copy, then the copies are joined: a
   // maximum, so the result does not depend on the thread count
   const std::size_t n = st.size(), nc = st.columns();
@@ -54,34 +58,46 @@ const std::vector<Real>& InterfaceLayer::static_tops(const HeightField& hf,
   return tops_;
 }
 
+const std::vector<std::uint32_t>* InterfaceLayer::take_changed_tops() {
+  if (tops_all_changed_ || tops_changed_.columns() != tops_.size()) {
+    tops_all_changed_ = false;
+    tops_changed_.resize(tops_.size());
+    return nullptr;
+  }
+  tops_changed_out_ = tops_changed_.list();
+  tops_changed_.clear();
+  return &tops_changed_out_;
+}
+
 void InterfaceLayer::recompute_tops(const HeightField& hf, const StaticStore& st,
-                                    const std::vector<std::uint8_t>& dirty) {
+                                    const ColumnSet& dirty) {
   // a grain filed in column c reaches the columns whose centres are closer than r + cell/2 to
   // its centre, which is within the column (or its margin): at most `reach` columns away
   const int nx = hf.nx(), ny = hf.ny();
   const int reach = static_cast<int>(
       std::ceil((tops_r_max_ + 0.5 * hf.cell()) / hf.cell() - 0.5 + StaticStore::kMargin));
-  std::vector<std::uint8_t> scan(dirty.size(), 0);
-  for (std::size_t c = 0; c < dirty.size(); ++c) {
-    if (!dirty[c]) continue;
+  if (scan_.columns() != dirty.columns()) scan_.resize(dirty.columns());
+  scan_.clear();
+  for (std::uint32_t c : dirty.list()) {
     tops_[c] = tops_L_[c];
+    if (!tops_all_changed_) tops_changed_.add(c);
     const int i = static_cast<int>(c % nx), j = static_cast<int>(c / nx);
     for (int jj = std::max(j - reach, 0); jj <= std::min(j + reach, ny - 1); ++jj)
       for (int ii = std::max(i - reach, 0); ii <= std::min(i + reach, nx - 1); ++ii)
-        scan[static_cast<std::size_t>(jj) * nx + ii] = 1;
+        scan_.add(static_cast<std::uint32_t>(jj * nx + ii));
   }
-  for (std::size_t c = 0; c < scan.size(); ++c) {
-    if (!scan[c]) continue;
+  for (std::uint32_t c : scan_.list()) {
     st.for_each_in_column(c, [&](const StaticGrain& g) {
       hf.for_each_ray_hit(g.x, g.r, [&](std::size_t cc, Real, Real top) {
-        if (dirty[cc]) tops_[cc] = std::max(tops_[cc], top);
+        if (dirty.contains(cc)) tops_[cc] = std::max(tops_[cc], top);
       });
     });
   }
 }
 
 Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticStore& st,
-                                     const std::vector<std::uint8_t>& contacts, bool list_changes) {
+                                     const std::vector<std::uint8_t>& contacts, bool list_changes,
+                                     const std::vector<std::uint32_t>* moved) {
   Transitions out;
   TransitionCounts& n = out.counts;
   std::vector<StateChange>& changes = out.changes;
@@ -142,7 +158,7 @@ Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticS
       const StaticGrain g = st.grain(st.add(hot.id[i], x, hot.r[i], static_cast<std::uint32_t>(c)));
       if (follow) {
         hf.for_each_ray_hit(g.x, g.r, [&](std::size_t cc, Real, Real top) {
-          tops_[cc] = std::max(tops_[cc], top);
+          set_top(cc, std::max(tops_[cc], top));
         });
         tops_r_max_ = std::max(tops_r_max_, g.r);
         ++tops_of_;
@@ -160,26 +176,33 @@ Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticS
   const std::size_t nc = hf.columns();
   const std::vector<Real>& h_now = hf.static_top();
   const std::vector<Real>& L_now = hf.terrain();
-  if (h_seen_.size() != nc) h_seen_ = L_now;
-  if (L_seen_.size() != nc) L_seen_ = L_now;
-  std::vector<std::uint8_t> fell(nc, 0);
-  bool any = false;
+  // (only the columns whose h or L changed can have fallen or risen: `moved`)
+  bool all = !moved;
+  if (h_seen_.size() != nc || L_seen_.size() != nc) {
+    h_seen_ = L_seen_ = L_now;
+    all = true;
+  }
+  if (fell_.columns() != nc) fell_.resize(nc);
+  fell_.clear();
   const int nx = hf.nx(), ny = hf.ny();
-  for (std::size_t c = 0; c < nc; ++c) {
-    if (!(h_now[c] < h_seen_[c]) && !(L_now[c] > L_seen_[c])) continue;
-    any = true;
+  auto look = [&](std::size_t c) {
+    const bool woke = h_now[c] < h_seen_[c] || L_now[c] > L_seen_[c];
+    h_seen_[c] = h_now[c];
+    L_seen_[c] = L_now[c];
+    if (!woke) return;
     const int i = static_cast<int>(c % nx), j = static_cast<int>(c / nx);
     for (int jj = std::max(j - 1, 0); jj <= std::min(j + 1, ny - 1); ++jj)
       for (int ii = std::max(i - 1, 0); ii <= std::min(i + 1, nx - 1); ++ii)
-        fell[static_cast<std::size_t>(jj) * nx + ii] = 1;
-  }
-  h_seen_ = h_now;
-  L_seen_ = L_now;
-  if (!any) return out;
+        fell_.add(static_cast<std::uint32_t>(jj * nx + ii));
+  };
+  if (all)
+    for (std::size_t c = 0; c < nc; ++c) look(c);
+  else
+    for (std::uint32_t c : *moved) look(c);
+  if (fell_.empty()) return out;
 
   std::vector<std::uint32_t> flagged;
-  for (std::size_t c = 0; c < nc; ++c) {
-    if (!fell[c]) continue;
+  for (std::uint32_t c : fell_.list()) {
     const Real band = vertical_band(T, hf.slope()[c]);
     st.for_each_in_column(c, [&](const StaticGrain& g) {
       if (g.x.z > hf.static_top_at(g.x.x, g.x.y) - band || g.x.z < L_now[c])
@@ -228,12 +251,13 @@ std::int64_t InterfaceLayer::wake(const HeightField& hf, Grains& hot, StaticStor
   const std::size_t nc = hf.columns();
   // the tops of the columns the woken grains reached are computed again from the grains that stay
   const bool follow = tops_follow(st) && tops_.size() == nc;
-  std::vector<std::uint8_t> dirty(follow ? nc : 0, 0);
+  if (dirty_.columns() != nc) dirty_.resize(nc);
+  dirty_.clear();
   for (std::uint32_t k : slots) {
     const StaticGrain g = st.grain(k);
     if (follow)  // (a column's top is one of its hits: only the highest one's leaving lowers it)
       hf.for_each_ray_hit(g.x, g.r, [&](std::size_t c, Real, Real top) {
-        if (top >= tops_[c]) dirty[c] = 1;
+        if (top >= tops_[c]) dirty_.add(static_cast<std::uint32_t>(c));
       });
     hot.add(g.id, g.x, Vec3{}, g.r, p_.density);
     // (one below its column's level moves on its own; transfer() makes it ACTIVE next time)
@@ -243,7 +267,7 @@ std::int64_t InterfaceLayer::wake(const HeightField& hf, Grains& hot, StaticStor
   st.remove(slots);
   if (follow) {
     tops_of_ = st.size();
-    recompute_tops(hf, st, dirty);
+    recompute_tops(hf, st, dirty_);
   }
   return static_cast<std::int64_t>(slots.size());
 }

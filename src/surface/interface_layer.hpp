@@ -34,6 +34,7 @@
 
 #include "dem/dem_solver.hpp"
 #include "dem/grains.hpp"
+#include "surface/column_set.hpp"
 #include "surface/height_field.hpp"
 #include "surface/seat.hpp"
 #include "surface/static_reach.hpp"
@@ -87,13 +88,18 @@ class InterfaceLayer {
   /// keeps it up to date as grains sleep and wake; it is computed from all static grains only
   /// at the first call, after a restart and where a column's level changed.
   const std::vector<Real>& static_tops(const HeightField& hf, const StaticStore& st);
+  /// The columns whose static top changed since the last call (HeightField::measure's
+  /// changed_tops); null when any may have (the tops were computed afresh).
+  const std::vector<std::uint32_t>* take_changed_tops();
 
   /// Makes the four transitions against the current h, in the stores; returns them, for the DEM
   /// to apply. `contacts` is DemSolver::contacts_of for the hot grains. Without `list_changes`
   /// only trapping happens (it keeps the pair list); the rest waits for a later call with them,
-  /// which wakes grains wherever h fell since the last such call.
+  /// which wakes grains wherever h fell since the last such call. `moved` lists the columns
+  /// whose h or L changed since then (HeightField::take_moved; null: any may have).
   Transitions transfer(const HeightField& hf, Grains& hot, StaticStore& st,
-                       const std::vector<std::uint8_t>& contacts, bool list_changes = true);
+                       const std::vector<std::uint8_t>& contacts, bool list_changes = true,
+                       const std::vector<std::uint32_t>* moved = nullptr);
 
   /// The invariant: wakes (to INTERFACE) every STATIC grain k within reach of an ACTIVE grain i,
   /// |x_i - x_k| < r_i + r_k + allow[i], allow[i] being how far the coming rebuild lets i move
@@ -122,12 +128,22 @@ class InterfaceLayer {
   static constexpr std::size_t kNoTops = static_cast<std::size_t>(-1);
   std::vector<Real> tops_, tops_L_;
   std::size_t tops_of_ = kNoTops;
+  std::uint64_t tops_level_ = 0;  ///< HeightField::level_revision() of tops_L_
   Real tops_r_max_ = 0;  ///< the largest static grain's radius
+  ColumnSet tops_changed_;  ///< columns whose top changed since take_changed_tops()
+  bool tops_all_changed_ = true;
+  std::vector<std::uint32_t> tops_changed_out_;
+  /// Column c's top is now `top`.
+  void set_top(std::size_t c, Real top) {
+    if (top == tops_[c]) return;
+    tops_[c] = top;
+    if (!tops_all_changed_) tops_changed_.add(static_cast<std::uint32_t>(c));
+  }
+  ColumnSet fell_, dirty_, scan_;  ///< scratch of transfer(), wake(), recompute_tops()
   /// Whether the tops follow the store (before it changes).
   bool tops_follow(const StaticStore& st) const { return tops_of_ == st.size(); }
   /// Recomputes the tops of the marked columns from the static grains (filed by column).
-  void recompute_tops(const HeightField& hf, const StaticStore& st,
-                      const std::vector<std::uint8_t>& dirty);
+  void recompute_tops(const HeightField& hf, const StaticStore& st, const ColumnSet& dirty);
   /// Moves the static grains in `slots` (in any order, repeats allowed) to the hot grains as
   /// INTERFACE, in slot order, each added to `changes`; returns how many.
   std::int64_t wake(const HeightField& hf, Grains& hot, StaticStore& st,

@@ -15,15 +15,18 @@
 
 #include "core/vec3.hpp"
 #include "dem/grains.hpp"
+#include "surface/column_set.hpp"
 #include "surface/height_field.hpp"
 
 namespace sandflow {
 
 class StaticReach {
  public:
-  /// Makes the index answer queries of reach up to `reach` [m] (for_each_within's `extra`);
-  /// does nothing when neither the store nor the columns the reach spans changed since.
-  void prepare(const HeightField& hf, const StaticStore& st, Real reach);
+  /// Makes the index answer queries of reach up to `reach` [m] (for_each_within's `extra`). It
+  /// follows the store's changed columns (StaticStore::changed_columns, which it consumes), so
+  /// its work is what changed, not the store; a reach wider than any before recomputes the
+  /// windows once.
+  void prepare(const HeightField& hf, StaticStore& st, Real reach);
 
   /// Calls f(k) for the slot k of every static grain with |x - x_k| < extra + r_k; `extra` at
   /// most the reach prepare() was given.
@@ -35,13 +38,15 @@ class StaticReach {
   Real r_max() const { return r_max_; }
 
  private:
-  static constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
-  std::uint64_t revision_ = kNever;  ///< StaticStore::revision() the index was built for
+  /// The highest top of the grains of column c.
+  static Real column_top(const StaticStore& st, std::size_t c);
+
   std::size_t columns_ = 0;
-  int span_ = -1;                    ///< columns the reach covers on each side
+  int span_ = -1;  ///< columns the reach covers on each side (never shrinks)
   Real r_max_ = 0;
   std::vector<Real> top_;            ///< per column: highest z + r of its static grains
   std::vector<Real> near_top_;       ///< per column: highest z + r of the static grains within span_
+  ColumnSet changed_, window_;       ///< scratch of prepare()
 };
 
 // ---------------------------------------------------------------------------------------------

@@ -28,18 +28,22 @@ void SurfaceFlow::update_height_field(const Grains& hot, const StaticStore& st,
       counts_[i] |= std::binary_search(seated_.begin(), seated_.end(), hot.id[i]);
     seated_.clear();
   }
-  hf_.measure(hot, interface_.static_tops(hf_, st), counts_);
+  const std::vector<Real>& tops = interface_.static_tops(hf_, st);
+  hf_.measure(hot, tops, counts_, interface_.take_changed_tops());
   // The columns where grains move: a grain in contact with the pile with the energy to leave a
   // seat (seat.hpp). There the rolling layer flows (BCRE with theta0); elsewhere it is at rest
   // and deposits up to theta_max.
-  flowing_.assign(hf_.columns(), 0);
+  if (flowing_.columns() != hf_.columns()) flowing_.resize(hf_.columns());
+  flowing_.clear();
   fast_.clear();
   for (std::size_t i = 0; i < hot.size(); ++i) {
     if (hot.state[i] != GrainState::Active ||
         !moves_pile(p_.interface.seat, hot, i, contacts_[i]) || below_level(hot.x[i]))
       continue;
     fast_.push_back(static_cast<std::uint32_t>(i));
-    hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) { flowing_[c] = 1; });
+    hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) {
+      flowing_.add(static_cast<std::uint32_t>(c));
+    });
   }
   hf_.exchange(dt, flowing_);
 }
@@ -121,7 +125,8 @@ Transitions SurfaceFlow::transfer(Grains& hot, StaticStore& st, const DemSolver&
   // step, they wait for its next rebuild, and at most until the next update.
   const bool now = dem.needs_rebuild() || pending_;
   pending_ = !now;
-  return interface_.transfer(hf_, hot, st, contacts_, now);
+  if (!now) return interface_.transfer(hf_, hot, st, contacts_, false);
+  return interface_.transfer(hf_, hot, st, contacts_, true, take_moved());
 }
 
 Transitions SurfaceFlow::wake_within_reach(Grains& hot, StaticStore& st, const DemSolver& dem,
@@ -136,7 +141,13 @@ Transitions SurfaceFlow::catch_up(Grains& hot, StaticStore& st, const DemSolver&
   if (!pending_ || !dem.needs_rebuild()) return {};
   pending_ = false;
   dem.contacts_of(hot, geometry, contacts_);
-  return interface_.transfer(hf_, hot, st, contacts_, true);
+  return interface_.transfer(hf_, hot, st, contacts_, true, take_moved());
+}
+
+const std::vector<std::uint32_t>* SurfaceFlow::take_moved() {
+  bool all = false;
+  hf_.take_moved(moved_, all);
+  return all ? nullptr : &moved_;
 }
 
 }  // namespace sandflow

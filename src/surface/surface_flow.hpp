@@ -89,7 +89,13 @@ class SurfaceFlow {
   SurfaceParams p_;
   HeightField hf_;
   InterfaceLayer interface_;
-  std::vector<std::uint8_t> contacts_, counts_, flowing_;
+  /// The columns whose h or L changed since the last transfer that could wake grains (null: any
+  /// may have).
+  const std::vector<std::uint32_t>* take_moved();
+
+  std::vector<std::uint8_t> contacts_, counts_;
+  ColumnSet flowing_;                 ///< the columns where grains move the pile
+  std::vector<std::uint32_t> moved_;  ///< scratch of take_moved()
   std::vector<std::uint32_t> fast_;  ///< the hot grains that move the pile, at the last update
   std::vector<Real> allow_;
   /// ACTIVE grains seated by seat_bed: part of the pile at the next measure (sorted ids)
