@@ -34,10 +34,18 @@ Real interface_thickness(const SceneConfig& scene) {
 HeapSize largest_heap(const SceneConfig& scene) {
   const Real d = scene.material.diameter;
   const Real grain_volume = kPi / 6 * d * d * d;
-  const Real bulk = static_cast<Real>(scene.total_grains()) * grain_volume / kHeapPacking;
+  std::int64_t heaped = 0;
+  Real bed_top = 0;
+  for (const EmitterConfig& e : scene.emitters) {
+    if (e.type == EmitterType::Bed)
+      bed_top = std::max(bed_top, e.height);
+    else
+      heaped += e.count;
+  }
+  const Real bulk = static_cast<Real>(heaped) * grain_volume / kHeapPacking;
   const Real t = std::tan(scene.surface.repose_angle);
   const Real radius = std::cbrt(3 * bulk / (kPi * t));
-  return {radius * t, radius};
+  return {radius * t + bed_top, radius};
 }
 
 SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry, Real dt) {
@@ -93,7 +101,10 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   for (const EmitterConfig& e : scene.emitters) {
     const Real hx = e.type == EmitterType::Pour && e.shape == PourShape::Disk ? e.radius : e.size.x / 2;
     const Real hy = e.type == EmitterType::Pour && e.shape == PourShape::Disk ? e.radius : e.size.y / 2;
-    grow(e.center.x - hx - heap, e.center.y - hy - heap, e.center.x + hx + heap, e.center.y + hy + heap);
+    // (a bed lies in its footprint: the heap of every grain around it would be a grid many times
+    // its area)
+    const Real m = e.type == EmitterType::Bed ? 4 * d : heap;
+    grow(e.center.x - hx - m, e.center.y - hy - m, e.center.x + hx + m, e.center.y + hy + m);
     z_top = std::max(z_top, e.center.z + e.size.z);
     z_floor = std::min(z_floor, e.center.z - e.size.z);
   }

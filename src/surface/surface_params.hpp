@@ -33,7 +33,8 @@ Real flowing_min(const SceneConfig& scene);
 Real interface_thickness(const SceneConfig& scene);
 
 /// Height [m] and base radius [m] of the cone that holds every grain of the scene at theta_0
-/// (packing fraction 0.6): the scale of the largest heap the scene can make.
+/// (packing fraction 0.6): the scale of the largest heap the scene can make. A bed's grains lie
+/// in its footprint, not in the cone: they add the highest bed's top (above z = 0) to the height.
 struct HeapSize {
   Real height, radius;
 };
