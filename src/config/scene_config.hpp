@@ -186,7 +186,10 @@ struct EmitterConfig {
   // bed: a packed region at rest over the footprint center.xy +- size.xy / 2, from the scene's
   // geometry up to z = height. Its count is the packing's (resolve_beds, sim/emitters.hpp), and
   // center.z and size.z become the box of its grains.
-  Real height = 0.0;  ///< the bed's flat top [m]
+  Real height = 0.0;  ///< the bed's top [m]: flat, or the highest point of its relief
+  Real relief = 0.0;  ///< depth of the top's relief below `height` [m]; 0: a flat top
+  std::optional<Real> relief_wavelength;  ///< of the relief [m]; unset: a quarter of the footprint
+  std::uint64_t relief_seed = 1;          ///< the relief's shape (the same for every run seed)
 };
 
 struct SceneConfig {

@@ -158,6 +158,11 @@ class StaticStore {
   /// the main body).
   template <class F>
   void for_each_in_column_between(std::size_t c, Real z_lo, Real z_hi, F&& f) const;
+  /// Calls f(const StaticGrain&) for every grain whose centre may lie in the box [lo, hi] (and
+  /// some near it: whole columns, within their margin): the work is the columns the box covers,
+  /// not the store.
+  template <class F>
+  void for_each_near_box(const Vec3& lo, const Vec3& hi, F&& f) const;
 
   /// Counts every change, so that an index built on the store knows when it is stale.
   std::uint64_t revision() const { return revision_; }
@@ -257,6 +262,27 @@ void StaticStore::for_each_in_column(std::size_t c, F&& f) const {
     if (id_[q] != kNoGrain) f(grain(q, col));
   for (std::uint32_t t = tail_last_[c]; t != kNone; t = tail_next_[t])
     if (id_[main_ + t] != kNoGrain) f(grain(main_ + t, col));
+}
+
+template <class F>
+void StaticStore::for_each_near_box(const Vec3& lo, const Vec3& hi, F&& f) const {
+  if (start_.empty() || live_ == 0) return;
+  // (a stored centre lies at most kMargin cells outside its column's square)
+  const Real m = kMargin * f_.cell;
+  const Real fx0 = std::floor((lo.x - m - f_.x0) / f_.cell),
+             fx1 = std::floor((hi.x + m - f_.x0) / f_.cell);
+  const Real fy0 = std::floor((lo.y - m - f_.y0) / f_.cell),
+             fy1 = std::floor((hi.y + m - f_.y0) / f_.cell);
+  if (!(fx1 >= 0 && fy1 >= 0 && fx0 < f_.nx && fy0 < f_.ny)) return;  // (NaN too)
+  const auto i0 = static_cast<std::size_t>(std::max(fx0, 0.0));
+  const auto i1 = static_cast<std::size_t>(std::min<Real>(fx1, f_.nx - 1));
+  const auto j0 = static_cast<std::size_t>(std::max(fy0, 0.0));
+  const auto j1 = static_cast<std::size_t>(std::min<Real>(fy1, f_.ny - 1));
+  // (the stored heights are within the frame's step of the true ones: a step's margin)
+  const Real dz = f_.position_error();
+  for (std::size_t j = j0; j <= j1; ++j)
+    for (std::size_t i = i0; i <= i1; ++i)
+      for_each_in_column_between(j * f_.nx + i, lo.z - dz, hi.z + dz, f);
 }
 
 template <class F>

@@ -33,6 +33,9 @@ EmitterConfig read_emitter(TableReader r, std::size_t index, const MaterialConfi
     r.read("size", e.size, kPositive, 2);  // x, y extents of the footprint; z is not used
     r.require("height", "the bed's flat top, z in metres");
     r.read("height", e.height);
+    r.read("relief", e.relief, kNonNegative);
+    r.read("relief_wavelength", e.relief_wavelength, kPositive);
+    r.read("relief_seed", e.relief_seed, kNonNegative);
     r.finish("a bed emitter");
     if (const auto problem = emitter_problem(e, material))
       r.fail_at(problem->key, r.name(problem->key) + " " + problem->what);

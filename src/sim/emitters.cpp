@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "core/error.hpp"
+#include "geometry/heightmap.hpp"
 
 namespace sandflow {
 
@@ -260,7 +261,18 @@ std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const Mat
     }
     return std::min(solids.back().second, top);
   };
-  region.top = [top](Real, Real) { return top; };
+  // the top: flat at `height`, or a smooth relief (the noise terrain of a heightmap, its own
+  // seed) from height - relief up to height
+  std::optional<SolidHeightmap> relief;
+  if (e.relief > 0) {
+    const std::array<Real, 4> extent{region.x0, region.y0, region.x1, region.y1};
+    const Real wavelength = e.relief_wavelength.value_or(0.25 * std::min(e.size.x, e.size.y));
+    relief.emplace(noise_heights(extent, wavelength, e.relief_seed, top - e.relief, top), extent,
+                   e.relief);
+    region.top = [&relief](Real x, Real y) { return relief->height(x, y); };
+  } else {
+    region.top = [top](Real, Real) { return top; };
+  }
   // a grain reaching into a solid by more than 1 % of d is refused (the floor is sampled and
   // met through tangent planes: a grain may rest a hair into a curved one)
   const Real tolerance = 0.01 * d;
@@ -282,7 +294,7 @@ std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const Mat
       for (int i = 0; i <= 32; ++i) {
         const Real x = region.x0 + (region.x1 - region.x0) * i / 32;
         const Real y = region.y0 + (region.y1 - region.y0) * j / 32;
-        coarse += std::max(0.0, top - region.floor(x, y)) / (33.0 * 33.0);
+        coarse += std::max(0.0, region.top(x, y) - region.floor(x, y)) / (33.0 * 33.0);
       }
     coarse *= (region.x1 - region.x0) * (region.y1 - region.y0) * 0.6 /
               (4.0 / 3.0 * kPi * std::pow(0.5 * m.diameter, 3));
@@ -336,6 +348,12 @@ void set_bed_extent(EmitterConfig& e, const BedPacking& bed) {
   }
   e.center.z = 0.5 * (z_lo + z_hi);
   e.size.z = z_hi - z_lo;
+}
+
+void Emitter::near_box(Real r, Vec3& lo, Vec3& hi) const {
+  const Real m = reach_ + drop_ + r;
+  lo = slot_lo_ - Vec3{m, m, m};
+  hi = slot_hi_ + Vec3{m, m, m};
 }
 
 bool Emitter::near_slots(const Vec3& x, Real r) const {

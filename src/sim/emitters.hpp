@@ -102,6 +102,8 @@ class Emitter {
   Real next_time() const { return next_time_; }
   /// True when a grain centred at x with radius r may overlap a new grain of this pour.
   bool near_slots(const Vec3& x, Real r) const;
+  /// The box [lo, hi] that holds the centre of every grain of radius up to r near_slots.
+  void near_box(Real r, Vec3& lo, Vec3& hi) const;
   /// Grains a pour owed but could not place because its slots were occupied (summed per batch).
   std::int64_t delayed() const { return delayed_; }
   const std::string& name() const { return config_.name; }

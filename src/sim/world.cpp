@@ -329,7 +329,10 @@ void World::emit() {
         }
       };
       for (std::size_t i = 0; i < grains_.size(); ++i) consider(grains_.x[i], grains_.r[i]);
-      static_.for_each([&](const StaticGrain& g) { consider(g.x, g.r); });
+      // (the static grains of the columns under the pour only: a bed around it costs nothing)
+      Vec3 lo, hi;
+      e.near_box(static_.frame().r_hi, lo, hi);
+      static_.for_each_near_box(lo, hi, [&](const StaticGrain& g) { consider(g.x, g.r); });
       for (const NewGrain& g : new_grains_) consider(g.x, g.r);
     }
     if (e.type() == EmitterType::Bed && surface_) {

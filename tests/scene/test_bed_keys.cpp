@@ -60,7 +60,15 @@ TEST(BedKeys, KeysOfOtherEmittersAreRefused) {
   expect_error(
       bed("size = [0.16, 0.16, 0]\nheight = 0.08\nvelocity = [0, 0, 1]\n"),
       {"t.toml:13:1:",
-       "velocity is not a key of a bed emitter (keys: type, name, start, center, size, height)"});
+       "velocity is not a key of a bed emitter (keys: type, name, start, center, size, height, "
+       "relief, relief_wavelength, relief_seed)"});
+}
+
+TEST(BedKeys, ANegativeReliefIsRefused) {
+  expect_error(bed("size = [0.16, 0.16, 0]\nheight = 0.08\nrelief = -0.01\n"),
+               {"t.toml:13:", "emitter[0].relief"});
+  expect_error(bed("size = [0.16, 0.16, 0]\nheight = 0.08\nrelief = 0.02\nrelief_wavelength = 0\n"),
+               {"t.toml:14:", "emitter[0].relief_wavelength"});
 }
 
 TEST(BedKeys, AnEmptyFootprintIsRefused) {

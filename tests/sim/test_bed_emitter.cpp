@@ -159,6 +159,39 @@ TEST(BedEmitter, ADisturbanceWakesOnlyTheBedNearIt) {
   EXPECT_LT(farthest, 10 * kD);
 }
 
+TEST(BedEmitter, ARelievedTopFollowsItsRelief) {
+  // a bed 24 grains wide and 6 deep whose top falls up to 2 grains below `height`, in hills about
+  // 16 grains apart (gentler than the material's theta_max: a steeper relief slumps)
+  SceneConfig flat = bed_scene(Mode::Surface, 24, 6);
+  SceneConfig hilly = flat;
+  hilly.emitters[0].relief = 2 * kD;
+  hilly.emitters[0].relief_wavelength = 16 * kD;
+  resolve_beds(hilly);
+  const BedPacking b = packed(hilly);
+  // the highest grain top of each 2 d x 2 d patch of the footprint
+  std::vector<Real> patch(144, -1);
+  for (std::size_t k = 0; k < b.size(); ++k) {
+    EXPECT_LE(b.x[k].z + b.r[k], 6 * kD + 1e-9);  // never above `height`
+    const int i = std::clamp(static_cast<int>((b.x[k].x + 12 * kD) / (2 * kD)), 0, 11);
+    const int j = std::clamp(static_cast<int>((b.x[k].y + 12 * kD) / (2 * kD)), 0, 11);
+    Real& top = patch[static_cast<std::size_t>(j * 12 + i)];
+    top = std::max(top, b.x[k].z + b.r[k]);
+  }
+  const auto [low, high] = std::minmax_element(patch.begin(), patch.end());
+  // hills reach the top within a grain; hollows lie at least half the relief below it
+  EXPECT_GT(*high, 5 * kD);
+  EXPECT_LT(*low, 6 * kD - 1.0 * kD);
+  // the relief takes grains away: a noise of mean depth about half the relief, less than the
+  // flat bed by a twentieth to a third of its 6-grain depth
+  EXPECT_LT(hilly.emitters[0].count, flat.emitters[0].count * 19 / 20);
+  EXPECT_GT(hilly.emitters[0].count, flat.emitters[0].count * 2 / 3);
+  // born at rest in the static layer like a flat bed, but for a few grains where the top is
+  // steepest: their centre lies above h interpolated between the column centres (3 of 2,828)
+  World w(hilly);
+  const FrameStats st = w.advance_frame();
+  EXPECT_GE(st.n_static, hilly.emitters[0].count * 99 / 100);
+}
+
 TEST(BedEmitter, GrainsScalingKeepsTheBed) {
   SceneConfig s = bed_scene(Mode::Surface);
   const std::int64_t bed = s.emitters[0].count;
