@@ -11,12 +11,14 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "analysis/crater.hpp"
 #include "analysis/statistics.hpp"
 #include "commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/folder_lock.hpp"
 #include "scene/scene_loader.hpp"
+#include "sim/emitters.hpp"
 #include "surface/surface_params.hpp"
 
 namespace fs = std::filesystem;
@@ -56,6 +58,36 @@ std::vector<double> angles(const std::vector<RunResult>& runs) {
     if (r.heap.ok) a.push_back(r.heap.repose_angle_deg);
   return a;
 }
+
+/// Largest minus smallest of the values; NaN for fewer than two (one seed has no spread).
+double spread_of(const std::vector<double>& v) {
+  if (v.size() < 2) return std::nan("");
+  return *std::max_element(v.begin(), v.end()) - *std::min_element(v.begin(), v.end());
+}
+
+/// What the fits that worked measured, `what` of each.
+std::vector<double> crater_values(const std::vector<CraterFit>& fits, double CraterFit::*what) {
+  std::vector<double> v;
+  for (const CraterFit& f : fits)
+    if (f.ok) v.push_back(f.*what);
+  return v;
+}
+
+nlohmann::json crater_json(const CraterFit& f) {
+  auto ok_or_null = [&](double v) { return f.ok ? nlohmann::json(v) : nlohmann::json(); };
+  return {{"ok", f.ok},
+          {"depth", ok_or_null(f.depth)},
+          {"rim_height", ok_or_null(f.rim_height)},
+          {"radius", ok_or_null(f.radius)},
+          {"rim_radius", ok_or_null(f.rim_radius)},
+          {"centre", f.ok ? nlohmann::json::array({f.centre.x, f.centre.y}) : nlohmann::json()},
+          {"reason", f.reason}};
+}
+
+/// Why a comparison of a scene with a bed gives no angle of repose.
+constexpr const char* kNoHeapInABed =
+    "not measured in a scene with a bed: the heap fit would take the bed's flat top, its walls and "
+    "the crater's rim for a heap";
 
 /// Prepares a comparison folder and locks it (the lock is returned: hold it while the comparison
 /// runs): OUT is refused when not empty unless `force`, in which case the earlier comparison is
@@ -205,7 +237,25 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
   // the column-by-column difference of the first pair, as before (one heap's height as the scale)
   const SurfaceDiff columns = compare_surfaces(s_dem[0], s_surf[0]);
 
-  const std::vector<double> a_dem = angles(c.dem), a_surf = angles(c.surface);
+  // a scene with a bed (an impact) makes a crater, not a heap: its depth and rim are measured in
+  // each run (analysis/crater.hpp), and no angle of repose
+  // (from the bed's top as packed for each seed: its grains stop short of its height)
+  const CraterSite site = crater_site(scene);
+  std::vector<CraterFit> crater_dem, crater_surf;
+  std::vector<double> z_ref;
+  if (site.bed) {
+    for (std::size_t k = 0; k < c.seeds.size(); ++k) {
+      BedPacking bed;
+      const bool packed =
+          !pack_bed_emitter(scene.emitters[site.bed_index], scene.material, geometry,
+                            bed_seed(static_cast<std::uint64_t>(c.seeds[k]), site.bed_index), bed);
+      z_ref.push_back(packed ? bed_level(bed.x, bed.r) : std::nan(""));
+      crater_dem.push_back(measure_crater(site, z_ref[k], c.dem[k].x, c.dem[k].r));
+      crater_surf.push_back(measure_crater(site, z_ref[k], c.surface[k].x, c.surface[k].r));
+    }
+  }
+  const std::vector<double> a_dem = site.bed ? std::vector<double>{} : angles(c.dem);
+  const std::vector<double> a_surf = site.bed ? std::vector<double>{} : angles(c.surface);
   const double a_dem_mean = mean(a_dem), a_surf_mean = mean(a_surf);
   const double spread =
       a_dem.empty() ? std::nan("")
@@ -240,23 +290,26 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
   const double k_dem = dem.summary["k_n"].get<double>();
   nlohmann::json runs = nlohmann::json::array();
   auto add_run = [&](const RunResult& r, const std::string& mode, std::int64_t seed,
-                     const std::string& dir) {
-    runs.push_back({{"mode", mode},
-                    {"seed", seed},
-                    {"folder", fs::relative(dir, out).string()},
-                    {"wall_seconds", r.wall_seconds},
-                    {"repose_angle_deg", r.heap.ok ? nlohmann::json(r.heap.repose_angle_deg)
-                                                   : nlohmann::json()},
-                    {"max_overlap_rel", max_overlap(r)},
-                    {"simulated_fraction_last_half",
-                     simulated_fraction(r.frames, r.frames.size() / 2)},
-                    {"k_n", r.summary["k_n"]},
-                    {"dt", r.summary["dt_mean"]},
-                    {"state_hash", r.summary["state_hash"]}});
+                     const std::string& dir, const CraterFit* crater) {
+    runs.push_back(
+        {{"mode", mode},
+         {"seed", seed},
+         {"folder", fs::relative(dir, out).string()},
+         {"wall_seconds", r.wall_seconds},
+         {"repose_angle_deg",
+          r.heap.ok && !site.bed ? nlohmann::json(r.heap.repose_angle_deg) : nlohmann::json()},
+         {"max_overlap_rel", max_overlap(r)},
+         {"simulated_fraction_last_half", simulated_fraction(r.frames, r.frames.size() / 2)},
+         {"k_n", r.summary["k_n"]},
+         {"dt", r.summary["dt_mean"]},
+         {"state_hash", r.summary["state_hash"]}});
+    if (crater) runs.back()["crater"] = crater_json(*crater);
   };
   for (std::size_t k = 0; k < c.seeds.size(); ++k) {
-    add_run(c.surface[k], "surface", c.seeds[k], compare_run_dir(out, "surface", k, c.seeds[k]));
-    add_run(c.dem[k], "dem", c.seeds[k], compare_run_dir(out, "dem", k, c.seeds[k]));
+    add_run(c.surface[k], "surface", c.seeds[k], compare_run_dir(out, "surface", k, c.seeds[k]),
+            site.bed ? &crater_surf[k] : nullptr);
+    add_run(c.dem[k], "dem", c.seeds[k], compare_run_dir(out, "dem", k, c.seeds[k]),
+            site.bed ? &crater_dem[k] : nullptr);
   }
   c.json = {
       {"scene", scene.name},
@@ -306,13 +359,42 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
       {"threads", thread_count(scene)},
       {"runs", runs},
   };
+  if (site.bed) {
+    // the crater's depth and rim: the means of the fits that worked in each mode, the plain-DEM
+    // seeds' spread (largest minus smallest) and whether the modes differ by no more than it
+    c.json["repose_angle_skipped"] = kNoHeapInABed;
+    c.json["crater_bed_height"] = site.height;
+    c.json["crater_z_ref"] = z_ref;  // per seed
+    c.json["crater_centre"] =
+        std::isnan(site.cx) ? nlohmann::json() : nlohmann::json::array({site.cx, site.cy});
+    c.json["crater_centre_from"] = site.centre_from;
+    c.json["crater_fits"] = {{"dem", crater_values(crater_dem, &CraterFit::depth).size()},
+                             {"surface", crater_values(crater_surf, &CraterFit::depth).size()}};
+    for (const auto& [name, what] :
+         {std::pair{std::string("crater_depth"), &CraterFit::depth},
+          std::pair{std::string("rim_height"), &CraterFit::rim_height}}) {
+      const std::vector<double> dem_v = crater_values(crater_dem, what);
+      const std::vector<double> surf_v = crater_values(crater_surf, what);
+      const double diff = std::abs(mean(surf_v) - mean(dem_v)), dem_spread = spread_of(dem_v);
+      c.json[name + "_dem"] = number_or_null(mean(dem_v));
+      c.json[name + "_surface"] = number_or_null(mean(surf_v));
+      c.json[name + "_dem_spread"] = number_or_null(dem_spread);
+      c.json[name + "_diff"] = number_or_null(diff);
+      c.json[name + "_within_spread"] = std::isfinite(diff) && std::isfinite(dem_spread)
+                                            ? nlohmann::json(diff <= dem_spread)
+                                            : nlohmann::json();
+    }
+  }
   if (const auto& eq = c.dem_equal_stiffness) {
     c.json["speedup_equal_stiffness"] = eq->wall_seconds / std::max(wall_surf, 1e-12);
     c.json["repose_angle_dem_equal_stiffness_deg"] =
-        eq->heap.ok ? nlohmann::json(eq->heap.repose_angle_deg) : nlohmann::json();
+        eq->heap.ok && !site.bed ? nlohmann::json(eq->heap.repose_angle_deg) : nlohmann::json();
     c.json["max_overlap_dem_equal_stiffness_rel"] = max_overlap(*eq);
     c.json["wall_seconds_dem_equal_stiffness"] = eq->wall_seconds;
-    add_run(*eq, "dem-equal-stiffness", seed0, compare_run_dir(out, kEqualStiffnessDir, 0, seed0));
+    const CraterFit eq_crater =
+        site.bed ? measure_crater(site, z_ref[0], eq->x, eq->r) : CraterFit{};
+    add_run(*eq, "dem-equal-stiffness", seed0, compare_run_dir(out, kEqualStiffnessDir, 0, seed0),
+            site.bed ? &eq_crater : nullptr);
     c.json["runs"] = runs;
   }
   write_file_atomic((fs::path(out) / "compare.json").string(), c.json.dump(2) + "\n");
@@ -392,9 +474,18 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
   fmt::print("{:<34}{:>16.3g}{:>16.3g}\n", "k_n [N/m]", k_dem, k_surf);
   fmt::print("{:<34}{:>16.3g}{:>16.3g}\n", "dt [s]", j["dt_dem"].get<double>(),
              j["dt_surface"].get<double>());
-  fmt::print("{:<34}{:>16}{:>16}\n", seeds > 1 ? "repose angle, mean" : "repose angle",
-             num("repose_angle_dem_deg", "{:.1f}", " deg"),
-             num("repose_angle_surface_deg", "{:.1f}", " deg"));
+  const bool crater = j.contains("crater_bed_height");
+  if (crater) {
+    fmt::print("{:<34}{:>16}{:>16}\n", seeds > 1 ? "crater depth, mean" : "crater depth",
+               num("crater_depth_dem", "{:.4f}", " m"),
+               num("crater_depth_surface", "{:.4f}", " m"));
+    fmt::print("{:<34}{:>16}{:>16}\n", seeds > 1 ? "rim height, mean" : "rim height",
+               num("rim_height_dem", "{:.4f}", " m"), num("rim_height_surface", "{:.4f}", " m"));
+  } else {
+    fmt::print("{:<34}{:>16}{:>16}\n", seeds > 1 ? "repose angle, mean" : "repose angle",
+               num("repose_angle_dem_deg", "{:.1f}", " deg"),
+               num("repose_angle_surface_deg", "{:.1f}", " deg"));
+  }
   fmt::print("{:<34}{:>16}{:>16}\n", "largest overlap (of a diameter)",
              pct("max_overlap_dem_rel"), pct("max_overlap_surface_rel"));
   fmt::print("speed-up {:.2f}x ({})\n", j["speedup"].get<double>(),
@@ -405,9 +496,57 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
                j["speedup_equal_stiffness"].get<double>(), k_surf, j["dt_surface"].get<double>(),
                num("repose_angle_dem_equal_stiffness_deg", "{:.1f}", " deg"),
                pct("max_overlap_dem_equal_stiffness_rel"));
-  fmt::print("angles differ by {} (plain DEM's seeds spread over {})\n",
-             num("repose_angle_diff_deg", "{:.1f}", " deg"),
-             num("repose_angle_dem_spread_deg", "{:.1f}", " deg"));
+  if (crater) {
+    // each run's crater, or why it has none, then the two modes against the plain-DEM seeds
+    fmt::print("angle of repose  {}\n", j["repose_angle_skipped"].get<std::string>());
+    std::vector<double> levels;
+    for (const auto& z : j["crater_z_ref"])
+      if (z.is_number()) levels.push_back(z.get<double>());
+    fmt::print(
+        "crater           in the bed of height {:.4f} m, from its top as packed (z = {:.4f} m, "
+        "mean over the seeds); centre {}\n",
+        j["crater_bed_height"].get<double>(), mean(levels),
+        j["crater_centre"].is_array()
+            ? fmt::format("({:.3f}, {:.3f}) m, {}", j["crater_centre"][0].get<double>(),
+                          j["crater_centre"][1].get<double>(),
+                          j["crater_centre_from"].get<std::string>())
+            : j["crater_centre_from"].get<std::string>());
+    fmt::print("  {:<8}{:<16}{:>12}{:>14}\n", "seed", "mode", "depth", "rim height");
+    for (const auto& run : j["runs"]) {
+      const std::string mode = run["mode"].get<std::string>();
+      if (mode != "dem" && mode != "surface") continue;
+      const auto& f = run["crater"];
+      const std::string what =
+          f["ok"].get<bool>()
+              ? fmt::format("{:>12}{:>14}", fmt::format("{:.4f} m", f["depth"].get<double>()),
+                            fmt::format("{:.4f} m", f["rim_height"].get<double>()))
+              : "  " + f["reason"].get<std::string>();
+      fmt::print("  {:<8}{:<16}{}\n", run["seed"].get<std::int64_t>(),
+                 mode == "dem" ? "plain DEM" : "surface flow", what);
+    }
+    const auto& fits = j["crater_fits"];
+    for (const auto& [name, what] :
+         {std::pair{"crater_depth", "crater depth"}, std::pair{"rim_height", "rim height"}}) {
+      const std::string key = name;
+      const std::string spread = num((key + "_dem_spread").c_str(), "{:.4f}", " m");
+      const auto& within = j[key + "_within_spread"];
+      if (j[key + "_diff"].is_number())
+        fmt::print("{} differs by {} between the means (plain DEM's seeds spread over {}){}\n",
+                   what, num((key + "_diff").c_str(), "{:.4f}", " m"), spread,
+                   within.is_boolean()
+                       ? (within.get<bool>() ? ": within the spread" : ": outside the spread")
+                       : "");
+      else
+        fmt::print(
+            "{}: no difference to give, a crater was measured in {} of {} plain-DEM runs "
+            "and {} of {} surface-flow runs (plain DEM's seeds spread over {})\n",
+            what, fits["dem"].get<int>(), seeds, fits["surface"].get<int>(), seeds, spread);
+    }
+  } else {
+    fmt::print("angles differ by {} (plain DEM's seeds spread over {})\n",
+               num("repose_angle_diff_deg", "{:.1f}", " deg"),
+               num("repose_angle_dem_spread_deg", "{:.1f}", " deg"));
+  }
   fmt::print("surfaces {} apart = {} grain diameters = {} of the scene's height {:.3f} m "
              "(plain DEM's seeds: {} = {} d)\n",
              num("surface_rms", "{:.4f}", " m"), num("surface_rms_d", "{:.2f}"),

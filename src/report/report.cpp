@@ -473,8 +473,21 @@ std::string compare_report_html(const CompareReportData& c) {
              fixed(j, {"wall_seconds_surface"}, 1, " s"));
   sum += row("k_n", count(j, {"k_n_dem"}) + " N/m", count(j, {"k_n_surface"}) + " N/m");
   sum += row("dt", general(j, {"dt_dem"}, " s"), general(j, {"dt_surface"}, " s"));
-  sum += row("angle of repose (mean over the seeds)", fixed(j, {"repose_angle_dem_deg"}, 1, "\u00b0"),
-             fixed(j, {"repose_angle_surface_deg"}, 1, "\u00b0"));
+  // a scene with a bed makes a crater, not a heap (compare.json says so)
+  const bool crater = find(j, {"crater_bed_height"}) != nullptr;
+  if (crater) {
+    sum += row("crater depth (mean over the seeds)", fixed(j, {"crater_depth_dem"}, 4, " m"),
+               fixed(j, {"crater_depth_surface"}, 4, " m"));
+    sum += row("rim height (mean over the seeds)", fixed(j, {"rim_height_dem"}, 4, " m"),
+               fixed(j, {"rim_height_surface"}, 4, " m"));
+    sum += row("craters measured, of the seeds",
+               count(j, {"crater_fits", "dem"}) + " of " + count(j, {"seeds"}),
+               count(j, {"crater_fits", "surface"}) + " of " + count(j, {"seeds"}));
+  } else {
+    sum += row("angle of repose (mean over the seeds)",
+               fixed(j, {"repose_angle_dem_deg"}, 1, "\u00b0"),
+               fixed(j, {"repose_angle_surface_deg"}, 1, "\u00b0"));
+  }
   sum += row("largest overlap, of a diameter (all seeds)", percent(j, {"max_overlap_dem_rel"}),
              percent(j, {"max_overlap_surface_rel"}));
   sum += row("grains inside geometry", count(j, {"grains_inside_geometry_dem"}),
@@ -515,9 +528,25 @@ std::string compare_report_html(const CompareReportData& c) {
      fixed(j, {"surface_rms_dem_vs_dem"}, 4, " m") + " = " +
          fixed(j, {"surface_rms_dem_vs_dem_d"}, 2, " d") + " = " +
          percent(j, {"surface_rms_dem_vs_dem_rel"}));
-  kv("angles of repose, difference of the means", fixed(j, {"repose_angle_diff_deg"}, 1, "\u00b0"));
-  kv("angles of repose, spread of the plain-DEM seeds",
-     fixed(j, {"repose_angle_dem_spread_deg"}, 1, "\u00b0"));
+  if (crater) {
+    auto within = [&](const char* key) {
+      const json* w = find(j, {key});
+      return w && w->is_boolean() ? (w->get<bool>() ? "yes" : "no") : kDash;
+    };
+    kv("crater depth, difference of the means", fixed(j, {"crater_depth_diff"}, 4, " m"));
+    kv("crater depth, spread of the plain-DEM seeds",
+       fixed(j, {"crater_depth_dem_spread"}, 4, " m"));
+    kv("crater depth, difference within the spread", within("crater_depth_within_spread"));
+    kv("rim height, difference of the means", fixed(j, {"rim_height_diff"}, 4, " m"));
+    kv("rim height, spread of the plain-DEM seeds", fixed(j, {"rim_height_dem_spread"}, 4, " m"));
+    kv("rim height, difference within the spread", within("rim_height_within_spread"));
+    kv("angle of repose", text(j, {"repose_angle_skipped"}));
+  } else {
+    kv("angles of repose, difference of the means",
+       fixed(j, {"repose_angle_diff_deg"}, 1, "\u00b0"));
+    kv("angles of repose, spread of the plain-DEM seeds",
+       fixed(j, {"repose_angle_dem_spread_deg"}, 1, "\u00b0"));
+  }
   kv("energy added by waking / removed by trapping (mean per run)",
      general(j, {"energy_added_by_waking_j"}, " J") + " / " +
          general(j, {"energy_removed_by_trapping_j"}, " J"));

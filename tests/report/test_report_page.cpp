@@ -191,3 +191,41 @@ TEST(ReportPage, CompareShowsBothModesOnSharedAxes) {
   EXPECT_NE(section_of(html, "final-frames").find("not rendered"), std::string::npos);
   EXPECT_EQ(html.find("http"), std::string::npos);
 }
+
+// A scene with a bed: the crater's figures in place of the angle of repose, which says why not
+TEST(ReportPage, CompareOfABedSceneShowsTheCraterNotAnAngle) {
+  TempDir t;
+  write_run(t.dir() / "surface", "surface", 3);
+  write_run(t.dir() / "dem", "dem", 3);
+  const nlohmann::json c = {{"scene", "impact"},
+                            {"frames", 3},
+                            {"seeds", 2},
+                            {"repose_angle_dem_deg", nullptr},
+                            {"repose_angle_skipped", "not measured in a scene with a bed"},
+                            {"crater_bed_height", 0.05},
+                            {"crater_fits", {{"dem", 2}, {"surface", 1}}},
+                            {"crater_depth_dem", 0.0139},
+                            {"crater_depth_surface", 0.0121},
+                            {"crater_depth_dem_spread", 0.0036},
+                            {"crater_depth_diff", 0.0018},
+                            {"crater_depth_within_spread", true},
+                            {"rim_height_dem", 0.0029},
+                            {"rim_height_surface", nullptr},
+                            {"rim_height_dem_spread", 0.0001},
+                            {"rim_height_diff", nullptr},
+                            {"rim_height_within_spread", nullptr}};
+  std::ofstream(t.dir() / "compare.json") << c.dump();
+  const std::string html = compare_report_html(load_compare_report_data(t.dir().string()));
+  EXPECT_EQ(html_problem(html), "");
+  const std::string sum = section_of(html, "summary");
+  EXPECT_EQ(sum.find("angle of repose"), std::string::npos);
+  EXPECT_NE(sum.find("0.0139 m"), std::string::npos);
+  EXPECT_NE(sum.find("0.0121 m"), std::string::npos);
+  EXPECT_NE(sum.find("1 of 2"), std::string::npos);
+  const std::string sp = section_of(html, "speedup");
+  EXPECT_NE(sp.find("0.0018 m"), std::string::npos);
+  EXPECT_NE(sp.find("0.0036 m"), std::string::npos);
+  EXPECT_NE(sp.find(">yes<"), std::string::npos);  // 0.0018 m within the spread of 0.0036 m
+  EXPECT_NE(sp.find("not measured in a scene with a bed"), std::string::npos);
+  EXPECT_EQ(sp.find("angles of repose"), std::string::npos);
+}

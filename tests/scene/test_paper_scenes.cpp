@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/crater.hpp"
 #include "geometry/shapes.hpp"
 #include "scene/scene_loader.hpp"
 #include "sim/world.hpp"
@@ -88,6 +89,32 @@ TEST(ColumnScene, ASmallColumnIsLiftedAndSpreadsInBothModes) {
     for (const Vec3& p : x) reach = std::max(reach, std::hypot(p.x, p.y));
     EXPECT_GT(reach, 0.12) << name << ": the sand left the tube's 0.1 m";
   }
+}
+
+// The impact scene at full scale, loaded (its bed packed), not run: about 200,000 grains, the bed
+// filling the sandbox, the clod coming down on the bed's middle, far from the walls
+TEST(ImpactScene, ABedOfAbout190000AndAClodComingDownOnItsMiddle) {
+  const SceneConfig s = load_scene(std::string(SANDFLOW_SOURCE_DIR) + "/scenes/impact.toml", {});
+  ASSERT_EQ(s.emitters.size(), 2u);
+  EXPECT_EQ(s.simulation.mode, Mode::Surface);
+  const EmitterConfig& bed = s.emitters[0];
+  ASSERT_EQ(bed.type, EmitterType::Bed);
+  EXPECT_GT(bed.count, 185000);
+  EXPECT_LT(bed.count, 195000);
+  EXPECT_EQ(s.emitters[1].type, EmitterType::Block);
+  EXPECT_GT(s.total_grains(), 195000);
+  EXPECT_LT(s.total_grains(), 205000);
+  // the bed's footprint is the sandbox's inside
+  ASSERT_EQ(s.geometry.size(), 2u);
+  EXPECT_TRUE(s.geometry[1].container);
+  EXPECT_DOUBLE_EQ(s.geometry[1].size.x, bed.size.x);
+  EXPECT_DOUBLE_EQ(s.geometry[1].size.y, bed.size.y);
+  const CraterSite site = crater_site(s);
+  ASSERT_TRUE(site.bed);
+  EXPECT_DOUBLE_EQ(site.cx, 0.0);
+  EXPECT_DOUBLE_EQ(site.cy, 0.0);
+  // the walls are more than twice the clod's width from where it lands
+  EXPECT_GT(site.x1 - site.cx, 2 * s.emitters[1].size.x);
 }
 
 }  // namespace
