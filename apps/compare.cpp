@@ -84,11 +84,6 @@ nlohmann::json crater_json(const CraterFit& f) {
           {"reason", f.reason}};
 }
 
-/// Why a comparison of a scene with a bed gives no angle of repose.
-constexpr const char* kNoHeapInABed =
-    "not measured in a scene with a bed: the heap fit would take the bed's flat top, its walls and "
-    "the crater's rim for a heap";
-
 /// Prepares a comparison folder and locks it (the lock is returned: hold it while the comparison
 /// runs): OUT is refused when not empty unless `force`, in which case the earlier comparison is
 /// removed, or `resume`, which keeps it.

@@ -186,6 +186,11 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
   write_ply((fs::path(out) / "final_grains.ply").string(), world.all_grains_frame(),
             scene.output.up_axis);
   res.heap = measure_heap(res.x, res.r);
+  if (std::any_of(scene.emitters.begin(), scene.emitters.end(),
+                  [](const EmitterConfig& e) { return e.type == EmitterType::Bed; })) {
+    res.heap.ok = false;
+    res.heap.reason = kNoHeapInABed;
+  }
   const HeapFit& fit = res.heap;
   const auto inside = world.geometry().count_inside(res.x);
   const FrameStats& last = res.frames.back();

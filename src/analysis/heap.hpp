@@ -37,6 +37,11 @@
 
 namespace sandflow {
 
+/// Why a run or a comparison of a scene with a bed gives no angle of repose.
+inline constexpr const char* kNoHeapInABed =
+    "not measured in a scene with a bed: the heap fit would take the bed's flat top, its walls and "
+    "the crater's rim for a heap";
+
 struct HeapFit {
   double repose_angle_deg = std::numeric_limits<double>::quiet_NaN();  ///< [deg]
   double height = 0;       ///< Hh: highest point of the radial profile above the floor [m]

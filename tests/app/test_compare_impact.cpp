@@ -147,3 +147,22 @@ TEST(CompareImpact, AFlatBedHasNoCraterAndSaysWhy) {
 }
 
 }  // namespace
+
+namespace {
+
+// `sandflow run` on a scene with a bed prints and writes no angle of repose, but why.
+TEST(RunImpact, ABedSceneReportsNoAngleOfRepose) {
+  sandflow_test::Sandbox box;
+  const auto out = box.dir / "run";
+  std::string log;
+  ASSERT_EQ(sandflow_test::sandflow(
+                "run " + kScene.string() + " --frames 1 --threads 1 --out " + out.string(), &log),
+            0)
+      << log;
+  EXPECT_NE(log.find("repose angle     n/a (not measured in a scene with a bed"), std::string::npos)
+      << log;
+  const auto j = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_TRUE(j["repose_angle_deg"].is_null());
+}
+
+}  // namespace
