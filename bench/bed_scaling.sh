@@ -20,7 +20,7 @@ set -euo pipefail
 
 sizes="1 2 4 8"
 frames=12
-threads=""
+threads=1
 build=build
 while [ $# -gt 0 ]; do
   case "$1" in

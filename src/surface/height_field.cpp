@@ -324,7 +324,15 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
       // a deposit stops where the column's own downhill slope would pass theta_c: otherwise it
       // builds a step that the next update erodes again, and the grains on it flip between
       // trapped and dislodged at every update
-      if (dh > 0) dh = std::min(dh, 0.5 * dx * std::max(std::tan(theta_c) - tan_theta, 0.0));
+      if (dh > 0) {
+        const Real cap = 0.5 * dx * std::max(std::tan(theta_c) - tan_theta, 0.0);
+        dh = std::min(dh, cap);
+        // the exchange's deposit takes a fraction of R at each update, never all of it: what it
+        // would leave thinner than a thousandth of a column (a fraction of a grain's rounding in
+        // the static store) goes all the way, so that a column at rest stops changing and its
+        // updates stop (docs/design.md §4, "Only what can change")
+        if (R - dh < 1e-3 * dx && R <= cap) dh = R;
+      }
       // an avalanche: a static slope above theta_max erodes even with no rolling layer
       if (theta > p_.theta_max) dh -= p_.gamma * p_.avalanche_depth * (theta - p_.theta_max) * dt;
       // erosion stops where the slope would fall below theta0 (no overshoot between updates)
