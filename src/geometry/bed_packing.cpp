@@ -112,14 +112,14 @@ Real estimate_from_maps(const BedRegion& R, const Map& floor, const Map& top) {
 
 /// The first t in [0, t_max] where g(t) = k + a cos t + b sin t falls through 0, or kInf. A
 /// contact touching now (g(0) <= 0, to rounding) and closing (g'(0) = b < 0) is met at once; one
-/// touching and opening is met again only after it has opened.
-inline Real first_entry(Real k, Real a, Real b, Real t_max) {
+/// touching and opening is met again only after it has opened, and so is one the grain is
+/// `leaving` (it has just left it: see first_contact).
+inline Real first_entry(Real k, Real a, Real b, Real t_max, bool leaving = false) {
   const Real g0 = k + a;
   const Real r2 = a * a + b * b;
   const Real r = std::sqrt(r2);
-  // (closing slower than choose_supports' tolerance is leaving, as choose_supports decided: a
-  // contact the grain has just left at a lift-off, where it moves along it)
-  if (g0 <= 0 && b < -1e-9 * r) return 0;
+  // (closing slower than choose_supports' tolerance is leaving, as choose_supports decided)
+  if (g0 <= 0 && b < -1e-9 * r && !leaving) return 0;
   if (k * k >= r2) return kInf;  // g keeps its sign
   // g = k + r cos(t - phi) falls through 0 where t - phi = acos(-k / r); into (0, 2 pi] (t lies
   // within (-pi, 2 pi]: no floor, a libm call without SSE4.1)
@@ -204,8 +204,10 @@ class Packer {
   // the highest contact below z_max on the vertical line at (x, y): a grain, or kFloor
   int fall(Real x, Real y, Real r, Real z_max, int exclude, Real& z) const;
   Real floor_rest(Real x, Real y, Real r) const;
-  // the first contact met along the arc (not one of `held`), and where (t); kInf when none
-  void first_contact(const Arc& arc, Real r, const int* held, int n_held, Real& t, int& id) const;
+  // the first contact met along the arc (not one of `held`), and where (t); kInf when none.
+  // `left`: the contact just left, not met again before it has opened
+  void first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Real& t,
+                     int& id) const;
   Vec3 normal(int id, const Vec3& p, Real r) const;
   // gap along the arc of contact id: k + a cos t + b sin t
   void gap(int id, const Arc& arc, Real r, Real& k, Real& a, Real& b) const;
@@ -334,7 +336,7 @@ void Packer::gap(int id, const Arc& arc, Real r, Real& k, Real& a, Real& b) cons
   b = 2 * arc.rho * dot(d, arc.e2);
 }
 
-void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, Real& t,
+void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Real& t,
                            int& id) const {
   t = kInf;
   id = kFloor;
@@ -362,7 +364,7 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
     Real k, a, b;
     gap(q, arc, r, k, a, b);
     if (!within(k, a, b)) continue;
-    const Real tw = first_entry(k, a, b, T);
+    const Real tw = first_entry(k, a, b, T, q == left);
     if (tw < t) t = tw, id = q;
   }
   // the grains near the arc: the cells of its bounding box widened by a contact's reach; the
@@ -404,7 +406,7 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
           const Real b = 2 * arc.rho * dot(d, arc.e2);
           if (k > 0 && k * k >= a * a + b * b) return;  // never within reach of the circle
           if (!within(k, a, b) || is_held(q)) return;
-          const Real tq = first_entry(k, a, b, std::min(t, T));
+          const Real tq = first_entry(k, a, b, std::min(t, T), q == left);
           if (tq < t) t = tq, id = q;
         });
     }
@@ -534,7 +536,10 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
     // along the arc: the first new contact, else its end (the equator, a lift-off)
     Real t;
     int hit;
-    first_contact(arc, r, held, n_held, t, hit);
+    // (at a lift-off the grain moves along the contact it leaves, and rounding may make it
+    // close: met again at once, it would be left again, over and over; on one sphere the path
+    // leaves it for good, a great circle tangent to a cap smaller than a hemisphere)
+    first_contact(arc, r, held, n_held, exclude, t, hit);
     if (t == kInf) t = arc.t_max;
     Vec3 q = arc.at(t);
     // the floor met on the way: the grain rests there
@@ -577,8 +582,8 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
     for (int h = 0; h < n_held; ++h) {
       if (mask >> h & 1)
         held[kept++] = held[h];
-      else if (!is_wall(held[h]))
-        exclude = held[h];  // (for a fall: the grain it leaves)
+      else
+        exclude = held[h];  // (for a fall and the next arc: the contact it leaves)
     }
     n_held = kept;
   }
