@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <omp.h>
+
 #include "core/rng.hpp"
 
 namespace sandflow {
@@ -16,13 +18,26 @@ namespace {
 constexpr Real kInf = std::numeric_limits<Real>::infinity();
 constexpr Real kTwoPi = 2 * kPi;
 /// The most samples of the floor and of the top: 2^22 each (32 MiB); a larger footprint is
-/// sampled more coarsely than r_lo.
+/// sampled more coarsely than r_lo / 2.
 constexpr Real kMaxMapSamples = 4194304.0;
 /// A grain that has not come to rest after this many arcs is discarded (rounding can make a
 /// grain take and leave the same contact over and over; real sequences take a handful).
 constexpr int kMaxArcs = 64;
 /// The packing fraction estimate_bed_grains assumes.
 constexpr Real kEstimatePacking = 0.60;
+/// Tiles are kTile columns wide; a drop reads columns at most kMargin beyond its tile's (2 kMargin
+/// < kTile + 1, see run), and a tile makes a drop per kDropsPerColumn of its open columns a phase.
+constexpr int kTile = 16;
+constexpr int kMargin = 7;
+constexpr int kDropsPerColumn = 2;
+
+/// A seed for stream k of a round (splitmix64 of the three).
+std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t round, std::uint64_t k) {
+  std::uint64_t z = seed ^ (round + 1) * 0x9e3779b97f4a7c15ULL ^ k * 0xd1b54a32d192ed03ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
 
 // ---- The floor and the top, sampled ---------------------------------------------------------
 
@@ -55,7 +70,9 @@ struct Map {
 Map sample_map(const BedRegion& R, const std::function<Real(Real, Real)>& f, const char* what) {
   Map m;
   const Real w = R.x1 - R.x0, h = R.y1 - R.y0;
-  Real spacing = R.r_lo;
+  // (r_lo / 2: between samples the bilinear floor sags h^2 |f''| / 8 under a bump, and at r_lo
+  // grains of the wavy floor of the tests reached 1.1 % of d into it; 0.5 % at r_lo / 2)
+  Real spacing = R.r_lo / 2;
   const Real n = (w / spacing + 2) * (h / spacing + 2);
   if (n > kMaxMapSamples) spacing *= std::sqrt(n / kMaxMapSamples);
   m.mx = std::max(2, static_cast<int>(std::ceil(w / spacing)) + 1);
@@ -193,25 +210,53 @@ int choose_supports(const Vec3* n, int m) {
   return -1;
 }
 
+/// The state of one drop: the walls' planes for its grain (n . p >= w), and the columns it may
+/// read, those of its tile widened by kMargin (`out` once it would read beyond them).
+struct Walk {
+  std::array<Real, 4> wall_w{};
+  int ix0 = 0, ix1 = 0, iy0 = 0, iy1 = 0;
+  bool out = false;
+  bool reads(int jx0, int jx1, int jy0, int jy1) {
+    out = out || jx0 < ix0 || jx1 > ix1 || jy0 < iy0 || jy1 > iy1;
+    return !out;
+  }
+};
+
+enum class Drop { Rest, Discard, Leave };
+
+/// A tile's drops of one phase: its columns, the first of the grain ids reserved for its drops,
+/// how many, and its random stream.
+struct Tile {
+  int ix0, ix1, iy0, iy1;  // (inclusive)
+  std::int32_t base = 0;
+  std::int32_t drops = 0;
+  std::uint64_t seed = 0;
+  // the outcome
+  std::int64_t made = 0, discarded = 0, blocked = 0, kept = 0, closed = 0;
+};
+
 class Packer {
  public:
   explicit Packer(const BedRegion& R) : R_(R) {}
   BedPacking run();
 
  private:
-  // where a grain of radius r dropped at (x, y) comes to rest; false: discarded
-  bool drop(Real x, Real y, Real r, Vec3& rest);
+  // the drops of one tile (see run)
+  void run_tile(Tile& tile, std::vector<std::int32_t>& open);
+  // where a grain of radius r dropped at (x, y) comes to rest (Rest), or Discard (it did not
+  // settle), or Leave (it would read columns beyond w's)
+  Drop drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const;
   // the highest contact below z_max on the vertical line at (x, y): a grain, or kFloor
-  int fall(Real x, Real y, Real r, Real z_max, int exclude, Real& z) const;
+  int fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real& z) const;
   Real floor_rest(Real x, Real y, Real r) const;
   // the first contact met along the arc (not one of `held`), and where (t); kInf when none.
   // `left`: the contact just left, not met again before it has opened
-  void first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Real& t,
-                     int& id) const;
+  void first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Walk& w,
+                     Real& t, int& id) const;
   Vec3 normal(int id, const Vec3& p, Real r) const;
   // gap along the arc of contact id: k + a cos t + b sin t
-  void gap(int id, const Arc& arc, Real r, Real& k, Real& a, Real& b) const;
-  void insert(const Vec3& p, Real r);
+  void gap(int id, const Arc& arc, Real r, const Walk& w, Real& k, Real& a, Real& b) const;
+  void insert(std::int32_t id, const Vec3& p, Real r);
 
   // (clamped before the cast, which then truncates as floor would: std::floor is a libm call
   // without SSE4.1, and these run in the innermost loops)
@@ -255,10 +300,11 @@ class Packer {
   }
   std::vector<std::int32_t> col_top_;  ///< per column: highest layer holding a grain, or -1
   std::vector<Real> col_floor_;        ///< per column: the highest floor within r_hi of it
-  std::vector<Cell> g_;
-  // the walls' planes for the grain being dropped: n . p >= w
+  std::vector<Cell> g_;                ///< by id; r = 0: a drop that left no grain
+  std::vector<std::uint8_t> open_;     ///< per column: drops are made in it
+  std::vector<std::uint16_t> fails_;   ///< per column: discarded drops in a row, in eighths
+  // the walls' inward normals
   std::array<Vec3, 4> wall_n_{Vec3{1, 0, 0}, Vec3{-1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, -1, 0}};
-  std::array<Real, 4> wall_w_{};
 };
 
 Real Packer::floor_rest(Real x, Real y, Real r) const {
@@ -283,12 +329,13 @@ Real Packer::floor_rest(Real x, Real y, Real r) const {
   return best;
 }
 
-int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Real& z) const {
+int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real& z) const {
   Real best = floor_rest(x, y, r);
   int hit = kFloor;
   const int cx = column_x(x), cy = column_y(y);
   const int jx0 = std::max(cx - 1, 0), jx1 = std::min(cx + 1, nx_ - 1);
   const int jy0 = std::max(cy - 1, 0), jy1 = std::min(cy + 1, ny_ - 1);
+  if (!w.reads(jx0, jx1, jy0, jy1)) return kFloor;
   int top = -1;
   for (int jy = jy0; jy <= jy1; ++jy)
     for (int jx = jx0; jx <= jx1; ++jx)
@@ -319,11 +366,11 @@ Vec3 Packer::normal(int id, const Vec3& p, Real r) const {
   return (p - Vec3{o.x, o.y, o.z}) / (r + o.r);
 }
 
-void Packer::gap(int id, const Arc& arc, Real r, Real& k, Real& a, Real& b) const {
+void Packer::gap(int id, const Arc& arc, Real r, const Walk& w, Real& k, Real& a, Real& b) const {
   if (is_wall(id)) {
-    const int w = wall_index(id);
-    const Vec3& n = wall_n_[w];
-    k = dot(n, arc.c) - wall_w_[w];
+    const int j = wall_index(id);
+    const Vec3& n = wall_n_[j];
+    k = dot(n, arc.c) - w.wall_w[j];
     a = arc.rho * dot(n, arc.e1);
     b = arc.rho * dot(n, arc.e2);
     return;
@@ -336,8 +383,8 @@ void Packer::gap(int id, const Arc& arc, Real r, Real& k, Real& a, Real& b) cons
   b = 2 * arc.rho * dot(d, arc.e2);
 }
 
-void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Real& t,
-                           int& id) const {
+void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Walk& w,
+                           Real& t, int& id) const {
   t = kInf;
   id = kFloor;
   auto is_held = [&](int q) {
@@ -358,11 +405,11 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
     return -b >= 0 && (-a) * sT - (-b) * cT >= 0 && k * k < a * a + b * b;
   };
   // the walls
-  for (int w = 0; w < 4; ++w) {
-    const int q = kWall0 - w;
+  for (int j = 0; j < 4; ++j) {
+    const int q = kWall0 - j;
     if (is_held(q)) continue;
     Real k, a, b;
-    gap(q, arc, r, k, a, b);
+    gap(q, arc, r, w, k, a, b);
     if (!within(k, a, b)) continue;
     const Real tw = first_entry(k, a, b, T, q == left);
     if (tw < t) t = tw, id = q;
@@ -390,6 +437,7 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
   const int ix0 = column_x(lo.x - reach), ix1 = column_x(hi.x + reach);
   const int iy0 = column_y(lo.y - reach), iy1 = column_y(hi.y + reach);
   const int iz0 = layer(lo.z - reach), iz1 = layer(hi.z + reach);
+  if (!w.reads(ix0, ix1, iy0, iy1)) return;
   for (int iy = iy0; iy <= iy1; ++iy)
     for (int ix = ix0; ix <= ix1; ++ix) {
       const int top = std::min(iz1, col_top_[static_cast<std::size_t>(iy) * nx_ + ix]);
@@ -412,8 +460,9 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
     }
 }
 
-bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
-  wall_w_ = {R_.x0 + r, -(R_.x1 - r), R_.y0 + r, -(R_.y1 - r)};
+Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
+  w.wall_w = {R_.x0 + r, -(R_.x1 - r), R_.y0 + r, -(R_.y1 - r)};
+  w.out = false;
   Vec3 p{x, y, kInf};
   int held[3];
   int n_held = 0;
@@ -427,11 +476,12 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
     for (int h = 0; h < n_held; ++h) any_grain = any_grain || !is_wall(held[h]);
     if (!any_grain) {
       Real z;
-      const int hit = fall(p.x, p.y, r, p.z, exclude, z);
+      const int hit = fall(p.x, p.y, r, p.z, exclude, w, z);
+      if (w.out) return Drop::Leave;
       p.z = z;
       if (hit == kFloor) {
         rest = p;
-        return true;
+        return Drop::Rest;
       }
       held[0] = hit;
       n_held = 1;  // (walls touched on the way are met again at once if the roll closes on them)
@@ -478,9 +528,9 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
       Vec3 u;
       Real along, rho2;
       if (is_wall(wj)) {
-        const int w = wall_index(wj);
-        u = wall_n_[w];
-        along = wall_w_[w] - dot(u, a);
+        const int j = wall_index(wj);
+        u = wall_n_[j];
+        along = w.wall_w[j] - dot(u, a);
         rho2 = sa * sa - along * along;
       } else {
         const Cell& ob = g_[wj];
@@ -491,7 +541,7 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
         along = (L * L + sa * sa - sb * sb) / (2 * L);
         rho2 = sa * sa - along * along;
       }
-      if (!(rho2 > 0)) return false;  // (rounding: the two cannot both be touched)
+      if (!(rho2 > 0)) return Drop::Discard;  // (rounding: the two cannot both be touched)
       arc.c = a + u * along;
       arc.rho = std::sqrt(rho2);
       Vec3 e1 = p - arc.c;
@@ -539,7 +589,8 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
     // (at a lift-off the grain moves along the contact it leaves, and rounding may make it
     // close: met again at once, it would be left again, over and over; on one sphere the path
     // leaves it for good, a great circle tangent to a cap smaller than a hemisphere)
-    first_contact(arc, r, held, n_held, exclude, t, hit);
+    first_contact(arc, r, held, n_held, exclude, w, t, hit);
+    if (w.out) return Drop::Leave;
     if (t == kInf) t = arc.t_max;
     Vec3 q = arc.at(t);
     // the floor met on the way: the grain rests there
@@ -551,7 +602,7 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
         (on_floor(arc.at(mid)) ? hi : lo) = mid;
       }
       rest = arc.at(hi);  // (the first point of the arc found on the floor, to 1e-12 rad)
-      return true;
+      return Drop::Rest;
     }
     p = q;
     if (hit == kFloor) {
@@ -572,10 +623,10 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
     Vec3 n[3];
     for (int h = 0; h < n_held; ++h) n[h] = normal(held[h], p, r);
     const int mask = choose_supports(n, n_held);
-    if (mask < 0) return false;
+    if (mask < 0) return Drop::Discard;
     if (n_held == 3 && mask == 7) {
       rest = p;
-      return true;
+      return Drop::Rest;
     }
     int kept = 0;
     exclude = kFloor;
@@ -587,15 +638,13 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
     }
     n_held = kept;
   }
-  return false;
+  return Drop::Discard;
 }
 
-void Packer::insert(const Vec3& p, Real r) {
-  const auto k = static_cast<std::int32_t>(g_.size());
-  g_.push_back({p.x, p.y, p.z, r});
+void Packer::insert(std::int32_t k, const Vec3& p, Real r) {
+  g_[static_cast<std::size_t>(k)] = {p.x, p.y, p.z, r};
   const int ix = column_x(p.x), iy = column_y(p.y), iz = layer(p.z);
   Slots& s = cells_[cell(ix, iy, iz)];
-  next_.push_back(-1);
   int slot = 0;
   while (slot < 3 && s.id[slot] >= 0) ++slot;
   if (slot < 3) {
@@ -606,11 +655,80 @@ void Packer::insert(const Vec3& p, Real r) {
     s.r[slot] = static_cast<float>(r);
     // (the float radius may round up or down by 3e-8 r: the contacts stay within 1e-7 d)
   } else {
-    next_.back() = s.more;
+    next_[static_cast<std::size_t>(k)] = s.more;
     s.more = k;
   }
   int& top = col_top_[static_cast<std::size_t>(iy) * nx_ + ix];
   top = std::max(top, iz);
+}
+
+void Packer::run_tile(Tile& tile, std::vector<std::int32_t>& open) {
+  open.clear();
+  for (int iy = tile.iy0; iy <= tile.iy1; ++iy)
+    for (int ix = tile.ix0; ix <= tile.ix1; ++ix)
+      if (open_[static_cast<std::size_t>(iy) * nx_ + ix]) open.push_back(iy * nx_ + ix);
+  Walk w;
+  w.ix0 = std::max(0, tile.ix0 - kMargin);
+  w.ix1 = std::min(nx_ - 1, tile.ix1 + kMargin);
+  w.iy0 = std::max(0, tile.iy0 - kMargin);
+  w.iy1 = std::min(ny_ - 1, tile.iy1 + kMargin);
+  Rng rng(tile.seed);
+  for (std::int32_t n = 0; n < tile.drops && !open.empty(); ++n) {
+    const auto pick = static_cast<std::size_t>(rng.uniform() * static_cast<Real>(open.size()));
+    const std::size_t slot = std::min(pick, open.size() - 1);
+    const int c = open[slot];
+    const int ix = c % nx_, iy = c / nx_;
+    const Real r = R_.r_hi > R_.r_lo ? rng.uniform(R_.r_lo, R_.r_hi) : R_.r_lo;
+    const Real ux = rng.uniform(), uy = rng.uniform();
+    // a point of the cell where the grain lies inside the footprint
+    const Real xa = std::max(R_.x0 + ix * cs_, R_.x0 + r),
+               xb = std::min(R_.x0 + (ix + 1) * cs_, R_.x1 - r);
+    const Real ya = std::max(R_.y0 + iy * cs_, R_.y0 + r),
+               yb = std::min(R_.y0 + (iy + 1) * cs_, R_.y1 - r);
+    ++tile.made;
+    bool kept = false, blocked = false;
+    Vec3 p;
+    const Drop d = xb >= xa && yb >= ya ? drop(xa + ux * (xb - xa), ya + uy * (yb - ya), r, w, p)
+                                        : Drop::Discard;
+    if (d == Drop::Leave) {
+      // (it rolled too far for its tile: not made here, and no evidence of a full top)
+      ++tile.discarded;
+      continue;
+    }
+    if (d == Drop::Rest) {
+      if (p.z > top_.value(p.x, p.y) - r) {
+        ++tile.discarded;
+      } else {
+        if (R_.blocked) {
+          // (the caller's function need not be safe to call from two threads at once)
+#pragma omp critical(sandflow_bed_blocked)
+          blocked = R_.blocked(p, r);
+        }
+        if (blocked) {
+          ++tile.discarded;
+          ++tile.blocked;
+        } else {
+          insert(tile.base + n, p, r);
+          ++tile.kept;
+          kept = true;
+        }
+      }
+    } else {
+      ++tile.discarded;
+    }
+    // A drop refused by an obstacle counts an eighth of one that found the top: the flanks of an
+    // obstacle refuse drops until the sand around has grown up to them, and must not close the
+    // cells over it before (a cell inside an obstacle closes after 8 patience drops)
+    std::uint16_t& fail = fails_[static_cast<std::size_t>(c)];
+    if (kept) {
+      fail = 0;
+    } else if ((fail += blocked ? 1 : 8) >= 8 * R_.patience) {
+      open_[static_cast<std::size_t>(c)] = 0;
+      ++tile.closed;
+      open[slot] = open.back();
+      open.pop_back();
+    }
+  }
 }
 
 BedPacking Packer::run() {
@@ -655,13 +773,15 @@ BedPacking Packer::run() {
   if (flat_floor_) std::fill(col_floor_.begin(), col_floor_.end(), floor_.lo);
   // (a tangent plane lies at most r (sqrt(2) - 1) above the samples: it is used up to 45 degrees)
   for (Real& f : col_floor_) f += (std::sqrt(2.0) - 1) * R_.r_hi + 1e-12;
-  const auto reserve = static_cast<std::size_t>(std::min(estimate * 1.1 + 16, R_.max_grains));
+  // (ids are reserved for drops, about 1.3 a grain)
+  const auto reserve = static_cast<std::size_t>(std::min(estimate * 1.5 + 16, 2.0e9));
   g_.reserve(reserve);
   next_.reserve(reserve);
 
   // the cells drops are made in, each open until `patience` drops in a row fail there
-  std::vector<std::int32_t> open;
-  std::vector<std::uint16_t> fails(col_top_.size(), 0);
+  open_.assign(col_top_.size(), 0);
+  fails_.assign(col_top_.size(), 0);
+  std::int64_t n_open = 0;
   for (int iy = 0; iy < ny_; ++iy)
     for (int ix = 0; ix < nx_; ++ix) {
       // closed at once where no grain fits under the top anywhere in the cell
@@ -675,60 +795,78 @@ BedPacking Packer::run() {
       for (int j = j0; j <= j1 && !room; ++j)
         for (int i = i0; i <= i1 && !room; ++i)
           room = top_.at(i, j) - floor_.at(i, j) >= 2 * R_.r_lo;
-      if (room) open.push_back(iy * nx_ + ix);
+      if (room) {
+        open_[static_cast<std::size_t>(iy) * nx_ + ix] = 1;
+        ++n_open;
+      }
     }
 
   BedPacking out;
-  Rng rng(R_.seed);
-  while (!open.empty()) {
-    const auto pick = static_cast<std::size_t>(rng.uniform() * static_cast<Real>(open.size()));
-    const std::size_t slot = std::min(pick, open.size() - 1);
-    const int c = open[slot];
-    const int ix = c % nx_, iy = c / nx_;
-    const Real r = R_.r_hi > R_.r_lo ? rng.uniform(R_.r_lo, R_.r_hi) : R_.r_lo;
-    const Real ux = rng.uniform(), uy = rng.uniform();
-    // a point of the cell where the grain lies inside the footprint
-    const Real xa = std::max(R_.x0 + ix * cs_, R_.x0 + r),
-               xb = std::min(R_.x0 + (ix + 1) * cs_, R_.x1 - r);
-    const Real ya = std::max(R_.y0 + iy * cs_, R_.y0 + r),
-               yb = std::min(R_.y0 + (iy + 1) * cs_, R_.y1 - r);
-    ++out.drops;
-    bool kept = false, blocked = false;
-    Vec3 p;
-    if (xb >= xa && yb >= ya && drop(xa + ux * (xb - xa), ya + uy * (yb - ya), r, p)) {
-      if (p.z > top_.value(p.x, p.y) - r) {
-        ++out.discarded;
-      } else if (R_.blocked && R_.blocked(p, r)) {
-        ++out.discarded;
-        ++out.blocked;
-        blocked = true;
-      } else {
-        if (static_cast<Real>(g_.size()) >= R_.max_grains)
-          throw std::length_error("bed packing: more grains than the limit of " +
-                                  std::to_string(static_cast<long long>(R_.max_grains)));
-        insert(p, r);
-        kept = true;
+  std::int64_t kept = 0;
+  const int threads = std::max(1, R_.threads);
+  std::vector<std::vector<std::int32_t>> scratch(static_cast<std::size_t>(threads));
+  std::vector<Tile> tiles;
+  for (std::uint64_t round = 0; n_open > 0; ++round) {
+    // this round's tiling, shifted at random so that no seam stays, and the order of its colours
+    Rng rng(mix_seed(R_.seed, round, 0));
+    const int ox = static_cast<int>(rng.next() % kTile), oy = static_cast<int>(rng.next() % kTile);
+    int colours[4] = {0, 1, 2, 3};
+    for (int i = 3; i > 0; --i)
+      std::swap(colours[i],
+                colours[static_cast<int>(rng.next() % static_cast<std::uint64_t>(i + 1))]);
+    const int tx = (nx_ + ox + kTile - 1) / kTile, ty = (ny_ + oy + kTile - 1) / kTile;
+    for (const int colour : colours) {
+      // its tiles with an open column, their drops and the ids reserved for them, in tile order
+      tiles.clear();
+      std::int64_t next_id = static_cast<std::int64_t>(g_.size());
+      for (int j = colour / 2; j < ty; j += 2)
+        for (int i = colour % 2; i < tx; i += 2) {
+          Tile t;
+          t.ix0 = std::max(0, i * kTile - ox);
+          t.ix1 = std::min(nx_ - 1, (i + 1) * kTile - ox - 1);
+          t.iy0 = std::max(0, j * kTile - oy);
+          t.iy1 = std::min(ny_ - 1, (j + 1) * kTile - oy - 1);
+          int n = 0;
+          for (int iy = t.iy0; iy <= t.iy1; ++iy)
+            for (int ix = t.ix0; ix <= t.ix1; ++ix)
+              n += open_[static_cast<std::size_t>(iy) * nx_ + ix];
+          if (n == 0) continue;
+          t.drops = (n + kDropsPerColumn - 1) / kDropsPerColumn;
+          t.base = static_cast<std::int32_t>(next_id);
+          t.seed = mix_seed(R_.seed, round, static_cast<std::uint64_t>(j * tx + i) + 1);
+          next_id += t.drops;
+          tiles.push_back(t);
+        }
+      if (next_id > std::numeric_limits<std::int32_t>::max())
+        throw std::length_error("bed packing: more drops than grain ids");
+      g_.resize(static_cast<std::size_t>(next_id), Cell{0, 0, 0, 0});
+      next_.resize(static_cast<std::size_t>(next_id), -1);
+      // tiles of one colour are a tile apart, farther than two margins: their drops read and
+      // write disjoint columns, so the bed does not depend on the threads nor their order
+      const auto n_tiles = static_cast<std::int64_t>(tiles.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1 && n_tiles > 1)
+      for (std::int64_t k = 0; k < n_tiles; ++k)
+        run_tile(tiles[static_cast<std::size_t>(k)],
+                 scratch[static_cast<std::size_t>(omp_get_thread_num())]);
+      for (const Tile& t : tiles) {
+        out.drops += t.made;
+        out.discarded += t.discarded;
+        out.blocked += t.blocked;
+        kept += t.kept;
+        n_open -= t.closed;
       }
-    } else {
-      ++out.discarded;
-    }
-    // A drop refused by an obstacle counts an eighth of one that found the top: the flanks of an
-    // obstacle refuse drops until the sand around has grown up to them, and must not close the
-    // cells over it before (a cell inside an obstacle closes after 8 patience drops)
-    std::uint16_t& fail = fails[static_cast<std::size_t>(c)];
-    if (kept) {
-      fail = 0;
-    } else if ((fail += blocked ? 1 : 8) >= 8 * R_.patience) {
-      open[slot] = open.back();
-      open.pop_back();
+      if (static_cast<Real>(kept) > R_.max_grains)
+        throw std::length_error("bed packing: more grains than the limit of " +
+                                std::to_string(static_cast<long long>(R_.max_grains)));
     }
   }
-  out.x.resize(g_.size());
-  out.r.resize(g_.size());
-  for (std::size_t k = 0; k < g_.size(); ++k) {
-    out.x[k] = {g_[k].x, g_[k].y, g_[k].z};
-    out.r[k] = g_[k].r;
-  }
+  out.x.reserve(static_cast<std::size_t>(kept));
+  out.r.reserve(static_cast<std::size_t>(kept));
+  for (const Cell& c : g_)
+    if (c.r > 0) {
+      out.x.push_back({c.x, c.y, c.z});
+      out.r.push_back(c.r);
+    }
   return out;
 }
 
