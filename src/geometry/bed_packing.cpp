@@ -3,11 +3,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
 #include <omp.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "core/rng.hpp"
 
@@ -126,6 +130,23 @@ Real estimate_from_maps(const BedRegion& R, const Map& floor, const Map& top) {
 }
 
 // ---- Arcs and the events along them -----------------------------------------------------------
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+/// Bit k set for each of the 4 floats from v that lie in [lo, hi] (NaN in none).
+inline unsigned in_box(const float* v, float lo, float hi) {
+  using F4 = float __attribute__((vector_size(16)));
+  using I4 = std::int32_t __attribute__((vector_size(16)));
+  F4 x;
+  std::memcpy(&x, v, sizeof x);
+  const F4 l = {lo, lo, lo, lo}, h = {hi, hi, hi, hi};
+  const I4 in = (x >= l) & (x <= h);
+#if defined(__SSE2__)
+  return static_cast<unsigned>(_mm_movemask_ps(reinterpret_cast<__m128>(in)));
+#else
+  return (in[0] & 1u) | (in[1] & 2u) | (in[2] & 4u) | (in[3] & 8u);
+#endif
+}
 
 /// The first t in [0, t_max] where g(t) = k + a cos t + b sin t falls through 0, or kInf. A
 /// contact touching now (g(0) <= 0, to rounding) and closing (g'(0) = b < 0) is met at once; one
@@ -279,21 +300,31 @@ class Packer {
   // relative to the cell's low corner: within 6e-8 of its width, far below the 1e-6 d the
   // contacts are exact to), and chains the rest through next_ (rare: a cell holds 1.15 grains
   // on average at this packing). A scan reads a cell's line, not a list spread over memory.
+  // An empty slot's coordinates are NaN, which no box holds.
   struct alignas(64) Slots {
-    float x[3], y[3], z[3], r[3];
+    float x[3] = {kNaN, kNaN, kNaN}, y[3] = {kNaN, kNaN, kNaN}, z[3] = {kNaN, kNaN, kNaN}, r[3];
     std::int32_t id[3] = {-1, -1, -1};
     std::int32_t more = -1;
   };
   static_assert(sizeof(Slots) == 64);
   std::vector<Slots> cells_;
   std::vector<std::int32_t> next_;
-  /// Calls f(id, x, y, z, r) for every grain of cell (ix, iy, iz).
+  /// Calls f(id, x, y, z, r) for the grains of cell (ix, iy, iz) centred in [lo, hi] (and
+  /// perhaps a few more: the callers test each grain exactly). The three slots are tested at
+  /// once (4 floats from x, y and z: the fourth lane is the next array's first), without a
+  /// branch a grain: whether a grain lies in the box is a coin toss.
   template <class F>
-  void visit(int ix, int iy, int iz, F&& f) const {
+  void visit(int ix, int iy, int iz, const Vec3& lo, const Vec3& hi, F&& f) const {
     const Slots& s = cells_[cell(ix, iy, iz)];
     const Real cx = R_.x0 + ix * cs_, cy = R_.y0 + iy * cs_, cz = z0_ + iz * cs_;
-    for (int k = 0; k < 3; ++k) {
-      if (s.id[k] < 0) return;
+    // (the box relative to the cell, in floats widened by far more than their rounding)
+    const float e = 1e-5f * static_cast<float>(cs_);
+    unsigned m = in_box(s.x, static_cast<float>(lo.x - cx) - e, static_cast<float>(hi.x - cx) + e) &
+                 in_box(s.y, static_cast<float>(lo.y - cy) - e, static_cast<float>(hi.y - cy) + e) &
+                 in_box(s.z, static_cast<float>(lo.z - cz) - e, static_cast<float>(hi.z - cz) + e) &
+                 7u;
+    for (; m; m &= m - 1) {
+      const int k = __builtin_ctz(m);
       f(s.id[k], cx + s.x[k], cy + s.y[k], cz + s.z[k], static_cast<Real>(s.r[k]));
     }
     for (std::int32_t q = s.more; q >= 0; q = next_[q]) f(q, g_[q].x, g_[q].y, g_[q].z, g_[q].r);
@@ -343,10 +374,12 @@ int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real&
   if (z_max < kInf) top = std::min(top, layer(z_max + r + R_.r_hi));
   // layer by layer from the highest of the 3 x 3 columns down: every grain of layer iz and below
   // lies under z0 + (iz + 1) cs, so none of them can be met higher than that plus two radii
+  const Real reach = r + R_.r_hi;
+  const Vec3 lo{x - reach, y - reach, -kInf}, hi{x + reach, y + reach, kInf};
   for (int iz = top; iz >= 0 && z0_ + (iz + 1) * cs_ + r + R_.r_hi > best; --iz)
     for (int jy = jy0; jy <= jy1; ++jy)
       for (int jx = jx0; jx <= jx1; ++jx)
-        visit(jx, jy, iz, [&](std::int32_t k, Real ox, Real oy, Real oz, Real orad) {
+        visit(jx, jy, iz, lo, hi, [&](std::int32_t k, Real ox, Real oy, Real oz, Real orad) {
           const Real dx = ox - x, dy = oy - y, s = r + orad;
           const Real rho2 = dx * dx + dy * dy;
           if (rho2 >= s * s || k == exclude) return;
@@ -434,6 +467,8 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
     }
   }
   const Real reach = r + R_.r_hi;
+  const Vec3 wide{reach, reach, reach};
+  const Vec3 box_lo = lo - wide, box_hi = hi + wide;
   const int ix0 = column_x(lo.x - reach), ix1 = column_x(hi.x + reach);
   const int iy0 = column_y(lo.y - reach), iy1 = column_y(hi.y + reach);
   const int iz0 = layer(lo.z - reach), iz1 = layer(hi.z + reach);
@@ -442,21 +477,23 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
     for (int ix = ix0; ix <= ix1; ++ix) {
       const int top = std::min(iz1, col_top_[static_cast<std::size_t>(iy) * nx_ + ix]);
       for (int iz = iz0; iz <= top; ++iz)
-        visit(ix, iy, iz, [&](std::int32_t q, Real ox, Real oy, Real oz, Real orad) {
-          const Real s = r + orad;
-          // (the arc's box widened by this grain's reach: most grains of the cells are outside)
-          if (ox < lo.x - s || ox > hi.x + s || oy < lo.y - s || oy > hi.y + s || oz < lo.z - s ||
-              oz > hi.z + s)
-            return;
-          const Vec3 d = arc.c - Vec3{ox, oy, oz};
-          const Real k = dot(d, d) + arc.rho * arc.rho - s * s;
-          const Real a = 2 * arc.rho * dot(d, arc.e1);
-          const Real b = 2 * arc.rho * dot(d, arc.e2);
-          if (k > 0 && k * k >= a * a + b * b) return;  // never within reach of the circle
-          if (!within(k, a, b) || is_held(q)) return;
-          const Real tq = first_entry(k, a, b, std::min(t, T), q == left);
-          if (tq < t) t = tq, id = q;
-        });
+        visit(ix, iy, iz, box_lo, box_hi,
+              [&](std::int32_t q, Real ox, Real oy, Real oz, Real orad) {
+                const Real s = r + orad;
+                // (the arc's box widened by this grain's reach: most grains of the cells are
+                // outside)
+                if (ox < lo.x - s || ox > hi.x + s || oy < lo.y - s || oy > hi.y + s ||
+                    oz < lo.z - s || oz > hi.z + s)
+                  return;
+                const Vec3 d = arc.c - Vec3{ox, oy, oz};
+                const Real k = dot(d, d) + arc.rho * arc.rho - s * s;
+                const Real a = 2 * arc.rho * dot(d, arc.e1);
+                const Real b = 2 * arc.rho * dot(d, arc.e2);
+                if (k > 0 && k * k >= a * a + b * b) return;  // never within reach of the circle
+                if (!within(k, a, b) || is_held(q)) return;
+                const Real tq = first_entry(k, a, b, std::min(t, T), q == left);
+                if (tq < t) t = tq, id = q;
+              });
     }
 }
 
