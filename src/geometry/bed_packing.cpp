@@ -148,35 +148,57 @@ inline unsigned in_box(const float* v, float lo, float hi) {
 #endif
 }
 
-/// The first t in [0, t_max] where g(t) = k + a cos t + b sin t falls through 0, or kInf. A
-/// contact touching now (g(0) <= 0, to rounding) and closing (g'(0) = b < 0) is met at once; one
-/// touching and opening is met again only after it has opened, and so is one the grain is
-/// `leaving` (it has just left it: see first_contact).
-inline Real first_entry(Real k, Real a, Real b, Real t_max, bool leaving = false) {
+/// An angle t of [0, 2 pi) along an arc as its cosine and sine, with a key that orders angles
+/// without trigonometry: the "diamond angle", 0 to 4, and about t near 0 (1 - cos t would lose
+/// small angles). A key of 5: none.
+struct Angle {
+  Real c = 1, s = 0, key = 5;
+  static Angle of(Real c, Real s) {
+    Real k;
+    if (s >= 0)
+      k = c >= 0 ? s / (c + s) : 1 - c / (s - c);
+    else
+      k = c < 0 ? 2 - s / (-c - s) : 3 + c / (c - s);
+    return {c, s, k};
+  }
+  static Angle zero() { return {1, 0, 0}; }
+  static Angle none() { return {1, 0, 5}; }
+  bool is_none() const { return key > 4.5; }
+  Real radians() const {
+    const Real t = std::atan2(s, c);
+    return t < 0 ? t + kTwoPi : t;
+  }
+};
+
+/// The first angle up to the key `key_max` where g(t) = k + a cos t + b sin t falls through 0, or
+/// none. A contact touching now (g(0) <= 0, to rounding) and closing (g'(0) = b < 0) is met at
+/// once; one touching and opening is met again only after it has opened, and so is one the grain
+/// is `leaving` (it has just left it: see first_contact).
+inline Angle first_entry(Real k, Real a, Real b, Real key_max, bool leaving = false) {
   const Real g0 = k + a;
   const Real r2 = a * a + b * b;
-  const Real r = std::sqrt(r2);
   // (closing slower than choose_supports' tolerance is leaving, as choose_supports decided)
-  if (g0 <= 0 && b < -1e-9 * r && !leaving) return 0;
-  if (k * k >= r2) return kInf;  // g keeps its sign
-  // g = k + r cos(t - phi) falls through 0 where t - phi = acos(-k / r); into (0, 2 pi] (t lies
-  // within (-pi, 2 pi]: no floor, a libm call without SSE4.1)
-  Real t = std::atan2(b, a) + std::acos(-k / r);
-  if (t > kTwoPi) t -= kTwoPi;
+  if (g0 <= 0 && b < -1e-9 * std::sqrt(r2) && !leaving) return Angle::zero();
+  if (k * k >= r2) return Angle::none();  // g keeps its sign
+  // g = k + R cos(t - phi) falls through 0 at t = phi + theta, cos theta = -k / R: the sum of the
+  // two angles by their cosines and sines, (a, b) / R and (-k, q) / R (no atan2 nor acos)
+  const Real q = std::sqrt(r2 - k * k);
+  const Angle t = Angle::of((-a * k - b * q) / r2, (a * q - b * k) / r2);
   if (g0 > 0) {
     // the root lies ahead: a hair behind 0 is rounding
-    if (t < 0) t = t > -1e-6 ? 0 : t + kTwoPi;
-  } else if (t < 1e-6) {
-    t += kTwoPi;  // touching and opening: the root just passed (or rounding put it a hair ahead)
+    if (t.key > 4 - 1e-6) return Angle::zero();
+  } else if (t.key < 1e-6) {
+    return Angle::none();  // touching and opening: the root just passed (or rounding put it ahead)
   }
-  return t <= t_max ? t : kInf;
+  return t.key <= key_max ? t : Angle::none();
 }
 
 /// A circle c + rho (cos t e1 + sin t e2), followed from t = 0 (the grain's centre now) down.
 struct Arc {
   Vec3 c, e1, e2;
   Real rho = 0;
-  Real t_max = 0;
+  Angle t_max;
+  Vec3 at(const Angle& t) const { return c + (e1 * t.c + e2 * t.s) * rho; }
   Vec3 at(Real t) const { return c + (e1 * std::cos(t) + e2 * std::sin(t)) * rho; }
 };
 
@@ -273,7 +295,7 @@ class Packer {
   // the first contact met along the arc (not one of `held`), and where (t); kInf when none.
   // `left`: the contact just left, not met again before it has opened
   void first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Walk& w,
-                     Real& t, int& id) const;
+                     Angle& t, int& id) const;
   Vec3 normal(int id, const Vec3& p, Real r) const;
   // gap along the arc of contact id: k + a cos t + b sin t
   void gap(int id, const Arc& arc, Real r, const Walk& w, Real& k, Real& a, Real& b) const;
@@ -417,8 +439,8 @@ void Packer::gap(int id, const Arc& arc, Real r, const Walk& w, Real& k, Real& a
 }
 
 void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Walk& w,
-                           Real& t, int& id) const {
-  t = kInf;
+                           Angle& t, int& id) const {
+  t = Angle::none();
   id = kFloor;
   auto is_held = [&](int q) {
     for (int h = 0; h < n_held; ++h)
@@ -428,9 +450,8 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
   // Whether g(t) = k + a cos t + b sin t, positive at 0, falls through 0 by t = T (T <= pi,
   // cos T and sin T given), without trigonometry: at T, or at its minimum (t = phi + pi, where
   // (cos t, sin t) = -(a, b) / R) if that lies in [0, T] and is below 0.
-  const Real T = arc.t_max;
-  const Real cT = std::cos(T), sT = std::sin(T);
-  const bool narrow = T <= kPi;
+  const Real cT = arc.t_max.c, sT = arc.t_max.s, T = arc.t_max.key;
+  const bool narrow = T <= 2;  // (pi)
   auto within = [&](Real k, Real a, Real b) {
     if (!narrow || (k + a <= 0 && b < 0)) return true;  // (first_entry decides)
     if (k + a * cT + b * sT <= 0) return true;
@@ -444,12 +465,12 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
     Real k, a, b;
     gap(q, arc, r, w, k, a, b);
     if (!within(k, a, b)) continue;
-    const Real tw = first_entry(k, a, b, T, q == left);
-    if (tw < t) t = tw, id = q;
+    const Angle tw = first_entry(k, a, b, T, q == left);
+    if (tw.key < t.key) t = tw, id = q;
   }
   // the grains near the arc: the cells of its bounding box widened by a contact's reach; the
   // box holds the two ends and, on each axis, the circle's extreme point if the arc passes it
-  const Vec3 p0 = arc.at(0), p1 = arc.c + (arc.e1 * cT + arc.e2 * sT) * arc.rho;
+  const Vec3 p0 = arc.at(Angle::zero()), p1 = arc.at(arc.t_max);
   Vec3 lo = min(p0, p1), hi = max(p0, p1);
   for (int ax = 0; ax < 3; ++ax) {
     const Real u = arc.e1[ax], v = arc.e2[ax];  // coordinate: c + rho (u cos t + v sin t)
@@ -491,8 +512,8 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
                 const Real b = 2 * arc.rho * dot(d, arc.e2);
                 if (k > 0 && k * k >= a * a + b * b) return;  // never within reach of the circle
                 if (!within(k, a, b) || is_held(q)) return;
-                const Real tq = first_entry(k, a, b, std::min(t, T), q == left);
-                if (tq < t) t = tq, id = q;
+                const Angle tq = first_entry(k, a, b, std::min(t.key, T), q == left);
+                if (tq.key < t.key) t = tq, id = q;
               });
     }
 }
@@ -553,8 +574,8 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
       arc.e1 = e1;
       arc.e2 = t / tn;
       // the equator: p.z - a.z = rho (e1.z cos t + e2.z sin t) falls through 0
-      arc.t_max = first_entry(0, s * arc.e1.z, s * arc.e2.z, kPi);
-      if (arc.t_max == kInf) arc.t_max = kPi / 2;
+      arc.t_max = first_entry(0, s * arc.e1.z, s * arc.e2.z, 2);  // (up to pi)
+      if (arc.t_max.is_none()) arc.t_max = Angle::of(0, 1);       // (pi / 2)
       other = kFloor - 1;  // (the equator)
     } else {
       int gi = held[0], wj = held[1];
@@ -606,34 +627,34 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
         zb[h] = arc.rho * e2.z / s;
       }
       // the lowest point of the circle bounds the arc (no grain rests on two: it is left first)
-      arc.t_max = first_entry(0, -arc.rho * e2.z, arc.rho * e1.z, kTwoPi);
-      if (arc.t_max == kInf) arc.t_max = kPi;
-      Real t_off = kInf;
+      arc.t_max = first_entry(0, -arc.rho * e2.z, arc.rho * e1.z, 4);
+      if (arc.t_max.is_none()) arc.t_max = Angle::of(-1, 0);  // (pi)
+      Angle t_off = Angle::none();
       for (int h = 0; h < 2; ++h) {
-        const Real to = first_entry(zk[h] - kk * zk[1 - h], za[h] - kk * za[1 - h],
-                                    zb[h] - kk * zb[1 - h], arc.t_max);
-        if (to < t_off) t_off = to, other = held[h];
+        const Angle to = first_entry(zk[h] - kk * zk[1 - h], za[h] - kk * za[1 - h],
+                                     zb[h] - kk * zb[1 - h], arc.t_max.key);
+        if (to.key < t_off.key) t_off = to, other = held[h];
       }
-      if (t_off < kInf)
+      if (!t_off.is_none())
         arc.t_max = t_off;
       else
         other = held[zk[0] < zk[1] ? 0 : 1];
     }
 
     // along the arc: the first new contact, else its end (the equator, a lift-off)
-    Real t;
+    Angle t;
     int hit;
     // (at a lift-off the grain moves along the contact it leaves, and rounding may make it
     // close: met again at once, it would be left again, over and over; on one sphere the path
     // leaves it for good, a great circle tangent to a cap smaller than a hemisphere)
     first_contact(arc, r, held, n_held, exclude, w, t, hit);
     if (w.out) return Drop::Leave;
-    if (t == kInf) t = arc.t_max;
+    if (t.is_none()) t = arc.t_max;
     Vec3 q = arc.at(t);
     // the floor met on the way: the grain rests there
     const int col = column_y(q.y) * nx_ + column_x(q.x);
     if (q.z - r <= col_floor_[static_cast<std::size_t>(col)] && on_floor(q)) {
-      Real lo = 0, hi = t;
+      Real lo = 0, hi = t.radians();
       for (int it = 0; it < 48 && hi - lo > 1e-12; ++it) {
         const Real mid = 0.5 * (lo + hi);
         (on_floor(arc.at(mid)) ? hi : lo) = mid;
