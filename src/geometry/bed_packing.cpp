@@ -133,18 +133,23 @@ Real estimate_from_maps(const BedRegion& R, const Map& floor, const Map& top) {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-/// Bit k set for each of the 4 floats from v that lie in [lo, hi] (NaN in none).
-inline unsigned in_box(const float* v, float lo, float hi) {
-  using F4 = float __attribute__((vector_size(16)));
-  using I4 = std::int32_t __attribute__((vector_size(16)));
-  F4 x;
-  std::memcpy(&x, v, sizeof x);
-  const F4 l = {lo, lo, lo, lo}, h = {hi, hi, hi, hi};
-  const I4 in = (x >= l) & (x <= h);
+// Four floats at once (GCC and Clang vectors: SSE2 on x86-64, NEON on ARM).
+using F4 = float __attribute__((vector_size(16)));
+using I4 = std::int32_t __attribute__((vector_size(16)));
+inline F4 splat(float v) {
+  return F4{v, v, v, v};
+}
+inline F4 load4(const float* p) {
+  F4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+/// Bit k set for each lane k < 3 of `in` that is true.
+inline unsigned mask3(I4 in) {
 #if defined(__SSE2__)
-  return static_cast<unsigned>(_mm_movemask_ps(reinterpret_cast<__m128>(in)));
+  return static_cast<unsigned>(_mm_movemask_ps(reinterpret_cast<__m128>(in))) & 7u;
 #else
-  return (in[0] & 1u) | (in[1] & 2u) | (in[2] & 4u) | (in[3] & 8u);
+  return (in[0] & 1u) | (in[1] & 2u) | (in[2] & 4u);
 #endif
 }
 
@@ -317,6 +322,7 @@ class Packer {
   Map floor_, top_;
   bool flat_floor_ = false;
   Real cs_ = 0, inv_cs_ = 0, z0_ = 0;
+  float fcs_ = 0;
   int nx_ = 1, ny_ = 1, nz_ = 1;
   // Each cell holds its first three grains inline, in one cache line (coordinates as floats
   // relative to the cell's low corner: within 6e-8 of its width, far below the 1e-6 d the
@@ -331,25 +337,51 @@ class Packer {
   static_assert(sizeof(Slots) == 64);
   std::vector<Slots> cells_;
   std::vector<std::int32_t> next_;
-  /// Calls f(id, x, y, z, r) for the grains of cell (ix, iy, iz) centred in [lo, hi] (and
-  /// perhaps a few more: the callers test each grain exactly). The three slots are tested at
-  /// once (4 floats from x, y and z: the fourth lane is the next array's first), without a
-  /// branch a grain: whether a grain lies in the box is a coin toss.
+  /// The bounds [lo, hi] of a box about the cell whose low corner is at c, in floats relative
+  /// to it (widened by far more than their rounding).
+  F4 rel_lo(Real lo, Real c) const { return splat(static_cast<float>(lo - c) - 1e-5f * fcs_); }
+  F4 rel_hi(Real hi, Real c) const { return splat(static_cast<float>(hi - c) + 1e-5f * fcs_); }
+  /// Calls f(id, x, y, z, r) for the grains of cell s (low corner c) centred in the box of the
+  /// relative bounds given (and perhaps a few more: the callers test each grain exactly). Its
+  /// three slots are tested at once (4 floats from x, y and z: the fourth lane is the next
+  /// array's first), without a branch a grain: whether a grain lies in the box is a coin toss.
   template <class F>
-  void visit(int ix, int iy, int iz, const Vec3& lo, const Vec3& hi, F&& f) const {
-    const Slots& s = cells_[cell(ix, iy, iz)];
-    const Real cx = R_.x0 + ix * cs_, cy = R_.y0 + iy * cs_, cz = z0_ + iz * cs_;
-    // (the box relative to the cell, in floats widened by far more than their rounding)
-    const float e = 1e-5f * static_cast<float>(cs_);
-    unsigned m = in_box(s.x, static_cast<float>(lo.x - cx) - e, static_cast<float>(hi.x - cx) + e) &
-                 in_box(s.y, static_cast<float>(lo.y - cy) - e, static_cast<float>(hi.y - cy) + e) &
-                 in_box(s.z, static_cast<float>(lo.z - cz) - e, static_cast<float>(hi.z - cz) + e) &
-                 7u;
+  void visit(const Slots& s, const Vec3& c, unsigned m, F&& f) const {
     for (; m; m &= m - 1) {
       const int k = __builtin_ctz(m);
-      f(s.id[k], cx + s.x[k], cy + s.y[k], cz + s.z[k], static_cast<Real>(s.r[k]));
+      f(s.id[k], c.x + s.x[k], c.y + s.y[k], c.z + s.z[k], static_cast<Real>(s.r[k]));
     }
     for (std::int32_t q = s.more; q >= 0; q = next_[q]) f(q, g_[q].x, g_[q].y, g_[q].z, g_[q].r);
+  }
+  static unsigned in_xy(const Slots& s, F4 xl, F4 xh, F4 yl, F4 yh) {
+    const F4 x = load4(s.x), y = load4(s.y);
+    return mask3((x >= xl) & (x <= xh) & (y >= yl) & (y <= yh));
+  }
+  static unsigned in_xyz(const Slots& s, F4 xl, F4 xh, F4 yl, F4 yh, F4 zl, F4 zh) {
+    const F4 x = load4(s.x), y = load4(s.y), z = load4(s.z);
+    return mask3((x >= xl) & (x <= xh) & (y >= yl) & (y <= yh) & (z >= zl) & (z <= zh));
+  }
+  /// visit for the grains centred in [lo, hi] of the cells (ix0..ix1, iy0..iy1, iz0..iz1), up to
+  /// each column's top.
+  template <class F>
+  void scan(int ix0, int ix1, int iy0, int iy1, int iz0, int iz1, const Vec3& lo, const Vec3& hi,
+            F&& f) const {
+    for (int iy = iy0; iy <= iy1; ++iy) {
+      const Real cy = R_.y0 + iy * cs_;
+      const F4 yl = rel_lo(lo.y, cy), yh = rel_hi(hi.y, cy);
+      for (int ix = ix0; ix <= ix1; ++ix) {
+        const int top = std::min(iz1, col_top_[static_cast<std::size_t>(iy) * nx_ + ix]);
+        if (top < iz0) continue;
+        const Real cx = R_.x0 + ix * cs_;
+        const F4 xl = rel_lo(lo.x, cx), xh = rel_hi(hi.x, cx);
+        const Slots* col = &cells_[cell(ix, iy, 0)];
+        for (int iz = iz0; iz <= top; ++iz) {
+          const Real cz = z0_ + iz * cs_;
+          const unsigned m = in_xyz(col[iz], xl, xh, yl, yh, rel_lo(lo.z, cz), rel_hi(hi.z, cz));
+          visit(col[iz], Vec3{cx, cy, cz}, m, f);
+        }
+      }
+    }
   }
   std::vector<std::int32_t> col_top_;  ///< per column: highest layer holding a grain, or -1
   std::vector<Real> col_floor_;        ///< per column: the highest floor within r_hi of it
@@ -396,21 +428,37 @@ int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real&
   if (z_max < kInf) top = std::min(top, layer(z_max + r + R_.r_hi));
   // layer by layer from the highest of the 3 x 3 columns down: every grain of layer iz and below
   // lies under z0 + (iz + 1) cs, so none of them can be met higher than that plus two radii
+  // (the 3 x 3 columns' bounds of the square of a contact's reach about (x, y), once)
   const Real reach = r + R_.r_hi;
-  const Vec3 lo{x - reach, y - reach, -kInf}, hi{x + reach, y + reach, kInf};
+  int n_cols = 0;
+  const Slots* col[9];
+  Vec3 corner[9];
+  F4 xl[9], xh[9], yl[9], yh[9];
+  for (int jy = jy0; jy <= jy1; ++jy)
+    for (int jx = jx0; jx <= jx1; ++jx, ++n_cols) {
+      col[n_cols] = &cells_[cell(jx, jy, 0)];
+      corner[n_cols] = {R_.x0 + jx * cs_, R_.y0 + jy * cs_, 0};
+      xl[n_cols] = rel_lo(x - reach, corner[n_cols].x);
+      xh[n_cols] = rel_hi(x + reach, corner[n_cols].x);
+      yl[n_cols] = rel_lo(y - reach, corner[n_cols].y);
+      yh[n_cols] = rel_hi(y + reach, corner[n_cols].y);
+    }
+  auto meet = [&](std::int32_t k, Real ox, Real oy, Real oz, Real orad) {
+    const Real dx = ox - x, dy = oy - y, s = r + orad;
+    const Real rho2 = dx * dx + dy * dy;
+    if (rho2 >= s * s || k == exclude) return;
+    const Real zc = oz + std::sqrt(s * s - rho2);
+    if (zc > best && zc < z_max - 1e-10 * cs_) {
+      best = zc;
+      hit = k;
+    }
+  };
   for (int iz = top; iz >= 0 && z0_ + (iz + 1) * cs_ + r + R_.r_hi > best; --iz)
-    for (int jy = jy0; jy <= jy1; ++jy)
-      for (int jx = jx0; jx <= jx1; ++jx)
-        visit(jx, jy, iz, lo, hi, [&](std::int32_t k, Real ox, Real oy, Real oz, Real orad) {
-          const Real dx = ox - x, dy = oy - y, s = r + orad;
-          const Real rho2 = dx * dx + dy * dy;
-          if (rho2 >= s * s || k == exclude) return;
-          const Real zc = oz + std::sqrt(s * s - rho2);
-          if (zc > best && zc < z_max - 1e-10 * cs_) {
-            best = zc;
-            hit = k;
-          }
-        });
+    for (int c = 0; c < n_cols; ++c) {
+      const Slots& s = col[c][iz];
+      corner[c].z = z0_ + iz * cs_;
+      visit(s, corner[c], in_xy(s, xl[c], xh[c], yl[c], yh[c]), meet);
+    }
   z = std::min(best, z_max);
   return hit;
 }
@@ -489,33 +537,25 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
   }
   const Real reach = r + R_.r_hi;
   const Vec3 wide{reach, reach, reach};
-  const Vec3 box_lo = lo - wide, box_hi = hi + wide;
-  const int ix0 = column_x(lo.x - reach), ix1 = column_x(hi.x + reach);
-  const int iy0 = column_y(lo.y - reach), iy1 = column_y(hi.y + reach);
-  const int iz0 = layer(lo.z - reach), iz1 = layer(hi.z + reach);
+  lo = lo - wide;
+  hi = hi + wide;
+  const int ix0 = column_x(lo.x), ix1 = column_x(hi.x);
+  const int iy0 = column_y(lo.y), iy1 = column_y(hi.y);
+  const int iz0 = layer(lo.z), iz1 = layer(hi.z);
   if (!w.reads(ix0, ix1, iy0, iy1)) return;
-  for (int iy = iy0; iy <= iy1; ++iy)
-    for (int ix = ix0; ix <= ix1; ++ix) {
-      const int top = std::min(iz1, col_top_[static_cast<std::size_t>(iy) * nx_ + ix]);
-      for (int iz = iz0; iz <= top; ++iz)
-        visit(ix, iy, iz, box_lo, box_hi,
-              [&](std::int32_t q, Real ox, Real oy, Real oz, Real orad) {
-                const Real s = r + orad;
-                // (the arc's box widened by this grain's reach: most grains of the cells are
-                // outside)
-                if (ox < lo.x - s || ox > hi.x + s || oy < lo.y - s || oy > hi.y + s ||
-                    oz < lo.z - s || oz > hi.z + s)
-                  return;
-                const Vec3 d = arc.c - Vec3{ox, oy, oz};
-                const Real k = dot(d, d) + arc.rho * arc.rho - s * s;
-                const Real a = 2 * arc.rho * dot(d, arc.e1);
-                const Real b = 2 * arc.rho * dot(d, arc.e2);
-                if (k > 0 && k * k >= a * a + b * b) return;  // never within reach of the circle
-                if (!within(k, a, b) || is_held(q)) return;
-                const Angle tq = first_entry(k, a, b, std::min(t.key, T), q == left);
-                if (tq.key < t.key) t = tq, id = q;
-              });
-    }
+  // (a grain of the box beyond its own reach of the arc fails the tests below)
+  scan(ix0, ix1, iy0, iy1, iz0, iz1, lo, hi,
+       [&](std::int32_t q, Real ox, Real oy, Real oz, Real orad) {
+         const Real s = r + orad;
+         const Vec3 d = arc.c - Vec3{ox, oy, oz};
+         const Real k = dot(d, d) + arc.rho * arc.rho - s * s;
+         const Real a = 2 * arc.rho * dot(d, arc.e1);
+         const Real b = 2 * arc.rho * dot(d, arc.e2);
+         if (k > 0 && k * k >= a * a + b * b) return;  // never within reach of the circle
+         if (!within(k, a, b) || is_held(q)) return;
+         const Angle tq = first_entry(k, a, b, std::min(t.key, T), q == left);
+         if (tq.key < t.key) t = tq, id = q;
+       });
 }
 
 Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
@@ -804,6 +844,7 @@ BedPacking Packer::run() {
   // the grid: cells 2 r_hi wide, from under the lowest floor to over the highest top
   cs_ = 2 * R_.r_hi;
   inv_cs_ = 1 / cs_;
+  fcs_ = static_cast<float>(cs_);
   nx_ = std::max(1, static_cast<int>(std::ceil((R_.x1 - R_.x0) / cs_)));
   ny_ = std::max(1, static_cast<int>(std::ceil((R_.y1 - R_.y0) / cs_)));
   z0_ = floor_.lo - cs_;
