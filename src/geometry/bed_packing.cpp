@@ -361,28 +361,6 @@ class Packer {
     const F4 x = load4(s.x), y = load4(s.y), z = load4(s.z);
     return mask3((x >= xl) & (x <= xh) & (y >= yl) & (y <= yh) & (z >= zl) & (z <= zh));
   }
-  /// visit for the grains centred in [lo, hi] of the cells (ix0..ix1, iy0..iy1, iz0..iz1), up to
-  /// each column's top.
-  template <class F>
-  void scan(int ix0, int ix1, int iy0, int iy1, int iz0, int iz1, const Vec3& lo, const Vec3& hi,
-            F&& f) const {
-    for (int iy = iy0; iy <= iy1; ++iy) {
-      const Real cy = R_.y0 + iy * cs_;
-      const F4 yl = rel_lo(lo.y, cy), yh = rel_hi(hi.y, cy);
-      for (int ix = ix0; ix <= ix1; ++ix) {
-        const int top = std::min(iz1, col_top_[static_cast<std::size_t>(iy) * nx_ + ix]);
-        if (top < iz0) continue;
-        const Real cx = R_.x0 + ix * cs_;
-        const F4 xl = rel_lo(lo.x, cx), xh = rel_hi(hi.x, cx);
-        const Slots* col = &cells_[cell(ix, iy, 0)];
-        for (int iz = iz0; iz <= top; ++iz) {
-          const Real cz = z0_ + iz * cs_;
-          const unsigned m = in_xyz(col[iz], xl, xh, yl, yh, rel_lo(lo.z, cz), rel_hi(hi.z, cz));
-          visit(col[iz], Vec3{cx, cy, cz}, m, f);
-        }
-      }
-    }
-  }
   std::vector<std::int32_t> col_top_;  ///< per column: highest layer holding a grain, or -1
   std::vector<Real> col_floor_;        ///< per column: the highest floor within r_hi of it
   std::vector<Cell> g_;                ///< by id; r = 0: a drop that left no grain
@@ -495,6 +473,7 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
       if (held[h] == q) return true;
     return false;
   };
+  constexpr int kNoId = -1000;  // (no grain, no wall)
   // Whether g(t) = k + a cos t + b sin t, positive at 0, falls through 0 by t = T (T <= pi,
   // cos T and sin T given), without trigonometry: at T, or at its minimum (t = phi + pi, where
   // (cos t, sin t) = -(a, b) / R) if that lies in [0, T] and is below 0.
@@ -543,19 +522,63 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
   const int iy0 = column_y(lo.y), iy1 = column_y(hi.y);
   const int iz0 = layer(lo.z), iz1 = layer(hi.z);
   if (!w.reads(ix0, ix1, iy0, iy1)) return;
-  // (a grain of the box beyond its own reach of the arc fails the tests below)
-  scan(ix0, ix1, iy0, iy1, iz0, iz1, lo, hi,
-       [&](std::int32_t q, Real ox, Real oy, Real oz, Real orad) {
-         const Real s = r + orad;
-         const Vec3 d = arc.c - Vec3{ox, oy, oz};
-         const Real k = dot(d, d) + arc.rho * arc.rho - s * s;
-         const Real a = 2 * arc.rho * dot(d, arc.e1);
-         const Real b = 2 * arc.rho * dot(d, arc.e2);
-         if (k > 0 && k * k >= a * a + b * b) return;  // never within reach of the circle
-         if (!within(k, a, b) || is_held(q)) return;
-         const Angle tq = first_entry(k, a, b, std::min(t.key, T), q == left);
-         if (tq.key < t.key) t = tq, id = q;
-       });
+  // A grain of the box: within reach of the circle, within the arc (as `within`) and not held,
+  // tested without a branch (each a coin toss), then its root. (A grain of the box beyond its
+  // own reach of the arc fails these.)
+  const int h0 = held[0], h1 = n_held > 1 ? held[1] : kNoId, h2 = n_held > 2 ? held[2] : kNoId;
+  const Real rho2 = arc.rho * arc.rho;
+  auto test = [&](std::int32_t q, Real ox, Real oy, Real oz, Real orad) {
+    const Real s = r + orad;
+    const Real dx = arc.c.x - ox, dy = arc.c.y - oy, dz = arc.c.z - oz;
+    const Real k = dx * dx + dy * dy + dz * dz + rho2 - s * s;
+    const Real a = 2 * arc.rho * (dx * arc.e1.x + dy * arc.e1.y + dz * arc.e1.z);
+    const Real b = 2 * arc.rho * (dx * arc.e2.x + dy * arc.e2.y + dz * arc.e2.z);
+    const Real R2 = a * a + b * b;
+    const bool reaches = (k <= 0) | (k * k < R2);
+    const bool in = (!narrow) | ((k + a <= 0) & (b < 0)) | (k + a * cT + b * sT <= 0) |
+                    ((b <= 0) & (b * cT - a * sT >= 0) & (k * k < R2));
+    const bool free = (q != h0) & (q != h1) & (q != h2);
+    if (reaches & in & free) {
+      const Angle tq = first_entry(k, a, b, std::min(t.key, T), q == left);
+      if (tq.key < t.key) t = tq, id = q;
+    }
+  };
+  // The cells: each one's slots in the box, 3 bits a cell of one word, tested once 21 cells
+  // are in (a loop over a cell's own few would guess its end wrong about once a cell).
+  const Slots* cells[21];
+  Vec3 corner[21];
+  std::uint64_t bits = 0;
+  int n = 0;
+  auto flush = [&] {
+    for (; bits; bits &= bits - 1) {
+      const int b = __builtin_ctzll(bits), c = b / 3, k = b - 3 * c;
+      const Slots& sl = *cells[c];
+      test(sl.id[k], corner[c].x + sl.x[k], corner[c].y + sl.y[k], corner[c].z + sl.z[k], sl.r[k]);
+    }
+    n = 0;
+  };
+  for (int iy = iy0; iy <= iy1; ++iy) {
+    const Real cy = R_.y0 + iy * cs_;
+    const F4 yl = rel_lo(lo.y, cy), yh = rel_hi(hi.y, cy);
+    for (int ix = ix0; ix <= ix1; ++ix) {
+      const int top = std::min(iz1, col_top_[static_cast<std::size_t>(iy) * nx_ + ix]);
+      const Real cx = R_.x0 + ix * cs_;
+      const F4 xl = rel_lo(lo.x, cx), xh = rel_hi(hi.x, cx);
+      const Slots* col = &cells_[cell(ix, iy, 0)];
+      for (int iz = iz0; iz <= top; ++iz) {
+        const Slots& sl = col[iz];
+        const Real cz = z0_ + iz * cs_;
+        const std::uint64_t m = in_xyz(sl, xl, xh, yl, yh, rel_lo(lo.z, cz), rel_hi(hi.z, cz));
+        cells[n] = &sl;
+        corner[n] = {cx, cy, cz};
+        bits |= m << (3 * n);
+        for (std::int32_t q = sl.more; q >= 0; q = next_[q])
+          test(q, g_[q].x, g_[q].y, g_[q].z, g_[q].r);
+        if (++n == 21) flush();
+      }
+    }
+  }
+  flush();
 }
 
 Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
