@@ -341,18 +341,9 @@ class Packer {
   /// to it (widened by far more than their rounding).
   F4 rel_lo(Real lo, Real c) const { return splat(static_cast<float>(lo - c) - 1e-5f * fcs_); }
   F4 rel_hi(Real hi, Real c) const { return splat(static_cast<float>(hi - c) + 1e-5f * fcs_); }
-  /// Calls f(id, x, y, z, r) for the grains of cell s (low corner c) centred in the box of the
-  /// relative bounds given (and perhaps a few more: the callers test each grain exactly). Its
-  /// three slots are tested at once (4 floats from x, y and z: the fourth lane is the next
-  /// array's first), without a branch a grain: whether a grain lies in the box is a coin toss.
-  template <class F>
-  void visit(const Slots& s, const Vec3& c, unsigned m, F&& f) const {
-    for (; m; m &= m - 1) {
-      const int k = __builtin_ctz(m);
-      f(s.id[k], c.x + s.x[k], c.y + s.y[k], c.z + s.z[k], static_cast<Real>(s.r[k]));
-    }
-    for (std::int32_t q = s.more; q >= 0; q = next_[q]) f(q, g_[q].x, g_[q].y, g_[q].z, g_[q].r);
-  }
+  /// The slots of a cell centred in the box of the relative bounds given, as bits 0 to 2 (and
+  /// perhaps a few more: the callers test each grain exactly). The three are tested at once (4
+  /// floats from x, y and z: the fourth lane is the next array's first).
   static unsigned in_xy(const Slots& s, F4 xl, F4 xh, F4 yl, F4 yh) {
     const F4 x = load4(s.x), y = load4(s.y);
     return mask3((x >= xl) & (x <= xh) & (y >= yl) & (y <= yh));
@@ -404,22 +395,22 @@ int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real&
     for (int jx = jx0; jx <= jx1; ++jx)
       top = std::max(top, col_top_[static_cast<std::size_t>(jy) * nx_ + jx]);
   if (z_max < kInf) top = std::min(top, layer(z_max + r + R_.r_hi));
-  // layer by layer from the highest of the 3 x 3 columns down: every grain of layer iz and below
-  // lies under z0 + (iz + 1) cs, so none of them can be met higher than that plus two radii
-  // (the 3 x 3 columns' bounds of the square of a contact's reach about (x, y), once)
+  // the 3 x 3 columns, and the square of a contact's reach about (x, y) relative to each, once
+  // (their corners not in Vec3s, whose members are set to 0 first)
   const Real reach = r + R_.r_hi;
   int n_cols = 0;
   const Slots* col[9];
-  Vec3 corner[9];
+  Real cx_of[9], cy_of[9];
   F4 xl[9], xh[9], yl[9], yh[9];
   for (int jy = jy0; jy <= jy1; ++jy)
     for (int jx = jx0; jx <= jx1; ++jx, ++n_cols) {
       col[n_cols] = &cells_[cell(jx, jy, 0)];
-      corner[n_cols] = {R_.x0 + jx * cs_, R_.y0 + jy * cs_, 0};
-      xl[n_cols] = rel_lo(x - reach, corner[n_cols].x);
-      xh[n_cols] = rel_hi(x + reach, corner[n_cols].x);
-      yl[n_cols] = rel_lo(y - reach, corner[n_cols].y);
-      yh[n_cols] = rel_hi(y + reach, corner[n_cols].y);
+      cx_of[n_cols] = R_.x0 + jx * cs_;
+      cy_of[n_cols] = R_.y0 + jy * cs_;
+      xl[n_cols] = rel_lo(x - reach, cx_of[n_cols]);
+      xh[n_cols] = rel_hi(x + reach, cx_of[n_cols]);
+      yl[n_cols] = rel_lo(y - reach, cy_of[n_cols]);
+      yh[n_cols] = rel_hi(y + reach, cy_of[n_cols]);
     }
   auto meet = [&](std::int32_t k, Real ox, Real oy, Real oz, Real orad) {
     const Real dx = ox - x, dy = oy - y, s = r + orad;
@@ -431,12 +422,24 @@ int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real&
       hit = k;
     }
   };
-  for (int iz = top; iz >= 0 && z0_ + (iz + 1) * cs_ + r + R_.r_hi > best; --iz)
+  // layer by layer from the highest of the columns down: every grain of layer iz and below lies
+  // under z0 + (iz + 1) cs, so none of them can be met higher than that plus two radii. A
+  // layer's slots in the square gathered as bits of one word first (as in first_contact).
+  for (int iz = top; iz >= 0 && z0_ + (iz + 1) * cs_ + reach > best; --iz) {
+    const Real cz = z0_ + iz * cs_;
+    std::uint32_t bits = 0;
     for (int c = 0; c < n_cols; ++c) {
-      const Slots& s = col[c][iz];
-      corner[c].z = z0_ + iz * cs_;
-      visit(s, corner[c], in_xy(s, xl[c], xh[c], yl[c], yh[c]), meet);
+      const Slots& sl = col[c][iz];
+      bits |= in_xy(sl, xl[c], xh[c], yl[c], yh[c]) << (3 * c);
+      for (std::int32_t q = sl.more; q >= 0; q = next_[q])
+        meet(q, g_[q].x, g_[q].y, g_[q].z, g_[q].r);
     }
+    for (; bits; bits &= bits - 1) {
+      const int b = __builtin_ctz(bits), c = b / 3, k = b - 3 * c;
+      const Slots& sl = col[c][iz];
+      meet(sl.id[k], cx_of[c] + sl.x[k], cy_of[c] + sl.y[k], cz + sl.z[k], sl.r[k]);
+    }
+  }
   z = std::min(best, z_max);
   return hit;
 }
@@ -485,16 +488,6 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
     // the direction (-a, -b) in the sector [0, T]: at or above the t = 0 axis, and not past T
     return -b >= 0 && (-a) * sT - (-b) * cT >= 0 && k * k < a * a + b * b;
   };
-  // the walls
-  for (int j = 0; j < 4; ++j) {
-    const int q = kWall0 - j;
-    if (is_held(q)) continue;
-    Real k, a, b;
-    gap(q, arc, r, w, k, a, b);
-    if (!within(k, a, b)) continue;
-    const Angle tw = first_entry(k, a, b, T, q == left);
-    if (tw.key < t.key) t = tw, id = q;
-  }
   // the grains near the arc: the cells of its bounding box widened by a contact's reach; the
   // box holds the two ends and, on each axis, the circle's extreme point if the arc passes it
   const Vec3 p0 = arc.at(Angle::zero()), p1 = arc.at(arc.t_max);
@@ -513,6 +506,17 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
       else
         lo[ax] = std::min(lo[ax], e);
     }
+  }
+  // the walls the box comes near (n . p - w over the box: its least, for each wall's normal)
+  const Real nearest[4] = {lo.x, -hi.x, lo.y, -hi.y};
+  for (int j = 0; j < 4; ++j) {
+    const int q = kWall0 - j;
+    if (nearest[j] > w.wall_w[j] + 1e-6 * cs_ || is_held(q)) continue;
+    Real k, a, b;
+    gap(q, arc, r, w, k, a, b);
+    if (!within(k, a, b)) continue;
+    const Angle tw = first_entry(k, a, b, T, q == left);
+    if (tw.key < t.key) t = tw, id = q;
   }
   const Real reach = r + R_.r_hi;
   const Vec3 wide{reach, reach, reach};
@@ -546,14 +550,14 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
   // The cells: each one's slots in the box, 3 bits a cell of one word, tested once 21 cells
   // are in (a loop over a cell's own few would guess its end wrong about once a cell).
   const Slots* cells[21];
-  Vec3 corner[21];
+  Real cx_of[21], cy_of[21], cz_of[21];  // (not Vec3: its members are set to 0 first)
   std::uint64_t bits = 0;
   int n = 0;
   auto flush = [&] {
     for (; bits; bits &= bits - 1) {
       const int b = __builtin_ctzll(bits), c = b / 3, k = b - 3 * c;
       const Slots& sl = *cells[c];
-      test(sl.id[k], corner[c].x + sl.x[k], corner[c].y + sl.y[k], corner[c].z + sl.z[k], sl.r[k]);
+      test(sl.id[k], cx_of[c] + sl.x[k], cy_of[c] + sl.y[k], cz_of[c] + sl.z[k], sl.r[k]);
     }
     n = 0;
   };
@@ -570,7 +574,7 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
         const Real cz = z0_ + iz * cs_;
         const std::uint64_t m = in_xyz(sl, xl, xh, yl, yh, rel_lo(lo.z, cz), rel_hi(hi.z, cz));
         cells[n] = &sl;
-        corner[n] = {cx, cy, cz};
+        cx_of[n] = cx, cy_of[n] = cy, cz_of[n] = cz;
         bits |= m << (3 * n);
         for (std::int32_t q = sl.more; q >= 0; q = next_[q])
           test(q, g_[q].x, g_[q].y, g_[q].z, g_[q].r);
