@@ -548,16 +548,25 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
     }
   };
   // The cells: each one's slots in the box, 3 bits a cell of one word, tested once 21 cells
-  // are in (a loop over a cell's own few would guess its end wrong about once a cell).
+  // are in (a loop over a cell's own few would guess its end wrong about once a cell). The
+  // layers' bounds once (an arc's box, at most 4 cells high, spans at most 5 layers).
+  constexpr int kLayers = 8;
+  F4 zl[kLayers], zh[kLayers];
+  for (int i = 0; i < std::min(iz1 - iz0 + 1, kLayers); ++i) {
+    zl[i] = rel_lo(lo.z, z0_ + (iz0 + i) * cs_);
+    zh[i] = rel_hi(hi.z, z0_ + (iz0 + i) * cs_);
+  }
   const Slots* cells[21];
-  Real cx_of[21], cy_of[21], cz_of[21];  // (not Vec3: its members are set to 0 first)
+  Real cx_of[21], cy_of[21];  // (not Vec3: its members are set to 0 first)
+  int iz_of[21];
   std::uint64_t bits = 0;
   int n = 0;
   auto flush = [&] {
     for (; bits; bits &= bits - 1) {
       const int b = __builtin_ctzll(bits), c = b / 3, k = b - 3 * c;
       const Slots& sl = *cells[c];
-      test(sl.id[k], cx_of[c] + sl.x[k], cy_of[c] + sl.y[k], cz_of[c] + sl.z[k], sl.r[k]);
+      test(sl.id[k], cx_of[c] + sl.x[k], cy_of[c] + sl.y[k], z0_ + iz_of[c] * cs_ + sl.z[k],
+           sl.r[k]);
     }
     n = 0;
   };
@@ -571,11 +580,12 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
       const Slots* col = &cells_[cell(ix, iy, 0)];
       for (int iz = iz0; iz <= top; ++iz) {
         const Slots& sl = col[iz];
-        const Real cz = z0_ + iz * cs_;
-        const std::uint64_t m = in_xyz(sl, xl, xh, yl, yh, rel_lo(lo.z, cz), rel_hi(hi.z, cz));
+        const int i = iz - iz0;
+        const F4 l = i < kLayers ? zl[i] : rel_lo(lo.z, z0_ + iz * cs_);
+        const F4 h = i < kLayers ? zh[i] : rel_hi(hi.z, z0_ + iz * cs_);
         cells[n] = &sl;
-        cx_of[n] = cx, cy_of[n] = cy, cz_of[n] = cz;
-        bits |= m << (3 * n);
+        cx_of[n] = cx, cy_of[n] = cy, iz_of[n] = iz;
+        bits |= static_cast<std::uint64_t>(in_xyz(sl, xl, xh, yl, yh, l, h)) << (3 * n);
         for (std::int32_t q = sl.more; q >= 0; q = next_[q])
           test(q, g_[q].x, g_[q].y, g_[q].z, g_[q].r);
         if (++n == 21) flush();
