@@ -831,7 +831,8 @@ void Packer::run_tile(Tile& tile, std::vector<std::int32_t>& open) {
       continue;
     }
     if (d == Drop::Rest) {
-      if (p.z > top_.value(p.x, p.y) - r) {
+      // (the bilinear top lies at or above its lowest sample: most grains need no look-up)
+      if (p.z > top_.lo - r && p.z > top_.value(p.x, p.y) - r) {
         ++tile.discarded;
       } else {
         if (R_.blocked) {
