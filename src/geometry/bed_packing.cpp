@@ -295,15 +295,16 @@ class Packer {
   // settle), or Leave (it would read columns beyond w's)
   Drop drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const;
   // the highest contact below z_max on the vertical line at (x, y): a grain, or kFloor
-  int fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real& z) const;
+  int fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real& z, Cell& met) const;
   Real floor_rest(Real x, Real y, Real r) const;
   // the first contact met along the arc (not one of `held`), and where (t); kInf when none.
   // `left`: the contact just left, not met again before it has opened
   void first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Walk& w,
-                     Angle& t, int& id) const;
-  Vec3 normal(int id, const Vec3& p, Real r) const;
-  // gap along the arc of contact id: k + a cos t + b sin t
-  void gap(int id, const Arc& arc, Real r, const Walk& w, Real& k, Real& a, Real& b) const;
+                     Angle& t, int& id, Cell& met) const;
+  // the unit normal at p of contact id (a grain at o, or a wall)
+  Vec3 normal(int id, const Cell& o, const Vec3& p, Real r) const;
+  // gap along the arc of wall j: k + a cos t + b sin t
+  void wall_gap(int j, const Arc& arc, const Walk& w, Real& k, Real& a, Real& b) const;
   void insert(std::int32_t id, const Vec3& p, Real r);
 
   // (clamped before the cast, which then truncates as floor would: std::floor is a libm call
@@ -383,7 +384,8 @@ Real Packer::floor_rest(Real x, Real y, Real r) const {
   return best;
 }
 
-int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real& z) const {
+int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real& z,
+                 Cell& met) const {
   Real best = floor_rest(x, y, r);
   int hit = kFloor;
   const int cx = column_x(x), cy = column_y(y);
@@ -420,6 +422,7 @@ int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real&
     if (zc > best && zc < z_max - 1e-10 * cs_) {
       best = zc;
       hit = k;
+      met = {ox, oy, oz, orad};
     }
   };
   // layer by layer from the highest of the columns down: every grain of layer iz and below lies
@@ -444,31 +447,20 @@ int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real&
   return hit;
 }
 
-Vec3 Packer::normal(int id, const Vec3& p, Real r) const {
+Vec3 Packer::normal(int id, const Cell& o, const Vec3& p, Real r) const {
   if (is_wall(id)) return wall_n_[wall_index(id)];
-  const Cell& o = g_[id];
   return (p - Vec3{o.x, o.y, o.z}) / (r + o.r);
 }
 
-void Packer::gap(int id, const Arc& arc, Real r, const Walk& w, Real& k, Real& a, Real& b) const {
-  if (is_wall(id)) {
-    const int j = wall_index(id);
-    const Vec3& n = wall_n_[j];
-    k = dot(n, arc.c) - w.wall_w[j];
-    a = arc.rho * dot(n, arc.e1);
-    b = arc.rho * dot(n, arc.e2);
-    return;
-  }
-  const Cell& o = g_[id];
-  const Vec3 d = arc.c - Vec3{o.x, o.y, o.z};
-  const Real s = r + o.r;
-  k = dot(d, d) + arc.rho * arc.rho - s * s;
-  a = 2 * arc.rho * dot(d, arc.e1);
-  b = 2 * arc.rho * dot(d, arc.e2);
+void Packer::wall_gap(int j, const Arc& arc, const Walk& w, Real& k, Real& a, Real& b) const {
+  const Vec3& n = wall_n_[j];
+  k = dot(n, arc.c) - w.wall_w[j];
+  a = arc.rho * dot(n, arc.e1);
+  b = arc.rho * dot(n, arc.e2);
 }
 
 void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Walk& w,
-                           Angle& t, int& id) const {
+                           Angle& t, int& id, Cell& met) const {
   t = Angle::none();
   id = kFloor;
   auto is_held = [&](int q) {
@@ -513,7 +505,7 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
     const int q = kWall0 - j;
     if (nearest[j] > w.wall_w[j] + 1e-6 * cs_ || is_held(q)) continue;
     Real k, a, b;
-    gap(q, arc, r, w, k, a, b);
+    wall_gap(j, arc, w, k, a, b);
     if (!within(k, a, b)) continue;
     const Angle tw = first_entry(k, a, b, T, q == left);
     if (tw.key < t.key) t = tw, id = q;
@@ -544,7 +536,7 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
     const bool free = (q != h0) & (q != h1) & (q != h2);
     if (reaches & in & free) {
       const Angle tq = first_entry(k, a, b, std::min(t.key, T), q == left);
-      if (tq.key < t.key) t = tq, id = q;
+      if (tq.key < t.key) t = tq, id = q, met = {ox, oy, oz, orad};
     }
   };
   // The cells: each one's slots in the box, 3 bits a cell of one word, tested once 21 cells
@@ -599,7 +591,9 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
   w.wall_w = {R_.x0 + r, -(R_.x1 - r), R_.y0 + r, -(R_.y1 - r)};
   w.out = false;
   Vec3 p{x, y, kInf};
+  // the contacts holding the grain, and (for grains) where they are, as the grid gave them
   int held[3];
+  Cell at[3];
   int n_held = 0;
   int exclude = kFloor;
   const Vec3 ez{0, 0, 1};
@@ -611,7 +605,7 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
     for (int h = 0; h < n_held; ++h) any_grain = any_grain || !is_wall(held[h]);
     if (!any_grain) {
       Real z;
-      const int hit = fall(p.x, p.y, r, p.z, exclude, w, z);
+      const int hit = fall(p.x, p.y, r, p.z, exclude, w, z, at[0]);
       if (w.out) return Drop::Leave;
       p.z = z;
       if (hit == kFloor) {
@@ -629,7 +623,7 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
     Arc arc;
     int other = kFloor;
     if (n_held == 1) {
-      const Cell& o = g_[held[0]];
+      const Cell& o = at[0];
       const Vec3 a{o.x, o.y, o.z};
       const Real s = r + o.r;
       Vec3 e1 = p - a;
@@ -655,9 +649,9 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
       if (arc.t_max.is_none()) arc.t_max = Angle::of(0, 1);       // (pi / 2)
       other = kFloor - 1;  // (the equator)
     } else {
-      int gi = held[0], wj = held[1];
-      if (is_wall(gi)) std::swap(gi, wj);
-      const Cell& o = g_[gi];
+      const int ig = is_wall(held[0]) ? 1 : 0;  // (a grain; the other a grain or a wall)
+      const int wj = held[1 - ig];
+      const Cell& o = at[ig];
       const Vec3 a{o.x, o.y, o.z};
       const Real sa = r + o.r;
       Vec3 u;
@@ -668,7 +662,7 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
         along = w.wall_w[j] - dot(u, a);
         rho2 = sa * sa - along * along;
       } else {
-        const Cell& ob = g_[wj];
+        const Cell& ob = at[1 - ig];
         u = Vec3{ob.x, ob.y, ob.z} - a;
         const Real L = norm(u);
         u = u / L;
@@ -689,7 +683,7 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
       arc.e2 = e2;
       // the support each contact gives: N_q ~ n_q.ez - k n_other.ez with k = n_0 . n_1, constant
       // on the circle; n_q.ez = (c.z - x_q.z + rho (e1.z cos t + e2.z sin t)) / s_q for a grain
-      const Vec3 n0 = normal(held[0], p, r), n1 = normal(held[1], p, r);
+      const Vec3 n0 = normal(held[0], at[0], p, r), n1 = normal(held[1], at[1], p, r);
       const Real kk = dot(n0, n1);
       Real zk[2], za[2], zb[2];
       for (int h = 0; h < 2; ++h) {
@@ -697,7 +691,7 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
           zk[h] = za[h] = zb[h] = 0;
           continue;
         }
-        const Cell& q = g_[held[h]];
+        const Cell& q = at[h];
         const Real s = r + q.r;
         zk[h] = (arc.c.z - q.z) / s;
         za[h] = arc.rho * e1.z / s;
@@ -724,7 +718,8 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
     // (at a lift-off the grain moves along the contact it leaves, and rounding may make it
     // close: met again at once, it would be left again, over and over; on one sphere the path
     // leaves it for good, a great circle tangent to a cap smaller than a hemisphere)
-    first_contact(arc, r, held, n_held, exclude, w, t, hit);
+    Cell met;
+    first_contact(arc, r, held, n_held, exclude, w, t, hit, met);
     if (w.out) return Drop::Leave;
     if (t.is_none()) t = arc.t_max;
     Vec3 q = arc.at(t);
@@ -746,17 +741,19 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
         exclude = held[0];
         n_held = 0;
       } else {
-        const int keep = held[0] == other ? held[1] : held[0];
+        const int keep = held[0] == other ? 1 : 0;
         exclude = other;
-        held[0] = keep;
+        held[0] = held[keep];
+        at[0] = at[keep];
         n_held = 1;
       }
       continue;
     }
-    held[n_held++] = hit;
+    held[n_held] = hit;
+    at[n_held++] = met;
     // which of the contacts now touching hold it: all three (at rest), two (a groove), one or none
     Vec3 n[3];
-    for (int h = 0; h < n_held; ++h) n[h] = normal(held[h], p, r);
+    for (int h = 0; h < n_held; ++h) n[h] = normal(held[h], at[h], p, r);
     const int mask = choose_supports(n, n_held);
     if (mask < 0) return Drop::Discard;
     if (n_held == 3 && mask == 7) {
@@ -767,7 +764,7 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
     exclude = kFloor;
     for (int h = 0; h < n_held; ++h) {
       if (mask >> h & 1)
-        held[kept++] = held[h];
+        held[kept] = held[h], at[kept++] = at[h];
       else
         exclude = held[h];  // (for a fall and the next arc: the contact it leaves)
     }
@@ -815,6 +812,23 @@ void Packer::run_tile(Tile& tile, std::vector<std::int32_t>& open) {
     const int ix = c % nx_, iy = c / nx_;
     const Real r = R_.r_hi > R_.r_lo ? rng.uniform(R_.r_lo, R_.r_hi) : R_.r_lo;
     const Real ux = rng.uniform(), uy = rng.uniform();
+    {
+      // (the next drop's column, from a copy of the stream, and the cells its fall reads first
+      // asked for now: far from this drop's, they would be read from memory, not the cache)
+      Rng peek = rng;
+      const int nc =
+          open[std::min(static_cast<std::size_t>(peek.uniform() * static_cast<Real>(open.size())),
+                        open.size() - 1)];
+      const int top = col_top_[static_cast<std::size_t>(nc)];
+      const int jx = nc % nx_, jy = nc / nx_;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int qx = std::clamp(jx + dx, 0, nx_ - 1), qy = std::clamp(jy + dy, 0, ny_ - 1);
+          const Slots* col = &cells_[cell(qx, qy, 0)];
+          __builtin_prefetch(col + std::max(top, 0));
+          __builtin_prefetch(col + std::max(top - 1, 0));
+        }
+    }
     // a point of the cell where the grain lies inside the footprint
     const Real xa = std::max(R_.x0 + ix * cs_, R_.x0 + r),
                xb = std::min(R_.x0 + (ix + 1) * cs_, R_.x1 - r);
