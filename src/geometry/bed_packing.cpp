@@ -821,8 +821,8 @@ void Packer::run_tile(Tile& tile, std::vector<std::int32_t>& open) {
                         open.size() - 1)];
       const int top = col_top_[static_cast<std::size_t>(nc)];
       const int jx = nc % nx_, jy = nc / nx_;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -2; dy <= 2; ++dy)
+        for (int dx = -2; dx <= 2; ++dx) {
           const int qx = std::clamp(jx + dx, 0, nx_ - 1), qy = std::clamp(jy + dy, 0, ny_ - 1);
           const Slots* col = &cells_[cell(qx, qy, 0)];
           __builtin_prefetch(col + std::max(top, 0));
