@@ -30,10 +30,9 @@ constexpr int kMaxArcs = 64;
 /// The packing fraction estimate_bed_grains assumes.
 constexpr Real kEstimatePacking = 0.60;
 /// Tiles are kTile columns wide; a drop reads columns at most kMargin beyond its tile's (2 kMargin
-/// < kTile + 1, see run), and a tile makes a drop per kDropsPerColumn of its open columns a phase.
+/// < kTile + 1, see run).
 constexpr int kTile = 16;
 constexpr int kMargin = 7;
-constexpr int kDropsPerColumn = 2;
 
 /// A seed for stream k of a round (splitmix64 of the three).
 std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t round, std::uint64_t k) {
@@ -982,7 +981,10 @@ BedPacking Packer::run() {
             for (int ix = t.ix0; ix <= t.ix1; ++ix)
               n += open_[static_cast<std::size_t>(iy) * nx_ + ix];
           if (n == 0) continue;
-          t.drops = (n + kDropsPerColumn - 1) / kDropsPerColumn;
+          // (a drop per open cell, about a layer: half a layer made the bed the same, and twice
+          // the phases, each ending when its last tile does, which costs much when another
+          // program holds a core)
+          t.drops = n;
           t.base = static_cast<std::int32_t>(next_id);
           t.seed = mix_seed(R_.seed, round, static_cast<std::uint64_t>(j * tx + i) + 1);
           next_id += t.drops;

@@ -27,7 +27,7 @@
 //
 // The order of the drops: in rounds. Each round cuts the footprint into tiles of 16 x 16 cells,
 // shifted at random (no seam stays), coloured as a 2 x 2 checkerboard; colour after colour (in a
-// random order), each tile with an open cell makes one drop per two of its open cells, from its
+// random order), each tile with an open cell makes as many drops as it has open cells, from its
 // own random stream. A drop far from another commutes with it: a grain comes to rest more than
 // 2 d from where it was dropped in one drop of 600, more than 3 d in one of 30,000, none 4 d in
 // 136,000 (2026-11-27); one that would read cells more than 7 beyond its tile is not made (none
@@ -38,7 +38,7 @@
 // bed is as random as with one global order (2026-11-27, 300,000 grains, two seeds each): the
 // same coordination (6.00), Steinhardt Q6 of the bulk 0.009-0.012 globally and 0.304 averaged
 // over grains (0.575 in a crystal), contact normals even in azimuth, and slabs 2 d wide across
-// the bulk vary by 0.003 in packing fraction (0.005-0.008 with the generator of 2026-11-26:
+// the bulk vary by 0.003-0.004 in packing fraction (0.005-0.008 with the generator of 2026-11-26:
 // one global order, and 2 % of its drops lost at a lift-off).
 //
 // Speed (docs/performance.md, 2026-11-27): a uniform grid of cells 2 r_hi wide, filed column by
