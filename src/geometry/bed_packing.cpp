@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -850,8 +851,14 @@ void Packer::run_tile(Tile& tile, std::vector<std::int32_t>& open) {
       } else {
         if (R_.blocked) {
           // (the caller's function need not be safe to call from two threads at once)
+          std::exception_ptr failed;  // (nor may an exception leave a critical section)
 #pragma omp critical(sandflow_bed_blocked)
-          blocked = R_.blocked(p, r);
+          try {
+            blocked = R_.blocked(p, r);
+          } catch (...) {
+            failed = std::current_exception();
+          }
+          if (failed) std::rethrow_exception(failed);
         }
         if (blocked) {
           ++tile.discarded;
@@ -997,10 +1004,19 @@ BedPacking Packer::run() {
       // tiles of one colour are a tile apart, farther than two margins: their drops read and
       // write disjoint columns, so the bed does not depend on the threads nor their order
       const auto n_tiles = static_cast<std::int64_t>(tiles.size());
+      // (an exception of `blocked` must not leave the parallel loop: kept, and thrown after it)
+      std::exception_ptr failed;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1 && n_tiles > 1)
-      for (std::int64_t k = 0; k < n_tiles; ++k)
-        run_tile(tiles[static_cast<std::size_t>(k)],
-                 scratch[static_cast<std::size_t>(omp_get_thread_num())]);
+      for (std::int64_t k = 0; k < n_tiles; ++k) {
+        try {
+          run_tile(tiles[static_cast<std::size_t>(k)],
+                   scratch[static_cast<std::size_t>(omp_get_thread_num())]);
+        } catch (...) {
+#pragma omp critical(sandflow_bed_failed)
+          if (!failed) failed = std::current_exception();
+        }
+      }
+      if (failed) std::rethrow_exception(failed);
       for (const Tile& t : tiles) {
         out.drops += t.made;
         out.discarded += t.discarded;

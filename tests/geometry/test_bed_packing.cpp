@@ -1,7 +1,8 @@
 // The bed generator (geometry/bed_packing.hpp): the packing fraction of its bulk, exact contacts
 // (a brute-force check of every pair), grains inside the footprint, on the floor and under the
 // top (flat, a heightmap floor, a sloped top), an obstacle respected, every grain stably supported,
-// the same bed for the same seed and for 1 and 2 threads, and the grain limit.
+// the same bed for the same seed and for 1 and 2 threads, an exception of `blocked` passed on, and
+// the grain limit.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -195,6 +196,19 @@ TEST(BedPacking, OneAndTwoThreadsGiveTheSameBed) {
   ASSERT_EQ(a.size(), b.size());
   EXPECT_EQ(a.drops, b.drops);
   EXPECT_TRUE(a.x == b.x && a.r == b.r);
+}
+
+TEST(BedPacking, AnExceptionOfBlockedReachesTheCaller) {
+  // thrown on a tile's thread, it is kept and thrown again once the tiles of its phase are done
+  for (int threads : {1, 2}) {
+    BedRegion R = flat_bed(40, 4);
+    R.threads = threads;
+    R.blocked = [](const Vec3& c, Real) -> bool {
+      if (c.z > 2 * kD) throw std::runtime_error("blocked failed");
+      return false;
+    };
+    EXPECT_THROW(pack_bed(R), std::runtime_error) << threads << " threads";
+  }
 }
 
 TEST(BedPacking, RefusesARegionBeyondItsLimitAndMalformedInput) {
