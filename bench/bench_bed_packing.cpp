@@ -1,10 +1,11 @@
-// The bed generator (src/geometry/bed_packing.hpp) on one core: a flat bed of equal grains (or
-// of radii spread by --spread) on a flat floor, sized for about --grains grains. Prints grains,
+// The bed generator (src/geometry/bed_packing.hpp) on --threads threads (default 1): a flat bed
+// of equal grains (or of radii spread by --spread) on a flat floor, sized for about --grains
+// grains. Prints grains,
 // seconds, grains per second, the packing fraction of the bulk (a box 5 diameters inside the
 // floor, the walls and the top) and the largest overlap over a diameter. Not a test: timings go
 // to docs/performance.md.
 //
-//   bench_bed_packing [--grains N] [--spread S] [--seed K] [--depth D]
+//   bench_bed_packing [--grains N] [--spread S] [--seed K] [--depth D] [--threads T]
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +20,7 @@ using namespace sandflow;
 
 int main(int argc, char** argv) {
   double grains = 1e6, spread = 0, depth_d = 22;
+  int threads = 1;
   std::uint64_t seed = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i];
@@ -31,9 +33,12 @@ int main(int argc, char** argv) {
       seed = static_cast<std::uint64_t>(v);
     else if (k == "--depth")
       depth_d = v;
+    else if (k == "--threads")
+      threads = static_cast<int>(v);
     else {
       std::fprintf(stderr,
-                   "usage: bench_bed_packing [--grains N] [--spread S] [--seed K] [--depth D]\n");
+                   "usage: bench_bed_packing [--grains N] [--spread S] [--seed K] [--depth D] "
+                   "[--threads T]\n");
       return 2;
     }
   }
@@ -50,6 +55,7 @@ int main(int argc, char** argv) {
   region.r_lo = 0.5 * d * (1 - spread);
   region.r_hi = 0.5 * d * (1 + spread);
   region.seed = seed;
+  region.threads = threads;
 
   // a small warm-up bed (page faults, caches), then the timed one
   {
@@ -66,9 +72,11 @@ int main(int argc, char** argv) {
   const double m = 5 * d;
   const double phi = packing_fraction_in(bed.x, bed.r, {m, m, m}, {side - m, side - m, height - m});
   const double overlap = largest_overlap(bed.x, bed.r);
-  std::printf("footprint %.3f x %.3f m, top %.3f m, d = %.3f m, spread %.2f, seed %llu\n", side,
-              side, height, d, spread, static_cast<unsigned long long>(seed));
-  // (the machines are shared: the CPU time of this one thread is printed beside the wall time)
+  std::printf(
+      "footprint %.3f x %.3f m, top %.3f m, d = %.3f m, spread %.2f, seed %llu, threads %d\n", side,
+      side, height, d, spread, static_cast<unsigned long long>(seed), threads);
+  // (the machines are shared: the CPU time of the threads, summed, is printed beside the wall
+  // time)
   std::printf(
       "grains=%zu drops=%lld discarded=%lld seconds=%.3f cpu_seconds=%.3f "
       "grains_per_s=%.0f grains_per_cpu_s=%.0f\n",

@@ -3,9 +3,16 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <exception>
 #include <limits>
 #include <stdexcept>
 #include <string>
+
+#include <omp.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "core/rng.hpp"
 
@@ -16,13 +23,25 @@ namespace {
 constexpr Real kInf = std::numeric_limits<Real>::infinity();
 constexpr Real kTwoPi = 2 * kPi;
 /// The most samples of the floor and of the top: 2^22 each (32 MiB); a larger footprint is
-/// sampled more coarsely than r_lo.
+/// sampled more coarsely than r_lo / 2.
 constexpr Real kMaxMapSamples = 4194304.0;
 /// A grain that has not come to rest after this many arcs is discarded (rounding can make a
 /// grain take and leave the same contact over and over; real sequences take a handful).
 constexpr int kMaxArcs = 64;
 /// The packing fraction estimate_bed_grains assumes.
 constexpr Real kEstimatePacking = 0.60;
+/// Tiles are kTile columns wide; a drop reads columns at most kMargin beyond its tile's (2 kMargin
+/// < kTile + 1, see run).
+constexpr int kTile = 16;
+constexpr int kMargin = 7;
+
+/// A seed for stream k of a round (splitmix64 of the three).
+std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t round, std::uint64_t k) {
+  std::uint64_t z = seed ^ (round + 1) * 0x9e3779b97f4a7c15ULL ^ k * 0xd1b54a32d192ed03ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
 
 // ---- The floor and the top, sampled ---------------------------------------------------------
 
@@ -55,7 +74,9 @@ struct Map {
 Map sample_map(const BedRegion& R, const std::function<Real(Real, Real)>& f, const char* what) {
   Map m;
   const Real w = R.x1 - R.x0, h = R.y1 - R.y0;
-  Real spacing = R.r_lo;
+  // (r_lo / 2: between samples the bilinear floor sags h^2 |f''| / 8 under a bump, and at r_lo
+  // grains of the wavy floor of the tests reached 1.1 % of d into it; 0.5 % at r_lo / 2)
+  Real spacing = R.r_lo / 2;
   const Real n = (w / spacing + 2) * (h / spacing + 2);
   if (n > kMaxMapSamples) spacing *= std::sqrt(n / kMaxMapSamples);
   m.mx = std::max(2, static_cast<int>(std::ceil(w / spacing)) + 1);
@@ -110,35 +131,79 @@ Real estimate_from_maps(const BedRegion& R, const Map& floor, const Map& top) {
 
 // ---- Arcs and the events along them -----------------------------------------------------------
 
-/// The first t in [0, t_max] where g(t) = k + a cos t + b sin t falls through 0, or kInf. A
-/// contact touching now (g(0) <= 0, to rounding) and closing (g'(0) = b < 0) is met at once; one
-/// touching and opening is met again only after it has opened.
-inline Real first_entry(Real k, Real a, Real b, Real t_max) {
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// Four floats at once (GCC and Clang vectors: SSE2 on x86-64, NEON on ARM).
+using F4 = float __attribute__((vector_size(16)));
+using I4 = std::int32_t __attribute__((vector_size(16)));
+inline F4 splat(float v) {
+  return F4{v, v, v, v};
+}
+inline F4 load4(const float* p) {
+  F4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+/// Bit k set for each lane k < 3 of `in` that is true.
+inline unsigned mask3(I4 in) {
+#if defined(__SSE2__)
+  return static_cast<unsigned>(_mm_movemask_ps(reinterpret_cast<__m128>(in))) & 7u;
+#else
+  return (in[0] & 1u) | (in[1] & 2u) | (in[2] & 4u);
+#endif
+}
+
+/// An angle t of [0, 2 pi) along an arc as its cosine and sine, with a key that orders angles
+/// without trigonometry: the "diamond angle", 0 to 4, and about t near 0 (1 - cos t would lose
+/// small angles). A key of 5: none.
+struct Angle {
+  Real c = 1, s = 0, key = 5;
+  static Angle of(Real c, Real s) {
+    Real k;
+    if (s >= 0)
+      k = c >= 0 ? s / (c + s) : 1 - c / (s - c);
+    else
+      k = c < 0 ? 2 - s / (-c - s) : 3 + c / (c - s);
+    return {c, s, k};
+  }
+  static Angle zero() { return {1, 0, 0}; }
+  static Angle none() { return {1, 0, 5}; }
+  bool is_none() const { return key > 4.5; }
+  Real radians() const {
+    const Real t = std::atan2(s, c);
+    return t < 0 ? t + kTwoPi : t;
+  }
+};
+
+/// The first angle up to the key `key_max` where g(t) = k + a cos t + b sin t falls through 0, or
+/// none. A contact touching now (g(0) <= 0, to rounding) and closing (g'(0) = b < 0) is met at
+/// once; one touching and opening is met again only after it has opened, and so is one the grain
+/// is `leaving` (it has just left it: see first_contact).
+inline Angle first_entry(Real k, Real a, Real b, Real key_max, bool leaving = false) {
   const Real g0 = k + a;
   const Real r2 = a * a + b * b;
-  const Real r = std::sqrt(r2);
-  // (closing slower than choose_supports' tolerance is leaving, as choose_supports decided: a
-  // contact the grain has just left at a lift-off, where it moves along it)
-  if (g0 <= 0 && b < -1e-9 * r) return 0;
-  if (k * k >= r2) return kInf;  // g keeps its sign
-  // g = k + r cos(t - phi) falls through 0 where t - phi = acos(-k / r); into (0, 2 pi] (t lies
-  // within (-pi, 2 pi]: no floor, a libm call without SSE4.1)
-  Real t = std::atan2(b, a) + std::acos(-k / r);
-  if (t > kTwoPi) t -= kTwoPi;
+  // (closing slower than choose_supports' tolerance is leaving, as choose_supports decided)
+  if (g0 <= 0 && b < -1e-9 * std::sqrt(r2) && !leaving) return Angle::zero();
+  if (k * k >= r2) return Angle::none();  // g keeps its sign
+  // g = k + R cos(t - phi) falls through 0 at t = phi + theta, cos theta = -k / R: the sum of the
+  // two angles by their cosines and sines, (a, b) / R and (-k, q) / R (no atan2 nor acos)
+  const Real q = std::sqrt(r2 - k * k);
+  const Angle t = Angle::of((-a * k - b * q) / r2, (a * q - b * k) / r2);
   if (g0 > 0) {
     // the root lies ahead: a hair behind 0 is rounding
-    if (t < 0) t = t > -1e-6 ? 0 : t + kTwoPi;
-  } else if (t < 1e-6) {
-    t += kTwoPi;  // touching and opening: the root just passed (or rounding put it a hair ahead)
+    if (t.key > 4 - 1e-6) return Angle::zero();
+  } else if (t.key < 1e-6) {
+    return Angle::none();  // touching and opening: the root just passed (or rounding put it ahead)
   }
-  return t <= t_max ? t : kInf;
+  return t.key <= key_max ? t : Angle::none();
 }
 
 /// A circle c + rho (cos t e1 + sin t e2), followed from t = 0 (the grain's centre now) down.
 struct Arc {
   Vec3 c, e1, e2;
   Real rho = 0;
-  Real t_max = 0;
+  Angle t_max;
+  Vec3 at(const Angle& t) const { return c + (e1 * t.c + e2 * t.s) * rho; }
   Vec3 at(Real t) const { return c + (e1 * std::cos(t) + e2 * std::sin(t)) * rho; }
 };
 
@@ -193,23 +258,54 @@ int choose_supports(const Vec3* n, int m) {
   return -1;
 }
 
+/// The state of one drop: the walls' planes for its grain (n . p >= w), and the columns it may
+/// read, those of its tile widened by kMargin (`out` once it would read beyond them).
+struct Walk {
+  std::array<Real, 4> wall_w{};
+  int ix0 = 0, ix1 = 0, iy0 = 0, iy1 = 0;
+  bool out = false;
+  bool reads(int jx0, int jx1, int jy0, int jy1) {
+    out = out || jx0 < ix0 || jx1 > ix1 || jy0 < iy0 || jy1 > iy1;
+    return !out;
+  }
+};
+
+enum class Drop { Rest, Discard, Leave };
+
+/// A tile's drops of one phase: its columns, the first of the grain ids reserved for its drops,
+/// how many, and its random stream.
+struct Tile {
+  int ix0, ix1, iy0, iy1;  // (inclusive)
+  std::int32_t base = 0;
+  std::int32_t drops = 0;
+  std::uint64_t seed = 0;
+  // the outcome
+  std::int64_t made = 0, discarded = 0, blocked = 0, kept = 0, closed = 0;
+};
+
 class Packer {
  public:
   explicit Packer(const BedRegion& R) : R_(R) {}
   BedPacking run();
 
  private:
-  // where a grain of radius r dropped at (x, y) comes to rest; false: discarded
-  bool drop(Real x, Real y, Real r, Vec3& rest);
+  // the drops of one tile (see run)
+  void run_tile(Tile& tile, std::vector<std::int32_t>& open);
+  // where a grain of radius r dropped at (x, y) comes to rest (Rest), or Discard (it did not
+  // settle), or Leave (it would read columns beyond w's)
+  Drop drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const;
   // the highest contact below z_max on the vertical line at (x, y): a grain, or kFloor
-  int fall(Real x, Real y, Real r, Real z_max, int exclude, Real& z) const;
+  int fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real& z, Cell& met) const;
   Real floor_rest(Real x, Real y, Real r) const;
-  // the first contact met along the arc (not one of `held`), and where (t); kInf when none
-  void first_contact(const Arc& arc, Real r, const int* held, int n_held, Real& t, int& id) const;
-  Vec3 normal(int id, const Vec3& p, Real r) const;
-  // gap along the arc of contact id: k + a cos t + b sin t
-  void gap(int id, const Arc& arc, Real r, Real& k, Real& a, Real& b) const;
-  void insert(const Vec3& p, Real r);
+  // the first contact met along the arc (not one of `held`), and where (t); kInf when none.
+  // `left`: the contact just left, not met again before it has opened
+  void first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Walk& w,
+                     Angle& t, int& id, Cell& met) const;
+  // the unit normal at p of contact id (a grain at o, or a wall)
+  Vec3 normal(int id, const Cell& o, const Vec3& p, Real r) const;
+  // gap along the arc of wall j: k + a cos t + b sin t
+  void wall_gap(int j, const Arc& arc, const Walk& w, Real& k, Real& a, Real& b) const;
+  void insert(std::int32_t id, const Vec3& p, Real r);
 
   // (clamped before the cast, which then truncates as floor would: std::floor is a libm call
   // without SSE4.1, and these run in the innermost loops)
@@ -227,36 +323,43 @@ class Packer {
   Map floor_, top_;
   bool flat_floor_ = false;
   Real cs_ = 0, inv_cs_ = 0, z0_ = 0;
+  float fcs_ = 0;
   int nx_ = 1, ny_ = 1, nz_ = 1;
   // Each cell holds its first three grains inline, in one cache line (coordinates as floats
   // relative to the cell's low corner: within 6e-8 of its width, far below the 1e-6 d the
   // contacts are exact to), and chains the rest through next_ (rare: a cell holds 1.15 grains
   // on average at this packing). A scan reads a cell's line, not a list spread over memory.
+  // An empty slot's coordinates are NaN, which no box holds.
   struct alignas(64) Slots {
-    float x[3], y[3], z[3], r[3];
+    float x[3] = {kNaN, kNaN, kNaN}, y[3] = {kNaN, kNaN, kNaN}, z[3] = {kNaN, kNaN, kNaN}, r[3];
     std::int32_t id[3] = {-1, -1, -1};
     std::int32_t more = -1;
   };
   static_assert(sizeof(Slots) == 64);
   std::vector<Slots> cells_;
   std::vector<std::int32_t> next_;
-  /// Calls f(id, x, y, z, r) for every grain of cell (ix, iy, iz).
-  template <class F>
-  void visit(int ix, int iy, int iz, F&& f) const {
-    const Slots& s = cells_[cell(ix, iy, iz)];
-    const Real cx = R_.x0 + ix * cs_, cy = R_.y0 + iy * cs_, cz = z0_ + iz * cs_;
-    for (int k = 0; k < 3; ++k) {
-      if (s.id[k] < 0) return;
-      f(s.id[k], cx + s.x[k], cy + s.y[k], cz + s.z[k], static_cast<Real>(s.r[k]));
-    }
-    for (std::int32_t q = s.more; q >= 0; q = next_[q]) f(q, g_[q].x, g_[q].y, g_[q].z, g_[q].r);
+  /// The bounds [lo, hi] of a box about the cell whose low corner is at c, in floats relative
+  /// to it (widened by far more than their rounding).
+  F4 rel_lo(Real lo, Real c) const { return splat(static_cast<float>(lo - c) - 1e-5f * fcs_); }
+  F4 rel_hi(Real hi, Real c) const { return splat(static_cast<float>(hi - c) + 1e-5f * fcs_); }
+  /// The slots of a cell centred in the box of the relative bounds given, as bits 0 to 2 (and
+  /// perhaps a few more: the callers test each grain exactly). The three are tested at once (4
+  /// floats from x, y and z: the fourth lane is the next array's first).
+  static unsigned in_xy(const Slots& s, F4 xl, F4 xh, F4 yl, F4 yh) {
+    const F4 x = load4(s.x), y = load4(s.y);
+    return mask3((x >= xl) & (x <= xh) & (y >= yl) & (y <= yh));
+  }
+  static unsigned in_xyz(const Slots& s, F4 xl, F4 xh, F4 yl, F4 yh, F4 zl, F4 zh) {
+    const F4 x = load4(s.x), y = load4(s.y), z = load4(s.z);
+    return mask3((x >= xl) & (x <= xh) & (y >= yl) & (y <= yh) & (z >= zl) & (z <= zh));
   }
   std::vector<std::int32_t> col_top_;  ///< per column: highest layer holding a grain, or -1
   std::vector<Real> col_floor_;        ///< per column: the highest floor within r_hi of it
-  std::vector<Cell> g_;
-  // the walls' planes for the grain being dropped: n . p >= w
+  std::vector<Cell> g_;                ///< by id; r = 0: a drop that left no grain
+  std::vector<std::uint8_t> open_;     ///< per column: drops are made in it
+  std::vector<std::uint16_t> fails_;   ///< per column: discarded drops in a row, in eighths
+  // the walls' inward normals
   std::array<Vec3, 4> wall_n_{Vec3{1, 0, 0}, Vec3{-1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, -1, 0}};
-  std::array<Real, 4> wall_w_{};
 };
 
 Real Packer::floor_rest(Real x, Real y, Real r) const {
@@ -281,93 +384,105 @@ Real Packer::floor_rest(Real x, Real y, Real r) const {
   return best;
 }
 
-int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Real& z) const {
+int Packer::fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real& z,
+                 Cell& met) const {
   Real best = floor_rest(x, y, r);
   int hit = kFloor;
   const int cx = column_x(x), cy = column_y(y);
   const int jx0 = std::max(cx - 1, 0), jx1 = std::min(cx + 1, nx_ - 1);
   const int jy0 = std::max(cy - 1, 0), jy1 = std::min(cy + 1, ny_ - 1);
+  if (!w.reads(jx0, jx1, jy0, jy1)) return kFloor;
   int top = -1;
   for (int jy = jy0; jy <= jy1; ++jy)
     for (int jx = jx0; jx <= jx1; ++jx)
       top = std::max(top, col_top_[static_cast<std::size_t>(jy) * nx_ + jx]);
   if (z_max < kInf) top = std::min(top, layer(z_max + r + R_.r_hi));
-  // layer by layer from the highest of the 3 x 3 columns down: every grain of layer iz and below
-  // lies under z0 + (iz + 1) cs, so none of them can be met higher than that plus two radii
-  for (int iz = top; iz >= 0 && z0_ + (iz + 1) * cs_ + r + R_.r_hi > best; --iz)
-    for (int jy = jy0; jy <= jy1; ++jy)
-      for (int jx = jx0; jx <= jx1; ++jx)
-        visit(jx, jy, iz, [&](std::int32_t k, Real ox, Real oy, Real oz, Real orad) {
-          const Real dx = ox - x, dy = oy - y, s = r + orad;
-          const Real rho2 = dx * dx + dy * dy;
-          if (rho2 >= s * s || k == exclude) return;
-          const Real zc = oz + std::sqrt(s * s - rho2);
-          if (zc > best && zc < z_max - 1e-10 * cs_) {
-            best = zc;
-            hit = k;
-          }
-        });
+  // the 3 x 3 columns, and the square of a contact's reach about (x, y) relative to each, once
+  // (their corners not in Vec3s, whose members are set to 0 first)
+  const Real reach = r + R_.r_hi;
+  int n_cols = 0;
+  const Slots* col[9];
+  Real cx_of[9], cy_of[9];
+  F4 xl[9], xh[9], yl[9], yh[9];
+  for (int jy = jy0; jy <= jy1; ++jy)
+    for (int jx = jx0; jx <= jx1; ++jx, ++n_cols) {
+      col[n_cols] = &cells_[cell(jx, jy, 0)];
+      cx_of[n_cols] = R_.x0 + jx * cs_;
+      cy_of[n_cols] = R_.y0 + jy * cs_;
+      xl[n_cols] = rel_lo(x - reach, cx_of[n_cols]);
+      xh[n_cols] = rel_hi(x + reach, cx_of[n_cols]);
+      yl[n_cols] = rel_lo(y - reach, cy_of[n_cols]);
+      yh[n_cols] = rel_hi(y + reach, cy_of[n_cols]);
+    }
+  auto meet = [&](std::int32_t k, Real ox, Real oy, Real oz, Real orad) {
+    const Real dx = ox - x, dy = oy - y, s = r + orad;
+    const Real rho2 = dx * dx + dy * dy;
+    if (rho2 >= s * s || k == exclude) return;
+    const Real zc = oz + std::sqrt(s * s - rho2);
+    if (zc > best && zc < z_max - 1e-10 * cs_) {
+      best = zc;
+      hit = k;
+      met = {ox, oy, oz, orad};
+    }
+  };
+  // layer by layer from the highest of the columns down: every grain of layer iz and below lies
+  // under z0 + (iz + 1) cs, so none of them can be met higher than that plus two radii. A
+  // layer's slots in the square gathered as bits of one word first (as in first_contact).
+  for (int iz = top; iz >= 0 && z0_ + (iz + 1) * cs_ + reach > best; --iz) {
+    const Real cz = z0_ + iz * cs_;
+    std::uint32_t bits = 0;
+    for (int c = 0; c < n_cols; ++c) {
+      const Slots& sl = col[c][iz];
+      bits |= in_xy(sl, xl[c], xh[c], yl[c], yh[c]) << (3 * c);
+      for (std::int32_t q = sl.more; q >= 0; q = next_[q])
+        meet(q, g_[q].x, g_[q].y, g_[q].z, g_[q].r);
+    }
+    for (; bits; bits &= bits - 1) {
+      const int b = __builtin_ctz(bits), c = b / 3, k = b - 3 * c;
+      const Slots& sl = col[c][iz];
+      meet(sl.id[k], cx_of[c] + sl.x[k], cy_of[c] + sl.y[k], cz + sl.z[k], sl.r[k]);
+    }
+  }
   z = std::min(best, z_max);
   return hit;
 }
 
-Vec3 Packer::normal(int id, const Vec3& p, Real r) const {
+Vec3 Packer::normal(int id, const Cell& o, const Vec3& p, Real r) const {
   if (is_wall(id)) return wall_n_[wall_index(id)];
-  const Cell& o = g_[id];
   return (p - Vec3{o.x, o.y, o.z}) / (r + o.r);
 }
 
-void Packer::gap(int id, const Arc& arc, Real r, Real& k, Real& a, Real& b) const {
-  if (is_wall(id)) {
-    const int w = wall_index(id);
-    const Vec3& n = wall_n_[w];
-    k = dot(n, arc.c) - wall_w_[w];
-    a = arc.rho * dot(n, arc.e1);
-    b = arc.rho * dot(n, arc.e2);
-    return;
-  }
-  const Cell& o = g_[id];
-  const Vec3 d = arc.c - Vec3{o.x, o.y, o.z};
-  const Real s = r + o.r;
-  k = dot(d, d) + arc.rho * arc.rho - s * s;
-  a = 2 * arc.rho * dot(d, arc.e1);
-  b = 2 * arc.rho * dot(d, arc.e2);
+void Packer::wall_gap(int j, const Arc& arc, const Walk& w, Real& k, Real& a, Real& b) const {
+  const Vec3& n = wall_n_[j];
+  k = dot(n, arc.c) - w.wall_w[j];
+  a = arc.rho * dot(n, arc.e1);
+  b = arc.rho * dot(n, arc.e2);
 }
 
-void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, Real& t,
-                           int& id) const {
-  t = kInf;
+void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, int left, Walk& w,
+                           Angle& t, int& id, Cell& met) const {
+  t = Angle::none();
   id = kFloor;
   auto is_held = [&](int q) {
     for (int h = 0; h < n_held; ++h)
       if (held[h] == q) return true;
     return false;
   };
+  constexpr int kNoId = -1000;  // (no grain, no wall)
   // Whether g(t) = k + a cos t + b sin t, positive at 0, falls through 0 by t = T (T <= pi,
   // cos T and sin T given), without trigonometry: at T, or at its minimum (t = phi + pi, where
   // (cos t, sin t) = -(a, b) / R) if that lies in [0, T] and is below 0.
-  const Real T = arc.t_max;
-  const Real cT = std::cos(T), sT = std::sin(T);
-  const bool narrow = T <= kPi;
+  const Real cT = arc.t_max.c, sT = arc.t_max.s, T = arc.t_max.key;
+  const bool narrow = T <= 2;  // (pi)
   auto within = [&](Real k, Real a, Real b) {
     if (!narrow || (k + a <= 0 && b < 0)) return true;  // (first_entry decides)
     if (k + a * cT + b * sT <= 0) return true;
     // the direction (-a, -b) in the sector [0, T]: at or above the t = 0 axis, and not past T
     return -b >= 0 && (-a) * sT - (-b) * cT >= 0 && k * k < a * a + b * b;
   };
-  // the walls
-  for (int w = 0; w < 4; ++w) {
-    const int q = kWall0 - w;
-    if (is_held(q)) continue;
-    Real k, a, b;
-    gap(q, arc, r, k, a, b);
-    if (!within(k, a, b)) continue;
-    const Real tw = first_entry(k, a, b, T);
-    if (tw < t) t = tw, id = q;
-  }
   // the grains near the arc: the cells of its bounding box widened by a contact's reach; the
   // box holds the two ends and, on each axis, the circle's extreme point if the arc passes it
-  const Vec3 p0 = arc.at(0), p1 = arc.c + (arc.e1 * cT + arc.e2 * sT) * arc.rho;
+  const Vec3 p0 = arc.at(Angle::zero()), p1 = arc.at(arc.t_max);
   Vec3 lo = min(p0, p1), hi = max(p0, p1);
   for (int ax = 0; ax < 3; ++ax) {
     const Real u = arc.e1[ax], v = arc.e2[ax];  // coordinate: c + rho (u cos t + v sin t)
@@ -384,36 +499,101 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
         lo[ax] = std::min(lo[ax], e);
     }
   }
+  // the walls the box comes near (n . p - w over the box: its least, for each wall's normal)
+  const Real nearest[4] = {lo.x, -hi.x, lo.y, -hi.y};
+  for (int j = 0; j < 4; ++j) {
+    const int q = kWall0 - j;
+    if (nearest[j] > w.wall_w[j] + 1e-6 * cs_ || is_held(q)) continue;
+    Real k, a, b;
+    wall_gap(j, arc, w, k, a, b);
+    if (!within(k, a, b)) continue;
+    const Angle tw = first_entry(k, a, b, T, q == left);
+    if (tw.key < t.key) t = tw, id = q;
+  }
   const Real reach = r + R_.r_hi;
-  const int ix0 = column_x(lo.x - reach), ix1 = column_x(hi.x + reach);
-  const int iy0 = column_y(lo.y - reach), iy1 = column_y(hi.y + reach);
-  const int iz0 = layer(lo.z - reach), iz1 = layer(hi.z + reach);
-  for (int iy = iy0; iy <= iy1; ++iy)
+  const Vec3 wide{reach, reach, reach};
+  lo = lo - wide;
+  hi = hi + wide;
+  const int ix0 = column_x(lo.x), ix1 = column_x(hi.x);
+  const int iy0 = column_y(lo.y), iy1 = column_y(hi.y);
+  const int iz0 = layer(lo.z), iz1 = layer(hi.z);
+  if (!w.reads(ix0, ix1, iy0, iy1)) return;
+  // A grain of the box: within reach of the circle, within the arc (as `within`) and not held,
+  // tested without a branch (each a coin toss), then its root. (A grain of the box beyond its
+  // own reach of the arc fails these.)
+  const int h0 = held[0], h1 = n_held > 1 ? held[1] : kNoId, h2 = n_held > 2 ? held[2] : kNoId;
+  const Real rho2 = arc.rho * arc.rho;
+  auto test = [&](std::int32_t q, Real ox, Real oy, Real oz, Real orad) {
+    const Real s = r + orad;
+    const Real dx = arc.c.x - ox, dy = arc.c.y - oy, dz = arc.c.z - oz;
+    const Real k = dx * dx + dy * dy + dz * dz + rho2 - s * s;
+    const Real a = 2 * arc.rho * (dx * arc.e1.x + dy * arc.e1.y + dz * arc.e1.z);
+    const Real b = 2 * arc.rho * (dx * arc.e2.x + dy * arc.e2.y + dz * arc.e2.z);
+    const Real R2 = a * a + b * b;
+    const bool reaches = (k <= 0) | (k * k < R2);
+    const bool in = (!narrow) | ((k + a <= 0) & (b < 0)) | (k + a * cT + b * sT <= 0) |
+                    ((b <= 0) & (b * cT - a * sT >= 0) & (k * k < R2));
+    const bool free = (q != h0) & (q != h1) & (q != h2);
+    if (reaches & in & free) {
+      const Angle tq = first_entry(k, a, b, std::min(t.key, T), q == left);
+      if (tq.key < t.key) t = tq, id = q, met = {ox, oy, oz, orad};
+    }
+  };
+  // The cells: each one's slots in the box, 3 bits a cell of one word, tested once 21 cells
+  // are in (a loop over a cell's own few would guess its end wrong about once a cell). The
+  // layers' bounds once (an arc's box, at most 4 cells high, spans at most 5 layers).
+  constexpr int kLayers = 8;
+  F4 zl[kLayers], zh[kLayers];
+  for (int i = 0; i < std::min(iz1 - iz0 + 1, kLayers); ++i) {
+    zl[i] = rel_lo(lo.z, z0_ + (iz0 + i) * cs_);
+    zh[i] = rel_hi(hi.z, z0_ + (iz0 + i) * cs_);
+  }
+  const Slots* cells[21];
+  Real cx_of[21], cy_of[21];  // (not Vec3: its members are set to 0 first)
+  int iz_of[21];
+  std::uint64_t bits = 0;
+  int n = 0;
+  auto flush = [&] {
+    for (; bits; bits &= bits - 1) {
+      const int b = __builtin_ctzll(bits), c = b / 3, k = b - 3 * c;
+      const Slots& sl = *cells[c];
+      test(sl.id[k], cx_of[c] + sl.x[k], cy_of[c] + sl.y[k], z0_ + iz_of[c] * cs_ + sl.z[k],
+           sl.r[k]);
+    }
+    n = 0;
+  };
+  for (int iy = iy0; iy <= iy1; ++iy) {
+    const Real cy = R_.y0 + iy * cs_;
+    const F4 yl = rel_lo(lo.y, cy), yh = rel_hi(hi.y, cy);
     for (int ix = ix0; ix <= ix1; ++ix) {
       const int top = std::min(iz1, col_top_[static_cast<std::size_t>(iy) * nx_ + ix]);
-      for (int iz = iz0; iz <= top; ++iz)
-        visit(ix, iy, iz, [&](std::int32_t q, Real ox, Real oy, Real oz, Real orad) {
-          const Real s = r + orad;
-          // (the arc's box widened by this grain's reach: most grains of the cells are outside)
-          if (ox < lo.x - s || ox > hi.x + s || oy < lo.y - s || oy > hi.y + s || oz < lo.z - s ||
-              oz > hi.z + s)
-            return;
-          const Vec3 d = arc.c - Vec3{ox, oy, oz};
-          const Real k = dot(d, d) + arc.rho * arc.rho - s * s;
-          const Real a = 2 * arc.rho * dot(d, arc.e1);
-          const Real b = 2 * arc.rho * dot(d, arc.e2);
-          if (k > 0 && k * k >= a * a + b * b) return;  // never within reach of the circle
-          if (!within(k, a, b) || is_held(q)) return;
-          const Real tq = first_entry(k, a, b, std::min(t, T));
-          if (tq < t) t = tq, id = q;
-        });
+      const Real cx = R_.x0 + ix * cs_;
+      const F4 xl = rel_lo(lo.x, cx), xh = rel_hi(hi.x, cx);
+      const Slots* col = &cells_[cell(ix, iy, 0)];
+      for (int iz = iz0; iz <= top; ++iz) {
+        const Slots& sl = col[iz];
+        const int i = iz - iz0;
+        const F4 l = i < kLayers ? zl[i] : rel_lo(lo.z, z0_ + iz * cs_);
+        const F4 h = i < kLayers ? zh[i] : rel_hi(hi.z, z0_ + iz * cs_);
+        cells[n] = &sl;
+        cx_of[n] = cx, cy_of[n] = cy, iz_of[n] = iz;
+        bits |= static_cast<std::uint64_t>(in_xyz(sl, xl, xh, yl, yh, l, h)) << (3 * n);
+        for (std::int32_t q = sl.more; q >= 0; q = next_[q])
+          test(q, g_[q].x, g_[q].y, g_[q].z, g_[q].r);
+        if (++n == 21) flush();
+      }
     }
+  }
+  flush();
 }
 
-bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
-  wall_w_ = {R_.x0 + r, -(R_.x1 - r), R_.y0 + r, -(R_.y1 - r)};
+Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
+  w.wall_w = {R_.x0 + r, -(R_.x1 - r), R_.y0 + r, -(R_.y1 - r)};
+  w.out = false;
   Vec3 p{x, y, kInf};
+  // the contacts holding the grain, and (for grains) where they are, as the grid gave them
   int held[3];
+  Cell at[3];
   int n_held = 0;
   int exclude = kFloor;
   const Vec3 ez{0, 0, 1};
@@ -425,11 +605,12 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
     for (int h = 0; h < n_held; ++h) any_grain = any_grain || !is_wall(held[h]);
     if (!any_grain) {
       Real z;
-      const int hit = fall(p.x, p.y, r, p.z, exclude, z);
+      const int hit = fall(p.x, p.y, r, p.z, exclude, w, z, at[0]);
+      if (w.out) return Drop::Leave;
       p.z = z;
       if (hit == kFloor) {
         rest = p;
-        return true;
+        return Drop::Rest;
       }
       held[0] = hit;
       n_held = 1;  // (walls touched on the way are met again at once if the roll closes on them)
@@ -442,7 +623,7 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
     Arc arc;
     int other = kFloor;
     if (n_held == 1) {
-      const Cell& o = g_[held[0]];
+      const Cell& o = at[0];
       const Vec3 a{o.x, o.y, o.z};
       const Real s = r + o.r;
       Vec3 e1 = p - a;
@@ -464,24 +645,24 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
       arc.e1 = e1;
       arc.e2 = t / tn;
       // the equator: p.z - a.z = rho (e1.z cos t + e2.z sin t) falls through 0
-      arc.t_max = first_entry(0, s * arc.e1.z, s * arc.e2.z, kPi);
-      if (arc.t_max == kInf) arc.t_max = kPi / 2;
+      arc.t_max = first_entry(0, s * arc.e1.z, s * arc.e2.z, 2);  // (up to pi)
+      if (arc.t_max.is_none()) arc.t_max = Angle::of(0, 1);       // (pi / 2)
       other = kFloor - 1;  // (the equator)
     } else {
-      int gi = held[0], wj = held[1];
-      if (is_wall(gi)) std::swap(gi, wj);
-      const Cell& o = g_[gi];
+      const int ig = is_wall(held[0]) ? 1 : 0;  // (a grain; the other a grain or a wall)
+      const int wj = held[1 - ig];
+      const Cell& o = at[ig];
       const Vec3 a{o.x, o.y, o.z};
       const Real sa = r + o.r;
       Vec3 u;
       Real along, rho2;
       if (is_wall(wj)) {
-        const int w = wall_index(wj);
-        u = wall_n_[w];
-        along = wall_w_[w] - dot(u, a);
+        const int j = wall_index(wj);
+        u = wall_n_[j];
+        along = w.wall_w[j] - dot(u, a);
         rho2 = sa * sa - along * along;
       } else {
-        const Cell& ob = g_[wj];
+        const Cell& ob = at[1 - ig];
         u = Vec3{ob.x, ob.y, ob.z} - a;
         const Real L = norm(u);
         u = u / L;
@@ -489,7 +670,7 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
         along = (L * L + sa * sa - sb * sb) / (2 * L);
         rho2 = sa * sa - along * along;
       }
-      if (!(rho2 > 0)) return false;  // (rounding: the two cannot both be touched)
+      if (!(rho2 > 0)) return Drop::Discard;  // (rounding: the two cannot both be touched)
       arc.c = a + u * along;
       arc.rho = std::sqrt(rho2);
       Vec3 e1 = p - arc.c;
@@ -502,7 +683,7 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
       arc.e2 = e2;
       // the support each contact gives: N_q ~ n_q.ez - k n_other.ez with k = n_0 . n_1, constant
       // on the circle; n_q.ez = (c.z - x_q.z + rho (e1.z cos t + e2.z sin t)) / s_q for a grain
-      const Vec3 n0 = normal(held[0], p, r), n1 = normal(held[1], p, r);
+      const Vec3 n0 = normal(held[0], at[0], p, r), n1 = normal(held[1], at[1], p, r);
       const Real kk = dot(n0, n1);
       Real zk[2], za[2], zb[2];
       for (int h = 0; h < 2; ++h) {
@@ -510,43 +691,48 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
           zk[h] = za[h] = zb[h] = 0;
           continue;
         }
-        const Cell& q = g_[held[h]];
+        const Cell& q = at[h];
         const Real s = r + q.r;
         zk[h] = (arc.c.z - q.z) / s;
         za[h] = arc.rho * e1.z / s;
         zb[h] = arc.rho * e2.z / s;
       }
       // the lowest point of the circle bounds the arc (no grain rests on two: it is left first)
-      arc.t_max = first_entry(0, -arc.rho * e2.z, arc.rho * e1.z, kTwoPi);
-      if (arc.t_max == kInf) arc.t_max = kPi;
-      Real t_off = kInf;
+      arc.t_max = first_entry(0, -arc.rho * e2.z, arc.rho * e1.z, 4);
+      if (arc.t_max.is_none()) arc.t_max = Angle::of(-1, 0);  // (pi)
+      Angle t_off = Angle::none();
       for (int h = 0; h < 2; ++h) {
-        const Real to = first_entry(zk[h] - kk * zk[1 - h], za[h] - kk * za[1 - h],
-                                    zb[h] - kk * zb[1 - h], arc.t_max);
-        if (to < t_off) t_off = to, other = held[h];
+        const Angle to = first_entry(zk[h] - kk * zk[1 - h], za[h] - kk * za[1 - h],
+                                     zb[h] - kk * zb[1 - h], arc.t_max.key);
+        if (to.key < t_off.key) t_off = to, other = held[h];
       }
-      if (t_off < kInf)
+      if (!t_off.is_none())
         arc.t_max = t_off;
       else
         other = held[zk[0] < zk[1] ? 0 : 1];
     }
 
     // along the arc: the first new contact, else its end (the equator, a lift-off)
-    Real t;
+    Angle t;
     int hit;
-    first_contact(arc, r, held, n_held, t, hit);
-    if (t == kInf) t = arc.t_max;
+    // (at a lift-off the grain moves along the contact it leaves, and rounding may make it
+    // close: met again at once, it would be left again, over and over; on one sphere the path
+    // leaves it for good, a great circle tangent to a cap smaller than a hemisphere)
+    Cell met;
+    first_contact(arc, r, held, n_held, exclude, w, t, hit, met);
+    if (w.out) return Drop::Leave;
+    if (t.is_none()) t = arc.t_max;
     Vec3 q = arc.at(t);
     // the floor met on the way: the grain rests there
     const int col = column_y(q.y) * nx_ + column_x(q.x);
     if (q.z - r <= col_floor_[static_cast<std::size_t>(col)] && on_floor(q)) {
-      Real lo = 0, hi = t;
+      Real lo = 0, hi = t.radians();
       for (int it = 0; it < 48 && hi - lo > 1e-12; ++it) {
         const Real mid = 0.5 * (lo + hi);
         (on_floor(arc.at(mid)) ? hi : lo) = mid;
       }
       rest = arc.at(hi);  // (the first point of the arc found on the floor, to 1e-12 rad)
-      return true;
+      return Drop::Rest;
     }
     p = q;
     if (hit == kFloor) {
@@ -555,42 +741,42 @@ bool Packer::drop(Real x, Real y, Real r, Vec3& rest) {
         exclude = held[0];
         n_held = 0;
       } else {
-        const int keep = held[0] == other ? held[1] : held[0];
+        const int keep = held[0] == other ? 1 : 0;
         exclude = other;
-        held[0] = keep;
+        held[0] = held[keep];
+        at[0] = at[keep];
         n_held = 1;
       }
       continue;
     }
-    held[n_held++] = hit;
+    held[n_held] = hit;
+    at[n_held++] = met;
     // which of the contacts now touching hold it: all three (at rest), two (a groove), one or none
     Vec3 n[3];
-    for (int h = 0; h < n_held; ++h) n[h] = normal(held[h], p, r);
+    for (int h = 0; h < n_held; ++h) n[h] = normal(held[h], at[h], p, r);
     const int mask = choose_supports(n, n_held);
-    if (mask < 0) return false;
+    if (mask < 0) return Drop::Discard;
     if (n_held == 3 && mask == 7) {
       rest = p;
-      return true;
+      return Drop::Rest;
     }
     int kept = 0;
     exclude = kFloor;
     for (int h = 0; h < n_held; ++h) {
       if (mask >> h & 1)
-        held[kept++] = held[h];
-      else if (!is_wall(held[h]))
-        exclude = held[h];  // (for a fall: the grain it leaves)
+        held[kept] = held[h], at[kept++] = at[h];
+      else
+        exclude = held[h];  // (for a fall and the next arc: the contact it leaves)
     }
     n_held = kept;
   }
-  return false;
+  return Drop::Discard;
 }
 
-void Packer::insert(const Vec3& p, Real r) {
-  const auto k = static_cast<std::int32_t>(g_.size());
-  g_.push_back({p.x, p.y, p.z, r});
+void Packer::insert(std::int32_t k, const Vec3& p, Real r) {
+  g_[static_cast<std::size_t>(k)] = {p.x, p.y, p.z, r};
   const int ix = column_x(p.x), iy = column_y(p.y), iz = layer(p.z);
   Slots& s = cells_[cell(ix, iy, iz)];
-  next_.push_back(-1);
   int slot = 0;
   while (slot < 3 && s.id[slot] >= 0) ++slot;
   if (slot < 3) {
@@ -601,11 +787,104 @@ void Packer::insert(const Vec3& p, Real r) {
     s.r[slot] = static_cast<float>(r);
     // (the float radius may round up or down by 3e-8 r: the contacts stay within 1e-7 d)
   } else {
-    next_.back() = s.more;
+    next_[static_cast<std::size_t>(k)] = s.more;
     s.more = k;
   }
   int& top = col_top_[static_cast<std::size_t>(iy) * nx_ + ix];
   top = std::max(top, iz);
+}
+
+void Packer::run_tile(Tile& tile, std::vector<std::int32_t>& open) {
+  open.clear();
+  for (int iy = tile.iy0; iy <= tile.iy1; ++iy)
+    for (int ix = tile.ix0; ix <= tile.ix1; ++ix)
+      if (open_[static_cast<std::size_t>(iy) * nx_ + ix]) open.push_back(iy * nx_ + ix);
+  Walk w;
+  w.ix0 = std::max(0, tile.ix0 - kMargin);
+  w.ix1 = std::min(nx_ - 1, tile.ix1 + kMargin);
+  w.iy0 = std::max(0, tile.iy0 - kMargin);
+  w.iy1 = std::min(ny_ - 1, tile.iy1 + kMargin);
+  Rng rng(tile.seed);
+  for (std::int32_t n = 0; n < tile.drops && !open.empty(); ++n) {
+    const auto pick = static_cast<std::size_t>(rng.uniform() * static_cast<Real>(open.size()));
+    const std::size_t slot = std::min(pick, open.size() - 1);
+    const int c = open[slot];
+    const int ix = c % nx_, iy = c / nx_;
+    const Real r = R_.r_hi > R_.r_lo ? rng.uniform(R_.r_lo, R_.r_hi) : R_.r_lo;
+    const Real ux = rng.uniform(), uy = rng.uniform();
+    {
+      // (the next drop's column, from a copy of the stream, and the cells its fall reads first
+      // asked for now: far from this drop's, they would be read from memory, not the cache)
+      Rng peek = rng;
+      const int nc =
+          open[std::min(static_cast<std::size_t>(peek.uniform() * static_cast<Real>(open.size())),
+                        open.size() - 1)];
+      const int top = col_top_[static_cast<std::size_t>(nc)];
+      const int jx = nc % nx_, jy = nc / nx_;
+      for (int dy = -2; dy <= 2; ++dy)
+        for (int dx = -2; dx <= 2; ++dx) {
+          const int qx = std::clamp(jx + dx, 0, nx_ - 1), qy = std::clamp(jy + dy, 0, ny_ - 1);
+          const Slots* col = &cells_[cell(qx, qy, 0)];
+          __builtin_prefetch(col + std::max(top, 0));
+          __builtin_prefetch(col + std::max(top - 1, 0));
+        }
+    }
+    // a point of the cell where the grain lies inside the footprint
+    const Real xa = std::max(R_.x0 + ix * cs_, R_.x0 + r),
+               xb = std::min(R_.x0 + (ix + 1) * cs_, R_.x1 - r);
+    const Real ya = std::max(R_.y0 + iy * cs_, R_.y0 + r),
+               yb = std::min(R_.y0 + (iy + 1) * cs_, R_.y1 - r);
+    ++tile.made;
+    bool kept = false, blocked = false;
+    Vec3 p;
+    const Drop d = xb >= xa && yb >= ya ? drop(xa + ux * (xb - xa), ya + uy * (yb - ya), r, w, p)
+                                        : Drop::Discard;
+    if (d == Drop::Leave) {
+      // (it rolled too far for its tile: not made here, and no evidence of a full top)
+      ++tile.discarded;
+      continue;
+    }
+    if (d == Drop::Rest) {
+      // (the bilinear top lies at or above its lowest sample: most grains need no look-up)
+      if (p.z > top_.lo - r && p.z > top_.value(p.x, p.y) - r) {
+        ++tile.discarded;
+      } else {
+        if (R_.blocked) {
+          // (the caller's function need not be safe to call from two threads at once)
+          std::exception_ptr failed;  // (nor may an exception leave a critical section)
+#pragma omp critical(sandflow_bed_blocked)
+          try {
+            blocked = R_.blocked(p, r);
+          } catch (...) {
+            failed = std::current_exception();
+          }
+          if (failed) std::rethrow_exception(failed);
+        }
+        if (blocked) {
+          ++tile.discarded;
+          ++tile.blocked;
+        } else {
+          insert(tile.base + n, p, r);
+          ++tile.kept;
+          kept = true;
+        }
+      }
+    } else {
+      ++tile.discarded;
+    }
+    // A drop refused by an obstacle counts an eighth of one that found the top: the flanks of an
+    // obstacle refuse drops until the sand around has grown up to them, and must not close the
+    // cells over it before (a cell inside an obstacle closes after 8 patience drops)
+    std::uint16_t& fail = fails_[static_cast<std::size_t>(c)];
+    if (kept) {
+      fail = 0;
+    } else if ((fail += blocked ? 1 : 8) >= 8 * R_.patience) {
+      open_[static_cast<std::size_t>(c)] = 0;
+      ++tile.closed;
+      open[slot] = open.back();
+      open.pop_back();
+    }
+  }
 }
 
 BedPacking Packer::run() {
@@ -623,6 +902,7 @@ BedPacking Packer::run() {
   // the grid: cells 2 r_hi wide, from under the lowest floor to over the highest top
   cs_ = 2 * R_.r_hi;
   inv_cs_ = 1 / cs_;
+  fcs_ = static_cast<float>(cs_);
   nx_ = std::max(1, static_cast<int>(std::ceil((R_.x1 - R_.x0) / cs_)));
   ny_ = std::max(1, static_cast<int>(std::ceil((R_.y1 - R_.y0) / cs_)));
   z0_ = floor_.lo - cs_;
@@ -650,13 +930,15 @@ BedPacking Packer::run() {
   if (flat_floor_) std::fill(col_floor_.begin(), col_floor_.end(), floor_.lo);
   // (a tangent plane lies at most r (sqrt(2) - 1) above the samples: it is used up to 45 degrees)
   for (Real& f : col_floor_) f += (std::sqrt(2.0) - 1) * R_.r_hi + 1e-12;
-  const auto reserve = static_cast<std::size_t>(std::min(estimate * 1.1 + 16, R_.max_grains));
+  // (ids are reserved for drops, about 1.3 a grain)
+  const auto reserve = static_cast<std::size_t>(std::min(estimate * 1.5 + 16, 2.0e9));
   g_.reserve(reserve);
   next_.reserve(reserve);
 
   // the cells drops are made in, each open until `patience` drops in a row fail there
-  std::vector<std::int32_t> open;
-  std::vector<std::uint16_t> fails(col_top_.size(), 0);
+  open_.assign(col_top_.size(), 0);
+  fails_.assign(col_top_.size(), 0);
+  std::int64_t n_open = 0;
   for (int iy = 0; iy < ny_; ++iy)
     for (int ix = 0; ix < nx_; ++ix) {
       // closed at once where no grain fits under the top anywhere in the cell
@@ -670,60 +952,90 @@ BedPacking Packer::run() {
       for (int j = j0; j <= j1 && !room; ++j)
         for (int i = i0; i <= i1 && !room; ++i)
           room = top_.at(i, j) - floor_.at(i, j) >= 2 * R_.r_lo;
-      if (room) open.push_back(iy * nx_ + ix);
+      if (room) {
+        open_[static_cast<std::size_t>(iy) * nx_ + ix] = 1;
+        ++n_open;
+      }
     }
 
   BedPacking out;
-  Rng rng(R_.seed);
-  while (!open.empty()) {
-    const auto pick = static_cast<std::size_t>(rng.uniform() * static_cast<Real>(open.size()));
-    const std::size_t slot = std::min(pick, open.size() - 1);
-    const int c = open[slot];
-    const int ix = c % nx_, iy = c / nx_;
-    const Real r = R_.r_hi > R_.r_lo ? rng.uniform(R_.r_lo, R_.r_hi) : R_.r_lo;
-    const Real ux = rng.uniform(), uy = rng.uniform();
-    // a point of the cell where the grain lies inside the footprint
-    const Real xa = std::max(R_.x0 + ix * cs_, R_.x0 + r),
-               xb = std::min(R_.x0 + (ix + 1) * cs_, R_.x1 - r);
-    const Real ya = std::max(R_.y0 + iy * cs_, R_.y0 + r),
-               yb = std::min(R_.y0 + (iy + 1) * cs_, R_.y1 - r);
-    ++out.drops;
-    bool kept = false, blocked = false;
-    Vec3 p;
-    if (xb >= xa && yb >= ya && drop(xa + ux * (xb - xa), ya + uy * (yb - ya), r, p)) {
-      if (p.z > top_.value(p.x, p.y) - r) {
-        ++out.discarded;
-      } else if (R_.blocked && R_.blocked(p, r)) {
-        ++out.discarded;
-        ++out.blocked;
-        blocked = true;
-      } else {
-        if (static_cast<Real>(g_.size()) >= R_.max_grains)
-          throw std::length_error("bed packing: more grains than the limit of " +
-                                  std::to_string(static_cast<long long>(R_.max_grains)));
-        insert(p, r);
-        kept = true;
+  std::int64_t kept = 0;
+  const int threads = std::max(1, R_.threads);
+  std::vector<std::vector<std::int32_t>> scratch(static_cast<std::size_t>(threads));
+  std::vector<Tile> tiles;
+  for (std::uint64_t round = 0; n_open > 0; ++round) {
+    // this round's tiling, shifted at random so that no seam stays, and the order of its colours
+    Rng rng(mix_seed(R_.seed, round, 0));
+    const int ox = static_cast<int>(rng.next() % kTile), oy = static_cast<int>(rng.next() % kTile);
+    int colours[4] = {0, 1, 2, 3};
+    for (int i = 3; i > 0; --i)
+      std::swap(colours[i],
+                colours[static_cast<int>(rng.next() % static_cast<std::uint64_t>(i + 1))]);
+    const int tx = (nx_ + ox + kTile - 1) / kTile, ty = (ny_ + oy + kTile - 1) / kTile;
+    for (const int colour : colours) {
+      // its tiles with an open column, their drops and the ids reserved for them, in tile order
+      tiles.clear();
+      std::int64_t next_id = static_cast<std::int64_t>(g_.size());
+      for (int j = colour / 2; j < ty; j += 2)
+        for (int i = colour % 2; i < tx; i += 2) {
+          Tile t;
+          t.ix0 = std::max(0, i * kTile - ox);
+          t.ix1 = std::min(nx_ - 1, (i + 1) * kTile - ox - 1);
+          t.iy0 = std::max(0, j * kTile - oy);
+          t.iy1 = std::min(ny_ - 1, (j + 1) * kTile - oy - 1);
+          int n = 0;
+          for (int iy = t.iy0; iy <= t.iy1; ++iy)
+            for (int ix = t.ix0; ix <= t.ix1; ++ix)
+              n += open_[static_cast<std::size_t>(iy) * nx_ + ix];
+          if (n == 0) continue;
+          // (a drop per open cell, about a layer: half a layer made the bed the same, and twice
+          // the phases, each ending when its last tile does, which costs much when another
+          // program holds a core)
+          t.drops = n;
+          t.base = static_cast<std::int32_t>(next_id);
+          t.seed = mix_seed(R_.seed, round, static_cast<std::uint64_t>(j * tx + i) + 1);
+          next_id += t.drops;
+          tiles.push_back(t);
+        }
+      if (next_id > std::numeric_limits<std::int32_t>::max())
+        throw std::length_error("bed packing: more drops than grain ids");
+      g_.resize(static_cast<std::size_t>(next_id), Cell{0, 0, 0, 0});
+      next_.resize(static_cast<std::size_t>(next_id), -1);
+      // tiles of one colour are a tile apart, farther than two margins: their drops read and
+      // write disjoint columns, so the bed does not depend on the threads nor their order
+      const auto n_tiles = static_cast<std::int64_t>(tiles.size());
+      // (an exception of `blocked` must not leave the parallel loop: kept, and thrown after it)
+      std::exception_ptr failed;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1 && n_tiles > 1)
+      for (std::int64_t k = 0; k < n_tiles; ++k) {
+        try {
+          run_tile(tiles[static_cast<std::size_t>(k)],
+                   scratch[static_cast<std::size_t>(omp_get_thread_num())]);
+        } catch (...) {
+#pragma omp critical(sandflow_bed_failed)
+          if (!failed) failed = std::current_exception();
+        }
       }
-    } else {
-      ++out.discarded;
-    }
-    // A drop refused by an obstacle counts an eighth of one that found the top: the flanks of an
-    // obstacle refuse drops until the sand around has grown up to them, and must not close the
-    // cells over it before (a cell inside an obstacle closes after 8 patience drops)
-    std::uint16_t& fail = fails[static_cast<std::size_t>(c)];
-    if (kept) {
-      fail = 0;
-    } else if ((fail += blocked ? 1 : 8) >= 8 * R_.patience) {
-      open[slot] = open.back();
-      open.pop_back();
+      if (failed) std::rethrow_exception(failed);
+      for (const Tile& t : tiles) {
+        out.drops += t.made;
+        out.discarded += t.discarded;
+        out.blocked += t.blocked;
+        kept += t.kept;
+        n_open -= t.closed;
+      }
+      if (static_cast<Real>(kept) > R_.max_grains)
+        throw std::length_error("bed packing: more grains than the limit of " +
+                                std::to_string(static_cast<long long>(R_.max_grains)));
     }
   }
-  out.x.resize(g_.size());
-  out.r.resize(g_.size());
-  for (std::size_t k = 0; k < g_.size(); ++k) {
-    out.x[k] = {g_[k].x, g_[k].y, g_[k].z};
-    out.r[k] = g_[k].r;
-  }
+  out.x.reserve(static_cast<std::size_t>(kept));
+  out.r.reserve(static_cast<std::size_t>(kept));
+  for (const Cell& c : g_)
+    if (c.r > 0) {
+      out.x.push_back({c.x, c.y, c.z});
+      out.r.push_back(c.r);
+    }
   return out;
 }
 

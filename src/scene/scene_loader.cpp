@@ -112,7 +112,8 @@ void read_emitters(TableReader& doc, const Places& places, SceneConfig& c) {
       BedPacking bed;
       const Real room = std::min(kMaxBedGrains, static_cast<Real>(kMaxGrains - total));
       if (const auto problem =
-              pack_bed_emitter(e, c.material, *geometry, bed_seed(c.simulation.seed, i), bed, room))
+              pack_bed_emitter(e, c.material, *geometry, bed_seed(c.simulation.seed, i), bed, room,
+                               c.simulation.threads))
         r.fail_at(problem->key, r.name(problem->key) + " " + problem->what +
                                     (room < kMaxBedGrains && std::string(problem->key) == "size"
                                          ? " (the scene's room left for grains)"

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include <fmt/format.h>
+#include <omp.h>
 
 #include "core/error.hpp"
 #include "geometry/heightmap.hpp"
@@ -229,7 +230,7 @@ std::uint64_t bed_seed(std::uint64_t scene_seed, std::size_t index) {
 
 std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const MaterialConfig& m,
                                                const Geometry& geometry, std::uint64_t seed,
-                                               BedPacking& out, Real max_grains) {
+                                               BedPacking& out, Real max_grains, int threads) {
   if (auto problem = emitter_problem(e, m)) return problem;
   const Real d = largest_diameter(m);
   const Real top = e.height;
@@ -287,6 +288,7 @@ std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const Mat
   region.r_hi = 0.5 * m.diameter * (1 + m.diameter_spread);
   region.seed = seed;
   region.max_grains = max_grains;
+  region.threads = threads > 0 ? threads : omp_get_num_procs();
   try {
     // a coarse look first (33 x 33 points), so that a bed far too large is refused at once
     Real coarse = 0;
@@ -332,7 +334,8 @@ void resolve_beds(SceneConfig& scene) {
     if (e.type != EmitterType::Bed) continue;
     BedPacking bed;
     if (const auto problem =
-            pack_bed_emitter(e, scene.material, geometry, bed_seed(scene.simulation.seed, k), bed))
+            pack_bed_emitter(e, scene.material, geometry, bed_seed(scene.simulation.seed, k), bed,
+                             kMaxBedGrains, scene.simulation.threads))
       throw InputError(
           fmt::format("{}: emitter[{}].{} {}", scene.path, k, problem->key, problem->what));
     set_bed_extent(e, bed);

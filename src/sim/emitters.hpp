@@ -56,10 +56,11 @@ std::uint64_t bed_seed(std::uint64_t scene_seed, std::size_t index);
 /// the floor the highest solid top under each point below e.height, grains wholly outside every
 /// solid (to 1 % of a diameter). Returns what makes it impossible (the key at fault and the rest of
 /// the message: no solid under the footprint, no room for a grain, more than max_grains), or fills
-/// `out`.
+/// `out`. It packs on `threads` threads (0: all cores), the same bed for any number.
 std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const MaterialConfig& m,
                                                const Geometry& geometry, std::uint64_t seed,
-                                               BedPacking& out, Real max_grains = kMaxBedGrains);
+                                               BedPacking& out, Real max_grains = kMaxBedGrains,
+                                               int threads = 1);
 
 /// Sets count, center.z and size.z of every bed of the scene from its packing (the loader does it
 /// with the file's places; a scene built in code calls this). Throws InputError naming the bed.

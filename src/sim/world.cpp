@@ -264,7 +264,8 @@ World::World(const SceneConfig& scene)
     // geometry and seed
     BedPacking bed;
     if (const auto problem = pack_bed_emitter(scene.emitters[k], scene.material, geometry_,
-                                              bed_seed(scene.simulation.seed, k), bed))
+                                              bed_seed(scene.simulation.seed, k), bed,
+                                              kMaxBedGrains, scene.simulation.threads))
       throw InputError(fmt::format("{}.{} {}", where, problem->key, problem->what));
     emitters_.back().set_bed(std::move(bed), where);
   }

@@ -1,7 +1,8 @@
 // The bed generator (geometry/bed_packing.hpp): the packing fraction of its bulk, exact contacts
 // (a brute-force check of every pair), grains inside the footprint, on the floor and under the
 // top (flat, a heightmap floor, a sloped top), an obstacle respected, every grain stably supported,
-// the same bed for the same seed, and the grain limit.
+// the same bed for the same seed and for 1 and 2 threads, an exception of `blocked` passed on, and
+// the grain limit.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -182,6 +183,32 @@ TEST(BedPacking, TheSameSeedGivesTheSameBed) {
   R.seed = 2;
   const BedPacking c = pack_bed(R);
   EXPECT_FALSE(c.size() == a.size() && c.x == a.x);
+}
+
+TEST(BedPacking, OneAndTwoThreadsGiveTheSameBed) {
+  // 40 d x 40 d: tiles of 16 columns, several of each colour a phase, so two threads share them
+  BedRegion R = flat_bed(40, 6);
+  R.r_lo = 0.4 * kD;
+  const BedPacking a = pack_bed(R);
+  R.threads = 2;
+  const BedPacking b = pack_bed(R);
+  ASSERT_GT(a.size(), 5000u);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(a.drops, b.drops);
+  EXPECT_TRUE(a.x == b.x && a.r == b.r);
+}
+
+TEST(BedPacking, AnExceptionOfBlockedReachesTheCaller) {
+  // thrown on a tile's thread, it is kept and thrown again once the tiles of its phase are done
+  for (int threads : {1, 2}) {
+    BedRegion R = flat_bed(40, 4);
+    R.threads = threads;
+    R.blocked = [](const Vec3& c, Real) -> bool {
+      if (c.z > 2 * kD) throw std::runtime_error("blocked failed");
+      return false;
+    };
+    EXPECT_THROW(pack_bed(R), std::runtime_error) << threads << " threads";
+  }
 }
 
 TEST(BedPacking, RefusesARegionBeyondItsLimitAndMalformedInput) {
