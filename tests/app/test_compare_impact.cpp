@@ -78,7 +78,9 @@ TEST(CompareImpact, TheCraterOfEveryRunAndTheModesAgainstThePlainDemSpread) {
     EXPECT_GE(rim[m].back(), 0.0) << f.dump();
     EXPECT_LT(rim[m].back(), 0.06) << f.dump();
     EXPECT_GT(f["radius"].get<double>(), 0.0);
-    EXPECT_LT(f["rim_radius"].get<double>(), 0.13);  // inside the walls
+    // inside the sandbox (its corners lie 0.13 sqrt(2) m from the centre: a rim of a few
+    // millimetres may be found as far out as that)
+    EXPECT_LT(f["rim_radius"].get<double>(), 0.13 * std::sqrt(2.0));
   }
   EXPECT_EQ(j["crater_fits"]["dem"], fits[0]);
   EXPECT_EQ(j["crater_fits"]["surface"], fits[1]);
