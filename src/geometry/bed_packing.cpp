@@ -23,7 +23,7 @@ namespace {
 constexpr Real kInf = std::numeric_limits<Real>::infinity();
 constexpr Real kTwoPi = 2 * kPi;
 /// The most samples of the floor and of the top: 2^22 each (32 MiB); a larger footprint is
-/// sampled more coarsely than r_lo / 2.
+/// sampled more coarsely.
 constexpr Real kMaxMapSamples = 4194304.0;
 /// A grain that has not come to rest after this many arcs is discarded (rounding can make a
 /// grain take and leave the same contact over and over; real sequences take a handful).
@@ -71,12 +71,11 @@ struct Map {
   }
 };
 
-Map sample_map(const BedRegion& R, const std::function<Real(Real, Real)>& f, const char* what) {
+/// f sampled every `spacing` (or more coarsely: at most kMaxMapSamples).
+Map sample_map(const BedRegion& R, const std::function<Real(Real, Real)>& f, const char* what,
+               Real spacing) {
   Map m;
   const Real w = R.x1 - R.x0, h = R.y1 - R.y0;
-  // (r_lo / 2: between samples the bilinear floor sags h^2 |f''| / 8 under a bump, and at r_lo
-  // grains of the wavy floor of the tests reached 1.1 % of d into it; 0.5 % at r_lo / 2)
-  Real spacing = R.r_lo / 2;
   const Real n = (w / spacing + 2) * (h / spacing + 2);
   if (n > kMaxMapSamples) spacing *= std::sqrt(n / kMaxMapSamples);
   m.mx = std::max(2, static_cast<int>(std::ceil(w / spacing)) + 1);
@@ -363,7 +362,7 @@ class Packer {
 };
 
 Real Packer::floor_rest(Real x, Real y, Real r) const {
-  if (flat_floor_) return floor_.lo + r;
+  if (flat_floor_) return floor_.hi + r;
   // a tangent plane at the centre: exact on a plane, conservative on a bump, within r^2 / R_c in
   // a hollow of curvature radius R_c
   Real fx, fy;
@@ -889,15 +888,24 @@ void Packer::run_tile(Tile& tile, std::vector<std::int32_t>& open) {
 
 BedPacking Packer::run() {
   check_region(R_);
-  floor_ = sample_map(R_, R_.floor, "floor");
-  top_ = sample_map(R_, R_.top, "top");
+  floor_ = sample_map(R_, R_.floor, "floor", R_.r_lo);
+  top_ = sample_map(R_, R_.top, "top", R_.r_lo);
+  // (flat to rounding: a container's floor comes back from the geometry within 1e-17 m)
+  flat_floor_ = floor_.hi - floor_.lo <= 1e-9 * R_.r_lo;
+  if (!flat_floor_) {
+    // A floor that is not flat, every r_lo / 2: between samples the bilinear floor sags
+    // h^2 |f''| / 8 under a bump, and at r_lo grains of the wavy floor of the tests reached 1.1 %
+    // of d into it, 0.5 % at r_lo / 2. (Not a flat one: the scene's geometry can be slow to ask,
+    // 6 us a point for a box container.)
+    floor_ = sample_map(R_, R_.floor, "floor", R_.r_lo / 2);
+    top_ = sample_map(R_, R_.top, "top", R_.r_lo / 2);
+  }
   const Real estimate = estimate_from_maps(R_, floor_, top_);
   if (estimate > R_.max_grains)
     throw std::length_error("bed packing: the region would hold about " +
                             std::to_string(static_cast<long long>(estimate)) +
                             " grains, more than the limit of " +
                             std::to_string(static_cast<long long>(R_.max_grains)));
-  flat_floor_ = floor_.lo == floor_.hi;
 
   // the grid: cells 2 r_hi wide, from under the lowest floor to over the highest top
   cs_ = 2 * R_.r_hi;
@@ -927,7 +935,7 @@ BedPacking Packer::run() {
           f = std::max(f, floor_.at(i, j));
         }
     }
-  if (flat_floor_) std::fill(col_floor_.begin(), col_floor_.end(), floor_.lo);
+  if (flat_floor_) std::fill(col_floor_.begin(), col_floor_.end(), floor_.hi);
   // (a tangent plane lies at most r (sqrt(2) - 1) above the samples: it is used up to 45 degrees)
   for (Real& f : col_floor_) f += (std::sqrt(2.0) - 1) * R_.r_hi + 1e-12;
   // (ids are reserved for drops, about 1.3 a grain)
@@ -1043,8 +1051,8 @@ BedPacking Packer::run() {
 
 Real estimate_bed_grains(const BedRegion& region) {
   check_region(region);
-  return estimate_from_maps(region, sample_map(region, region.floor, "floor"),
-                            sample_map(region, region.top, "top"));
+  return estimate_from_maps(region, sample_map(region, region.floor, "floor", region.r_lo),
+                            sample_map(region, region.top, "top", region.r_lo));
 }
 
 BedPacking pack_bed(const BedRegion& region) {

@@ -48,7 +48,8 @@
 // branches (whether one is in is a coin toss, which a branch predicts badly); the events'
 // angles as cosines and sines, without trigonometry; the next drop's cells asked for ahead.
 //
-// The floor and the top are sampled once on a grid of spacing r_lo / 2 (bilinear between samples;
+// The floor and the top are sampled on a grid of spacing r_lo, r_lo / 2 where the floor is not flat
+// (bilinear between samples;
 // at most 2^22 samples each, coarser on a larger footprint). A grain rests on the floor where its
 // centre is r sqrt(1 + |grad f|^2) above the bilinear floor (a tangent plane: exact on planes, a
 // hollow of curvature radius R_c is met within about r^2 / R_c); where the floor is steeper than
