@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -18,10 +19,12 @@ namespace sandflow_test {
 
 namespace fs = std::filesystem;
 
-/// The running test's "Suite.Name", for names that must not clash between parallel tests.
+/// The running test's "Suite.Name" and process id, for names that must not clash between
+/// parallel tests, nor between test runs of two build folders at once.
 inline std::string test_id() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  return std::string(info->test_suite_name()) + "." + info->name();
+  return std::string(info->test_suite_name()) + "." + info->name() + "." +
+         std::to_string(::getpid());
 }
 
 /// A scratch folder for one test, removed when the test ends.
