@@ -113,6 +113,6 @@ rows = [l.split() for l in open(sys.argv[1]) if l.strip()]
 g = [float(r[1]) for r in rows]
 sec = [float(r[3]) for r in rows]
 exps = [math.log(sec[i + 1] / sec[i]) / math.log2(g[i + 1] / g[i]) for i in range(len(rows) - 1)]
-growth = math.exp(sum(exps) / len(exps)) if exps else float("nan")
-print("growth_per_doubling=%.3f bytes_per_static=%.2f" % (growth, max(float(r[5]) for r in rows)))
+growth = "%.3f" % math.exp(sum(exps) / len(exps)) if exps else "n/a"  # one size: no ratio
+print("growth_per_doubling=%s bytes_per_static=%.2f" % (growth, max(float(r[5]) for r in rows)))
 PY
