@@ -1,6 +1,7 @@
 #include "geometry/bed_packing.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -34,6 +35,13 @@ constexpr Real kEstimatePacking = 0.60;
 /// < kTile + 1, see run).
 constexpr int kTile = 16;
 constexpr int kMargin = 7;
+/// The slab's periodic tile is kSlabTile columns wide, with kSlabGhost columns of images around
+/// it; the slab is laid where the footprint is at least two tiles wide and the bed kSlabLeast
+/// cells deep under a cut kSlabBelowTop cells below the lowest top.
+constexpr int kSlabTile = 32;
+constexpr int kSlabGhost = 8;
+constexpr Real kSlabLeast = 4;
+constexpr Real kSlabBelowTop = 2;
 
 /// A seed for stream k of a round (splitmix64 of the three).
 std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t round, std::uint64_t k) {
@@ -286,13 +294,27 @@ class Packer {
  public:
   explicit Packer(const BedRegion& R) : R_(R) {}
   BedPacking run();
+  // the periodic tile of the slab, its grains in the order they were laid (see lay_slab)
+  struct TileGrain {
+    Vec3 p;
+    Real r;
+    std::int32_t support[3];     ///< grains of the tile holding it, -1 past the last
+    std::int8_t sx[3], sy[3];    ///< ... in the copy of the tile this far away in x and y
+  };
+  std::vector<TileGrain> pack_periodic(int n_tile, int ghost);
 
  private:
+  // checks the region, samples its floor and top, makes the grid; the columns open for drops
+  std::int64_t prepare();
+  // the slab under the top laid from a periodic tile, where one fits (see the top of the file):
+  // its grains inserted as the first ids; how many
+  std::int64_t lay_slab();
   // the drops of one tile (see run)
   void run_tile(Tile& tile, std::vector<std::int32_t>& open);
   // where a grain of radius r dropped at (x, y) comes to rest (Rest), or Discard (it did not
-  // settle), or Leave (it would read columns beyond w's)
-  Drop drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const;
+  // settle), or Leave (it would read columns beyond w's); `support` (when given) the grains
+  // holding it at rest, -1 past the last
+  Drop drop(Real x, Real y, Real r, Walk& w, Vec3& rest, int* support = nullptr) const;
   // the highest contact below z_max on the vertical line at (x, y): a grain, or kFloor
   int fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real& z, Cell& met) const;
   Real floor_rest(Real x, Real y, Real r) const;
@@ -586,7 +608,7 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
   flush();
 }
 
-Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
+Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest, int* support) const {
   w.wall_w = {R_.x0 + r, -(R_.x1 - r), R_.y0 + r, -(R_.y1 - r)};
   w.out = false;
   Vec3 p{x, y, kInf};
@@ -597,6 +619,13 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
   int exclude = kFloor;
   const Vec3 ez{0, 0, 1};
   auto on_floor = [&](const Vec3& q) { return q.z <= floor_rest(q.x, q.y, r); };
+  auto report_supports = [&] {
+    if (!support) return;
+    int k = 0;
+    for (int h = 0; h < n_held; ++h)
+      if (!is_wall(held[h])) support[k++] = held[h];
+    if (k < 3) support[k] = -1;
+  };
 
   for (int step = 0; step < kMaxArcs; ++step) {
     // no grain among the supports: fall straight down (a wall does not hold a grain up)
@@ -609,6 +638,8 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
       p.z = z;
       if (hit == kFloor) {
         rest = p;
+        n_held = 0;
+        report_supports();
         return Drop::Rest;
       }
       held[0] = hit;
@@ -731,6 +762,7 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
         (on_floor(arc.at(mid)) ? hi : lo) = mid;
       }
       rest = arc.at(hi);  // (the first point of the arc found on the floor, to 1e-12 rad)
+      report_supports();
       return Drop::Rest;
     }
     p = q;
@@ -757,6 +789,7 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest) const {
     if (mask < 0) return Drop::Discard;
     if (n_held == 3 && mask == 7) {
       rest = p;
+      report_supports();
       return Drop::Rest;
     }
     int kept = 0;
@@ -886,7 +919,7 @@ void Packer::run_tile(Tile& tile, std::vector<std::int32_t>& open) {
   }
 }
 
-BedPacking Packer::run() {
+std::int64_t Packer::prepare() {
   check_region(R_);
   floor_ = sample_map(R_, R_.floor, "floor", R_.r_lo);
   top_ = sample_map(R_, R_.top, "top", R_.r_lo);
@@ -965,9 +998,173 @@ BedPacking Packer::run() {
         ++n_open;
       }
     }
+  return n_open;
+}
 
+std::vector<Packer::TileGrain> Packer::pack_periodic(int n_tile, int ghost) {
+  // The tile is the central n_tile x n_tile columns of this packer's grid; the `ghost` columns
+  // around it hold the images of the grains within reach of its sides, so that a drop near a side
+  // sees the grains across it as they lie in the next copy. A drop that would read past the
+  // ghosts is not made (none of the tile's drops did, 2026-11-27).
+  const Real L = n_tile * cs_;
+  const Real c_lo = R_.x0 + ghost * cs_, c_hi = c_lo + L;  // (x and y alike: a square)
+  std::vector<TileGrain> tile;
+  struct Image {
+    std::int32_t of;
+    std::int8_t sx, sy;
+  };
+  std::vector<Image> image;  // by id
+  std::vector<std::int32_t> open;
+  for (int iy = ghost; iy < ghost + n_tile; ++iy)
+    for (int ix = ghost; ix < ghost + n_tile; ++ix) open.push_back(iy * nx_ + ix);
+  Walk w;
+  w.ix0 = w.iy0 = 1;
+  w.ix1 = nx_ - 2;
+  w.iy1 = ny_ - 2;
+  Rng rng(R_.seed);
+  while (!open.empty()) {
+    const std::size_t slot =
+        std::min(static_cast<std::size_t>(rng.uniform() * static_cast<Real>(open.size())),
+                 open.size() - 1);
+    const int c = open[slot];
+    const int ix = c % nx_, iy = c / nx_;
+    const Real r = R_.r_hi > R_.r_lo ? rng.uniform(R_.r_lo, R_.r_hi) : R_.r_lo;
+    const Real x = R_.x0 + (ix + rng.uniform()) * cs_, y = R_.y0 + (iy + rng.uniform()) * cs_;
+    Vec3 p;
+    int support[3] = {-1, -1, -1};
+    const Drop d = drop(x, y, r, w, p, support);
+    if (d == Drop::Leave) continue;
+    bool kept = false;
+    if (d == Drop::Rest && p.z <= top_.lo - r) {
+      // into the central square, and its supports as seen from there
+      int wx = 0, wy = 0;
+      for (; p.x < c_lo; p.x += L) ++wx;
+      for (; p.x >= c_hi; p.x -= L) --wx;
+      for (; p.y < c_lo; p.y += L) ++wy;
+      for (; p.y >= c_hi; p.y -= L) --wy;
+      TileGrain t{p, r, {-1, -1, -1}, {0, 0, 0}, {0, 0, 0}};
+      for (int k = 0; k < 3 && support[k] >= 0; ++k) {
+        const Image& s = image[static_cast<std::size_t>(support[k])];
+        t.support[k] = s.of;
+        t.sx[k] = static_cast<std::int8_t>(s.sx + wx);
+        t.sy[k] = static_cast<std::int8_t>(s.sy + wy);
+      }
+      const auto of = static_cast<std::int32_t>(tile.size());
+      tile.push_back(t);
+      // the grain and its images on the grid
+      for (int sy = -1; sy <= 1; ++sy)
+        for (int sx = -1; sx <= 1; ++sx) {
+          const Vec3 q{p.x + sx * L, p.y + sy * L, p.z};
+          if (q.x < R_.x0 || q.x >= R_.x1 || q.y < R_.y0 || q.y >= R_.y1) continue;
+          const auto id = static_cast<std::int32_t>(g_.size());
+          g_.push_back({});
+          next_.push_back(-1);
+          image.push_back({of, static_cast<std::int8_t>(sx), static_cast<std::int8_t>(sy)});
+          insert(id, q, r);
+        }
+      kept = true;
+    }
+    std::uint16_t& fail = fails_[static_cast<std::size_t>(c)];
+    if (kept) {
+      fail = 0;
+    } else if (++fail >= R_.patience) {
+      open[slot] = open.back();
+      open.pop_back();
+    }
+  }
+  return tile;
+}
+
+std::int64_t Packer::lay_slab() {
+  const Real z_cut = top_.lo - kSlabBelowTop * cs_;
+  const Real L = kSlabTile * cs_;
+  if (!flat_floor_ || z_cut - floor_.hi < kSlabLeast * cs_ || R_.x1 - R_.x0 < 2 * L ||
+      R_.y1 - R_.y0 < 2 * L)
+    return 0;
+  // the tile: packed on the same floor up to a little over the cut, so that the cut passes
+  // through its bulk and not its ragged top
+  const int n_all = kSlabTile + 2 * kSlabGhost;
+  BedRegion T;
+  T.x0 = T.y0 = 0;
+  T.x1 = T.y1 = (n_all - 0.5) * cs_;  // (n_all columns, the last half wide)
+  const Real floor = floor_.hi, top = z_cut + 2 * cs_;
+  T.floor = [floor](Real, Real) { return floor; };
+  T.top = [top](Real, Real) { return top; };
+  T.r_lo = R_.r_lo;
+  T.r_hi = R_.r_hi;
+  T.seed = mix_seed(R_.seed, ~0ULL, 1);
+  T.patience = R_.patience;
+  Packer packer(T);
+  packer.prepare();
+  const std::vector<TileGrain> tile = packer.pack_periodic(kSlabTile, kSlabGhost);
+  const Real c_lo = kSlabGhost * cs_;
+
+  // copy (a, b) of the tile puts its square's low corner at (x0 - ox + a L, y0 - oy + b L), the
+  // offset at random; a grain of a copy is laid when it lies under the cut, inside the footprint,
+  // not in an obstacle, and every grain holding it is laid (those lie earlier in the tile's
+  // order): whatever stays rests as it did in the tile
+  Rng rng(mix_seed(R_.seed, ~0ULL, 2));
+  const Real ox = rng.uniform() * L, oy = rng.uniform() * L;
+  const int na = static_cast<int>(std::ceil((R_.x1 - R_.x0 + ox) / L));
+  const int nb = static_cast<int>(std::ceil((R_.y1 - R_.y0 + oy) / L));
+  const std::size_t copies = static_cast<std::size_t>(na) * nb;
+  std::vector<std::uint8_t> laid(tile.size() * copies, 0);  // grain-major
+  auto where = [&](const TileGrain& t, int a, int b) {
+    return Vec3{t.p.x - c_lo + R_.x0 - ox + a * L, t.p.y - c_lo + R_.y0 - oy + b * L, t.p.z};
+  };
+  for (std::size_t k = 0; k < tile.size(); ++k) {
+    const TileGrain& t = tile[k];
+    if (t.p.z >= z_cut) continue;
+    for (int b = 0; b < nb; ++b)
+      for (int a = 0; a < na; ++a) {
+        const Vec3 p = where(t, a, b);
+        bool ok = p.x - t.r >= R_.x0 && p.x + t.r <= R_.x1 && p.y - t.r >= R_.y0 &&
+                  p.y + t.r <= R_.y1;
+        for (int s = 0; s < 3 && ok && t.support[s] >= 0; ++s) {
+          const int sa = a + t.sx[s], sb = b + t.sy[s];
+          ok = sa >= 0 && sa < na && sb >= 0 && sb < nb &&
+               laid[static_cast<std::size_t>(t.support[s]) * copies +
+                    static_cast<std::size_t>(sb) * na + sa];
+        }
+        if (ok && R_.blocked) ok = !R_.blocked(p, t.r);
+        laid[k * copies + static_cast<std::size_t>(b) * na + a] = ok;
+      }
+  }
+  // into the grid, copy by copy
+  std::int64_t n = 0;
+  if (getenv("SLABDBG")) {
+    std::vector<long> hist(64,0); long below=0;
+    for (std::size_t k = 0; k < tile.size(); ++k) { if (tile[k].p.z>=z_cut) continue;
+      for (std::size_t c = 0; c < copies; ++c) { const int a = c % na, b = c / na; Vec3 p = where(tile[k],a,b);
+        if (p.x < R_.x0 || p.x > R_.x1 || p.y < R_.y0 || p.y > R_.y1) continue; ++below;
+        if (laid[k*copies+c]) continue;
+        Real dw = std::min({p.x-R_.x0, R_.x1-p.x, p.y-R_.y0, R_.y1-p.y})/cs_;
+        hist[std::min<int>(63, (int)dw)]++; } }
+    fprintf(stderr, "tile %zu below %ld removed by distance from wall (d):", tile.size(), below);
+    for (int i=0;i<64;++i) if (hist[i]) fprintf(stderr, " %d:%ld", i, hist[i]);
+    fprintf(stderr, "\n");
+  }
+  for (std::size_t c = 0; c < copies; ++c) {
+    const int a = static_cast<int>(c % na), b = static_cast<int>(c / na);
+    for (std::size_t k = 0; k < tile.size(); ++k) {
+      if (!laid[k * copies + c]) continue;
+      const auto id = static_cast<std::int32_t>(g_.size());
+      g_.push_back({});
+      next_.push_back(-1);
+      insert(id, where(tile[k], a, b), tile[k].r);
+      ++n;
+    }
+  }
+  return n;
+}
+
+BedPacking Packer::run() {
+  std::int64_t n_open = prepare();
   BedPacking out;
-  std::int64_t kept = 0;
+  auto T0 = std::chrono::steady_clock::now();
+  out.tiled = lay_slab();
+  if (getenv("SLABDBG")) fprintf(stderr, "slab %.3f s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - T0).count());
+  std::int64_t kept = out.tiled;
   const int threads = std::max(1, R_.threads);
   std::vector<std::vector<std::int32_t>> scratch(static_cast<std::size_t>(threads));
   std::vector<Tile> tiles;

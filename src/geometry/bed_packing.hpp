@@ -91,6 +91,7 @@ struct BedPacking {
   std::int64_t drops = 0;      ///< grains dropped, kept or not
   std::int64_t discarded = 0;  ///< of them: came to rest above the top, or did not settle
   std::int64_t blocked = 0;    ///< of them: refused by `blocked`
+  std::int64_t tiled = 0;      ///< grains laid from the periodic tile (not dropped)
   std::size_t size() const { return x.size(); }
 };
 
