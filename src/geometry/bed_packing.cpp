@@ -1,7 +1,6 @@
 #include "geometry/bed_packing.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -1132,18 +1131,6 @@ std::int64_t Packer::lay_slab() {
   }
   // into the grid, copy by copy
   std::int64_t n = 0;
-  if (getenv("SLABDBG")) {
-    std::vector<long> hist(64,0); long below=0;
-    for (std::size_t k = 0; k < tile.size(); ++k) { if (tile[k].p.z>=z_cut) continue;
-      for (std::size_t c = 0; c < copies; ++c) { const int a = c % na, b = c / na; Vec3 p = where(tile[k],a,b);
-        if (p.x < R_.x0 || p.x > R_.x1 || p.y < R_.y0 || p.y > R_.y1) continue; ++below;
-        if (laid[k*copies+c]) continue;
-        Real dw = std::min({p.x-R_.x0, R_.x1-p.x, p.y-R_.y0, R_.y1-p.y})/cs_;
-        hist[std::min<int>(63, (int)dw)]++; } }
-    fprintf(stderr, "tile %zu below %ld removed by distance from wall (d):", tile.size(), below);
-    for (int i=0;i<64;++i) if (hist[i]) fprintf(stderr, " %d:%ld", i, hist[i]);
-    fprintf(stderr, "\n");
-  }
   for (std::size_t c = 0; c < copies; ++c) {
     const int a = static_cast<int>(c % na), b = static_cast<int>(c / na);
     for (std::size_t k = 0; k < tile.size(); ++k) {
@@ -1161,9 +1148,7 @@ std::int64_t Packer::lay_slab() {
 BedPacking Packer::run() {
   std::int64_t n_open = prepare();
   BedPacking out;
-  auto T0 = std::chrono::steady_clock::now();
   out.tiled = lay_slab();
-  if (getenv("SLABDBG")) fprintf(stderr, "slab %.3f s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - T0).count());
   std::int64_t kept = out.tiled;
   const int threads = std::max(1, R_.threads);
   std::vector<std::vector<std::int32_t>> scratch(static_cast<std::size_t>(threads));

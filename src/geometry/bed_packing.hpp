@@ -41,6 +41,21 @@
 // the bulk vary by 0.003-0.004 in packing fraction (0.005-0.008 with the generator of 2026-11-26:
 // one global order, and 2 % of its drops lost at a lift-off).
 //
+// The slab: where the floor is flat and the footprint at least two tiles wide (kSlabTile = 32
+// columns), the bulk from the floor up to a cut two cells under the lowest top (when that leaves
+// at least four cells) is not dropped grain by grain but laid from a tile: a 32 x 32-column square
+// packed once by the same drops, periodic in x and y (the grains within reach of a side seen
+// across it in ghost columns of their images), copied over the footprint at a random offset.
+// A grain of a copy is laid when it lies under the cut, inside the footprint and not in an
+// obstacle, and every grain that held it in the tile is laid: what is laid rests as it did. What
+// the cut takes away (the grains crossing a wall, and above them every grain they held, in a cone
+// up to about 30 d wide along the walls of a 20 d bed) is then dropped as before, with the top
+// over the cut. The slab's grains repeat every 32 columns; its bulk packs as the dropped bed does
+// (0.5838 against 0.5839 in the test). Mirror-image copies of a tile packed between walls, whose
+// sides would match with nothing removed, ran twice as fast but packed the bulk at 0.572 against
+// 0.582 (planes packed as at a wall every 32 d), so they are not used (docs/performance.md,
+// 2026-11-27, seventh).
+//
 // Speed (docs/performance.md, 2026-11-27): a uniform grid of cells 2 r_hi wide, filed column by
 // column (z fastest), with each column's highest filled cell, so that a fall scans only the top
 // of 3 x 3 columns; an arc scans the cells of its bounding box widened by a contact's reach, a

@@ -1,12 +1,14 @@
 // The bed generator (geometry/bed_packing.hpp): the packing fraction of its bulk, exact contacts
 // (a brute-force check of every pair), grains inside the footprint, on the floor and under the
-// top (flat, a heightmap floor, a sloped top), an obstacle respected, every grain stably supported,
+// top (flat, a heightmap floor, a sloped top), an obstacle respected, every grain stably supported
+// (a bed dropped grain by grain and one with a slab laid from the periodic tile),
 // the same bed for the same seed and for 1 and 2 threads, an exception of `blocked` passed on, and
 // the grain limit.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <stdexcept>
+#include <unordered_map>
 #include <vector>
 
 #include "geometry/bed_packing.hpp"
@@ -137,22 +139,34 @@ TEST(BedPacking, AnObstacleIsRespectedAndBuriedWithGrainsAboveIt) {
   EXPECT_GT(above, 20u);  // the sand covers it, no hole left over it
 }
 
-TEST(BedPacking, EveryGrainIsStablySupported) {
-  // resting on the floor, or gravity inside the cone of the normals of three of its contacts
-  // (grains or walls of the footprint): the rule the generator stops on
-  const BedRegion R = flat_bed(12, 8);
-  const BedPacking b = pack_bed(R);
-  ASSERT_GT(b.size(), 500u);
-  const Real tol = 1e-6 * kD;
+// Grains neither on the floor (z = 0) nor held by three of their contacts (grains or walls of the
+// footprint, touching within 1e-6 d) with gravity inside the cone of their normals: the rule the
+// generator stops on. Neighbours through a grid of cells a largest diameter wide.
+std::size_t count_unsupported(const BedPacking& b, const BedRegion& R) {
+  const Real tol = 1e-6 * kD, cs = 2 * R.r_hi;
+  auto key = [&](const Vec3& x, int dx, int dy, int dz) {
+    const auto i = static_cast<std::int64_t>(std::floor((x.x - R.x0) / cs)) + dx;
+    const auto j = static_cast<std::int64_t>(std::floor((x.y - R.y0) / cs)) + dy;
+    const auto k = static_cast<std::int64_t>(std::floor(x.z / cs)) + dz;
+    return (i * 100003 + j) * 1009 + k;
+  };
+  std::unordered_map<std::int64_t, std::vector<std::size_t>> grid;
+  for (std::size_t i = 0; i < b.size(); ++i) grid[key(b.x[i], 0, 0, 0)].push_back(i);
   std::size_t unsupported = 0;
   for (std::size_t i = 0; i < b.size(); ++i) {
     const Vec3& x = b.x[i];
     const Real r = b.r[i];
     if (x.z - r < tol) continue;  // on the floor
     std::vector<Vec3> n;
-    for (std::size_t j = 0; j < b.size(); ++j)
-      if (j != i && std::abs(norm(x - b.x[j]) - r - b.r[j]) < tol)
-        n.push_back((x - b.x[j]) / norm(x - b.x[j]));
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto it = grid.find(key(x, dx, dy, dz));
+          if (it == grid.end()) continue;
+          for (std::size_t j : it->second)
+            if (j != i && std::abs(norm(x - b.x[j]) - r - b.r[j]) < tol)
+              n.push_back((x - b.x[j]) / norm(x - b.x[j]));
+        }
     if (x.x - r - R.x0 < tol) n.push_back({1, 0, 0});
     if (R.x1 - x.x - r < tol) n.push_back({-1, 0, 0});
     if (x.y - r - R.y0 < tol) n.push_back({0, 1, 0});
@@ -168,7 +182,50 @@ TEST(BedPacking, EveryGrainIsStablySupported) {
         }
     unsupported += !stable;
   }
-  EXPECT_EQ(unsupported, 0u);
+  return unsupported;
+}
+
+TEST(BedPacking, EveryGrainIsStablySupported) {
+  const BedRegion R = flat_bed(12, 8);
+  const BedPacking b = pack_bed(R);
+  ASSERT_GT(b.size(), 500u);
+  EXPECT_EQ(b.tiled, 0);  // (too small for the slab: dropped grain by grain)
+  EXPECT_EQ(count_unsupported(b, R), 0u);
+}
+
+TEST(BedPacking, TheSlabFromAPeriodicTileIsADropBedAtRest) {
+  // 80 d square, 11 d deep, radii from 0.4 d to 0.6 d: wide and deep enough for the slab (two
+  // tiles of 32 columns of 1.2 d, 4 cells under a cut 2 cells below the top). Its grains, those dropped into the
+  // bands its cut leaves along the walls and those dropped over it form one bed: no overlap,
+  // every grain inside and at rest, the bulk packed as a bed dropped grain by grain is (the same
+  // region 70 d wide, too narrow for the slab), and the same bed on 1 and 2 threads.
+  BedRegion R = flat_bed(80, 11);
+  R.r_lo = 0.4 * kD;
+  R.r_hi = 0.6 * kD;
+  const BedPacking b = pack_bed(R);
+  ASSERT_GT(b.size(), 40000u);
+  EXPECT_GT(b.tiled, static_cast<std::int64_t>(b.size() / 3));
+  EXPECT_LT(largest_overlap(b.x, b.r), 1e-3);
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    const Vec3& x = b.x[i];
+    const Real r = b.r[i];
+    ASSERT_TRUE(x.x - r >= -1e-6 * kD && x.x + r <= R.x1 + 1e-6 * kD && x.y - r >= -1e-6 * kD &&
+                x.y + r <= R.y1 + 1e-6 * kD && x.z - r >= -1e-12 && x.z + r <= 11 * kD + 1e-12)
+        << "grain " << i << " of " << b.size();
+  }
+  EXPECT_EQ(count_unsupported(b, R), 0u);
+  const Real m = 4 * kD;
+  const Real phi = packing_fraction_in(b.x, b.r, {m, m, m}, {80 * kD - m, 80 * kD - m, 7 * kD});
+  BedRegion narrow = R;
+  narrow.x1 = narrow.y1 = 70 * kD;
+  const BedPacking c = pack_bed(narrow);
+  EXPECT_EQ(c.tiled, 0);
+  const Real phi_dropped =
+      packing_fraction_in(c.x, c.r, {m, m, m}, {70 * kD - m, 70 * kD - m, 7 * kD});
+  EXPECT_NEAR(phi, phi_dropped, 0.006) << "slab " << phi << ", dropped " << phi_dropped;
+  R.threads = 2;
+  const BedPacking d = pack_bed(R);
+  EXPECT_TRUE(d.x == b.x && d.r == b.r);
 }
 
 TEST(BedPacking, TheSameSeedGivesTheSameBed) {
