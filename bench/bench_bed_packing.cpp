@@ -80,8 +80,9 @@ int main(int argc, char** argv) {
   std::printf(
       "grains=%zu tiled=%lld drops=%lld discarded=%lld seconds=%.3f cpu_seconds=%.3f "
       "grains_per_s=%.0f grains_per_cpu_s=%.0f\n",
-      bed.size(), static_cast<long long>(bed.tiled), static_cast<long long>(bed.drops), static_cast<long long>(bed.discarded), seconds,
-      cpu, static_cast<double>(bed.size()) / seconds, static_cast<double>(bed.size()) / cpu);
+      bed.size(), static_cast<long long>(bed.tiled), static_cast<long long>(bed.drops),
+      static_cast<long long>(bed.discarded), seconds, cpu,
+      static_cast<double>(bed.size()) / seconds, static_cast<double>(bed.size()) / cpu);
   std::printf("bulk_packing_fraction=%.4f largest_overlap_over_d=%.3g\n", phi, overlap);
   return 0;
 }

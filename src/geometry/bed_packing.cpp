@@ -297,8 +297,8 @@ class Packer {
   struct TileGrain {
     Vec3 p;
     Real r;
-    std::int32_t support[3];     ///< grains of the tile holding it, -1 past the last
-    std::int8_t sx[3], sy[3];    ///< ... in the copy of the tile this far away in x and y
+    std::int32_t support[3];   ///< grains of the tile holding it, -1 past the last
+    std::int8_t sx[3], sy[3];  ///< ... in the copy of the tile this far away in x and y
   };
   std::vector<TileGrain> pack_periodic(int n_tile, int ghost);
 
@@ -676,7 +676,7 @@ Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest, int* support) con
       // the equator: p.z - a.z = rho (e1.z cos t + e2.z sin t) falls through 0
       arc.t_max = first_entry(0, s * arc.e1.z, s * arc.e2.z, 2);  // (up to pi)
       if (arc.t_max.is_none()) arc.t_max = Angle::of(0, 1);       // (pi / 2)
-      other = kFloor - 1;  // (the equator)
+      other = kFloor - 1;                                         // (the equator)
     } else {
       const int ig = is_wall(held[0]) ? 1 : 0;  // (a grain; the other a grain or a wall)
       const int wj = held[1 - ig];
@@ -1022,9 +1022,8 @@ std::vector<Packer::TileGrain> Packer::pack_periodic(int n_tile, int ghost) {
   w.iy1 = ny_ - 2;
   Rng rng(R_.seed);
   while (!open.empty()) {
-    const std::size_t slot =
-        std::min(static_cast<std::size_t>(rng.uniform() * static_cast<Real>(open.size())),
-                 open.size() - 1);
+    const std::size_t slot = std::min(
+        static_cast<std::size_t>(rng.uniform() * static_cast<Real>(open.size())), open.size() - 1);
     const int c = open[slot];
     const int ix = c % nx_, iy = c / nx_;
     const Real r = R_.r_hi > R_.r_lo ? rng.uniform(R_.r_lo, R_.r_hi) : R_.r_lo;
@@ -1117,8 +1116,8 @@ std::int64_t Packer::lay_slab() {
     for (int b = 0; b < nb; ++b)
       for (int a = 0; a < na; ++a) {
         const Vec3 p = where(t, a, b);
-        bool ok = p.x - t.r >= R_.x0 && p.x + t.r <= R_.x1 && p.y - t.r >= R_.y0 &&
-                  p.y + t.r <= R_.y1;
+        bool ok =
+            p.x - t.r >= R_.x0 && p.x + t.r <= R_.x1 && p.y - t.r >= R_.y0 && p.y + t.r <= R_.y1;
         for (int s = 0; s < 3 && ok && t.support[s] >= 0; ++s) {
           const int sa = a + t.sx[s], sb = b + t.sy[s];
           ok = sa >= 0 && sa < na && sb >= 0 && sb < nb &&

@@ -195,10 +195,10 @@ TEST(BedPacking, EveryGrainIsStablySupported) {
 
 TEST(BedPacking, TheSlabFromAPeriodicTileIsADropBedAtRest) {
   // 80 d square, 11 d deep, radii from 0.4 d to 0.6 d: wide and deep enough for the slab (two
-  // tiles of 32 columns of 1.2 d, 4 cells under a cut 2 cells below the top). Its grains, those dropped into the
-  // bands its cut leaves along the walls and those dropped over it form one bed: no overlap,
-  // every grain inside and at rest, the bulk packed as a bed dropped grain by grain is (the same
-  // region 70 d wide, too narrow for the slab), and the same bed on 1 and 2 threads.
+  // tiles of 32 columns of 1.2 d, 4 cells under a cut 2 cells below the top). Its grains, those
+  // dropped into the bands its cut leaves along the walls and those dropped over it form one bed:
+  // no overlap, every grain inside and at rest, the bulk packed as a bed dropped grain by grain is
+  // (the same region 70 d wide, too narrow for the slab), and the same bed on 1 and 2 threads.
   BedRegion R = flat_bed(80, 11);
   R.r_lo = 0.4 * kD;
   R.r_hi = 0.6 * kD;
