@@ -201,6 +201,12 @@ std::string section(std::uint32_t tag, const Checkpoint& c) {
         w.reals(s.surface->h_seen, "the interface's h");
         w.reals(s.surface->L_seen, "the interface's L");
         w.u8(s.surface->pending ? 1 : 0);
+        w.count(s.surface->blows.size());
+        for (const Blow& b : s.surface->blows) {
+          for (Real v : {b.p, b.p0, b.px, b.py, b.m, b.d, b.z0, b.rho}) w.real(v, "a blow");
+          w.i64(b.n);
+        }
+        w.u32s(s.surface->counted);
       }
       break;
   }
@@ -423,6 +429,16 @@ void read_section(std::uint32_t tag, Reader& r, Checkpoint& c) {
       const std::uint8_t pending = r.u8("the interface's waiting flag");
       if (pending > 1) r.fail("the interface's waiting flag is neither 0 nor 1");
       sf.pending = pending == 1;
+      sf.blows.resize(r.count(72, "the blows"));
+      for (Blow& b : sf.blows) {
+        for (Real* v : {&b.p, &b.p0, &b.px, &b.py, &b.m, &b.d, &b.z0, &b.rho}) *v = r.real("a blow");
+        b.n = r.count_value("a blow's grains", 1);
+        if (!(b.p >= 0 && b.p0 > 0 && b.m > 0 && b.d > 0 && b.rho >= 0))
+          r.fail("a blow's momentum, mass, diameters or radius are out of range");
+      }
+      sf.counted = r.u32s("the grains the blows counted");
+      if (!std::is_sorted(sf.counted.begin(), sf.counted.end()))
+        r.fail("the grains the blows counted are not in order");
       s.surface = std::move(sf);
       break;
     }

@@ -34,7 +34,8 @@ namespace sandflow {
 /// 4: the stage timings are those of the eight stages of World::step (core/timer.hpp), not five.
 /// 5: STAT holds the static store's compact form (12 bytes a grain), not doubles; the height
 ///    field keeps each column's time at rest (closed columns).
-constexpr std::uint32_t kCheckpointFormat = 5;
+/// 6: SURF holds the blows under way and the grains they counted (surface.blows).
+constexpr std::uint32_t kCheckpointFormat = 6;
 
 struct Checkpoint {
   std::uint32_t format = kCheckpointFormat;

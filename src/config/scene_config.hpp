@@ -57,6 +57,8 @@ struct SurfaceConfig {
   std::optional<Real> rolling_min;          ///< R_min [m]; default one mean diameter
   std::optional<Real> flowing_min;          ///< R_min under a flowing layer [m]; default 4 d
   Real close_after = 2.0;                   ///< rest after which a column's top freezes [s]
+  /// a body striking the bed opens it as far as its whole momentum reaches (the blow rule)
+  bool blows = false;
   std::optional<Real> interface_thickness;  ///< T [m]; default half a mean diameter
   std::optional<Real> update_interval;      ///< time between height-field updates [s]
   std::optional<Real> trap_speed;           ///< grains slower than this may be trapped [m/s]

@@ -114,6 +114,7 @@ void read_surface(TableReader r, SurfaceConfig& s, Real diameter) {
   r.read("rolling_min", s.rolling_min, kNonNegative);
   r.read("flowing_min", s.flowing_min, kNonNegative);
   r.read("close_after", s.close_after, kNonNegative);
+  r.read("blows", s.blows);
   r.read("interface_thickness", s.interface_thickness, kPositive);
   r.read("update_interval", s.update_interval, kPositive);
   r.read("trap_speed", s.trap_speed, kNonNegative);

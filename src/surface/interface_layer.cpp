@@ -209,7 +209,7 @@ Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticS
         flagged.push_back(g.slot);
     });
   }
-  n.woken = wake(hf, hot, st, std::move(flagged), changes);
+  n.woken = wake(hf, hot, st, std::move(flagged), changes, p_.blows);
   return out;
 }
 
@@ -237,13 +237,13 @@ Transitions InterfaceLayer::wake_within_reach(const HeightField& hf, Grains& hot
 #pragma omp critical
     flagged.insert(flagged.end(), mine.begin(), mine.end());
   }
-  out.counts.woken_by_reach = wake(hf, hot, st, std::move(flagged), out.changes);
+  out.counts.woken_by_reach = wake(hf, hot, st, std::move(flagged), out.changes, false);
   return out;
 }
 
 std::int64_t InterfaceLayer::wake(const HeightField& hf, Grains& hot, StaticStore& st,
                                   std::vector<std::uint32_t> slots,
-                                  std::vector<StateChange>& changes) {
+                                  std::vector<StateChange>& changes, bool above_h_free) {
   if (slots.empty()) return 0;
   // in slot order, each once: the hot store receives them in an order the threads do not decide
   std::sort(slots.begin(), slots.end());
@@ -260,9 +260,12 @@ std::int64_t InterfaceLayer::wake(const HeightField& hf, Grains& hot, StaticStor
         if (top >= tops_[c]) dirty_.add(static_cast<std::uint32_t>(c));
       });
     hot.add(g.id, g.x, Vec3{}, g.r, p_.density);
-    // (one below its column's level moves on its own; transfer() makes it ACTIVE next time)
-    hot.state.back() = GrainState::Interface;
-    changes.push_back({g.id, GrainState::Static, GrainState::Interface});
+    // INTERFACE, the band under h, or ACTIVE above it where h fell past it: frozen there until the
+    // next update, it would be a floor under a blow that has already opened the bed. (One below
+    // its column's level moves on its own; transfer() makes it ACTIVE next time.)
+    const bool free = above_h_free && g.x.z > hf.static_top_at(g.x.x, g.x.y) + p_.margin;
+    hot.state.back() = free ? GrainState::Active : GrainState::Interface;
+    changes.push_back({g.id, GrainState::Static, hot.state.back()});
   }
   st.remove(slots);
   if (follow) {

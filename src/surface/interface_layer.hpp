@@ -9,7 +9,8 @@
 //   INTERFACE centre above h            -> ACTIVE    (dislodged, from rest)
 //   INTERFACE centre below h - T        -> STATIC    (sleeps: leaves the DEM, filed by column;
 //                                                     anywhere below h in a closed column)
-//   STATIC    centre above h - T        -> INTERFACE (wakes: only where h fell)
+//   STATIC    centre above h - T        -> INTERFACE (wakes: only where h fell; ACTIVE if above
+//                                                     h + m, where a blow opened the bed)
 //
 // The invariant that makes the layers safe: no STATIC grain lies within reach of an ACTIVE grain,
 // reach being what the two can close before the pair list is rebuilt again. STATIC grains push
@@ -70,6 +71,10 @@ struct InterfaceParams {
   SeatParams seat;          ///< which grains are held
   Real margin = 0.0025;     ///< hysteresis of the band's edges [m]
   Real density = 2600;      ///< to restore the mass of a woken grain [kg/m^3]
+  /// The blow rule (surface.blows): bodies striking the bed open it as far as their momentum
+  /// reaches, and a grain woken above h there moves at once (SurfaceFlow::apply_impacts).
+  bool blows = false;
+  Real friction = 0.6;  ///< the grains' friction: how soon a blow's moving bed stops
 };
 
 /// The thickness in the vertical of a band `thickness` thick normal to a slope `theta` [rad]: T /
@@ -145,9 +150,11 @@ class InterfaceLayer {
   /// Recomputes the tops of the marked columns from the static grains (filed by column).
   void recompute_tops(const HeightField& hf, const StaticStore& st, const ColumnSet& dirty);
   /// Moves the static grains in `slots` (in any order, repeats allowed) to the hot grains as
-  /// INTERFACE, in slot order, each added to `changes`; returns how many.
+  /// INTERFACE, in slot order, each added to `changes`; returns how many. With `above_h_free`,
+  /// those whose centre lies above h + margin go ACTIVE.
   std::int64_t wake(const HeightField& hf, Grains& hot, StaticStore& st,
-                    std::vector<std::uint32_t> slots, std::vector<StateChange>& changes);
+                    std::vector<std::uint32_t> slots, std::vector<StateChange>& changes,
+                    bool above_h_free);
 
   StaticReach reach_;  ///< the static grains near a point, for wake_within_reach
 };

@@ -8,6 +8,7 @@
 // of 0.31 sqrt(|g| d).
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -60,6 +61,20 @@ inline bool at_rest(const SeatParams& p, const Grains& g, std::size_t i, std::ui
 /// Whether grain i moves the pile it touches: touching it with more than the seat's energy.
 inline bool moves_pile(const SeatParams& p, const Grains& g, std::size_t i, std::uint8_t contacts) {
   return (contacts & DemSolver::kTouches) && kinetic_energy_per_mass(g, i) >= p.move_energy(g.r[i]);
+}
+
+/// Packing fraction of the bed a blow strikes, in blow_radius: poured sand's.
+constexpr Real kBlowPacking = 0.6;
+
+/// How far a blow sets a bed in motion [m]: a body of grains of mean mass m and diameter d that
+/// strikes it with momentum m v (v: the speed one grain would need to carry it) shares the
+/// momentum with the bed's grains in a half-sphere of radius rho about the point it strikes
+/// (packing kBlowPacking); they move the pile while their shared speed is still v_flow:
+/// m v = (m + phi 2/3 pi rho^3 rho_s) v_flow, so rho = d cbrt((v / v_flow - 1) / (4 phi)).
+/// 0 at or below v_flow.
+inline Real blow_radius(Real v, Real v_flow, Real d) {
+  if (!(v > v_flow) || !(v_flow > 0)) return 0;
+  return d * std::cbrt((v / v_flow - 1) / (4 * kBlowPacking));
 }
 
 }  // namespace sandflow

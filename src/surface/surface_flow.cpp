@@ -113,11 +113,82 @@ void SurfaceFlow::apply_impacts(const Grains& hot, Real dt) {
   // and slow grains would run out over a bed that does not yield. It reaches below the grain as
   // far as the grain can fall before the next update. (Dynamics, not safety: the invariant of the
   // layers keeps grains out of the static layer.)
-  for (std::uint32_t i : fast_) {
+  auto strike = [&](std::size_t i) {
     const Vec3& x = hot.x[i];
     const Vec3& v = hot.v[i];
     clear_path(x, v, hot.r[i], x.z - 3 * hot.r[i] - std::max(-v.z, 0.0) * dt);
+  };
+  for (std::uint32_t i : fast_) strike(i);
+  if (p_.interface.blows) strike_with_blows(hot, dt, strike);
+}
+
+template <class Strike>
+void SurfaceFlow::strike_with_blows(const Grains& hot, Real dt, Strike&& strike) {
+  // The blow rule (surface.blows; docs/physics.md, "Blows"). A grain in flight that reaches the
+  // static top before the next update strikes as one in contact does: the clod of an impact falls
+  // 2 cm between two updates, and would land on a bed that does not yield. And a body of grains
+  // falling into the bed faster than the flow speed shares its whole momentum with the bed, not
+  // one grain's: each blow is a record of where it struck and of the downward momentum brought
+  // into its footprint, down to the bed's level there, by every fast-falling grain (each counted
+  // once), decaying as the bed it set moving stops (over v_flow / (mu g)). While it lasts, the
+  // static top stays under the half-sphere that momentum sets moving (seat.hpp, blow_radius).
+  const SeatParams& seat = p_.interface.seat;
+  const Real stop = p_.interface.friction * seat.gravity;  // deceleration of the moving bed
+  for (Blow& b : blows_) {
+    const Real v_flow = std::sqrt(2 * seat.move_energy(b.d / static_cast<Real>(b.n) / 2));
+    b.p *= std::exp(-dt * stop / std::max(v_flow, 1e-12));
   }
+  for (std::size_t i = 0; i < hot.size(); ++i) {
+    if (hot.state[i] != GrainState::Active ||
+        kinetic_energy_per_mass(hot, i) < seat.move_energy(hot.r[i]) || below_level(hot.x[i]))
+      continue;
+    const Vec3& x = hot.x[i];
+    const Vec3& v = hot.v[i];
+    const Real low = x.z - hot.r[i] + std::min(v.z, 0.0) * dt;  // its bottom at the next update
+    const bool lands = low <= hf_.static_top_at(x.x, x.y);
+    if (lands && !(contacts_[i] & DemSolver::kTouches)) strike(i);
+    if (-v.z <= std::sqrt(2 * seat.move_energy(hot.r[i])) || counted_.count(hot.id[i])) continue;
+    Blow* into = nullptr;
+    for (Blow& b : blows_) {
+      const Real d = b.d / static_cast<Real>(b.n);
+      if (std::hypot(x.x - b.px / b.p0, x.y - b.py / b.p0) < std::max(b.rho, 2 * d) &&
+          low <= b.z0 + d) {
+        into = &b;
+        break;
+      }
+    }
+    if (!into && !lands) continue;
+    if (!into) {
+      // a new blow, centred on the sand's surface where it strikes
+      const std::int64_t c = hf_.column_of(x.x, x.y);
+      Blow b;
+      b.z0 = hf_.static_top_at(x.x, x.y);
+      if (c >= 0) b.z0 = std::max(b.z0, hf_.surface()[static_cast<std::size_t>(c)]);
+      blows_.push_back(b);
+      into = &blows_.back();
+    }
+    const Real p = hot.m[i] * -v.z;
+    into->p += p;
+    into->p0 += p;
+    into->px += p * x.x;
+    into->py += p * x.y;
+    into->m += hot.m[i];
+    into->d += 2 * hot.r[i];
+    ++into->n;
+    counted_.insert(hot.id[i]);
+  }
+  // each blow's half-sphere; one whose momentum no longer opens more than a grain's strike ends
+  std::size_t kept = 0;
+  for (Blow& b : blows_) {
+    const Real n = static_cast<Real>(b.n), d = b.d / n;
+    b.rho = blow_radius(b.p / (b.m / n), std::sqrt(2 * seat.move_energy(d / 2)), d);
+    if (b.rho <= d) continue;
+    hf_.for_each_ray_hit(Vec3{b.px / b.p0, b.py / b.p0, b.z0}, b.rho,
+                         [&](std::size_t c, Real bottom, Real) { hf_.limit_static_top(c, bottom); });
+    blows_[kept++] = b;
+  }
+  blows_.resize(kept);
+  if (blows_.empty()) counted_.clear();
 }
 
 Transitions SurfaceFlow::transfer(Grains& hot, StaticStore& st, const DemSolver& dem) {

@@ -7,6 +7,8 @@
 // the surface flow reads the solver, it does not change it.
 #pragma once
 
+#include <algorithm>
+#include <unordered_set>
 #include <vector>
 
 #include "dem/dem_solver.hpp"
@@ -20,10 +22,20 @@ namespace sandflow {
 
 /// What a restart needs of the surface flow: the height field's columns and the interface's
 /// memory of the last transfer (src/checkpoint/). The rest is scratch of one update.
+/// A blow under way (the blow rule, SurfaceFlow::apply_impacts): its momentum now and all it
+/// received [kg m/s], the received momentum's sums of x and y, the mass and the diameters of the
+/// grains counted and how many, where it struck (z0: the sand's surface there) and its radius [m].
+struct Blow {
+  Real p = 0, p0 = 0, px = 0, py = 0, m = 0, d = 0, z0 = 0, rho = 0;
+  std::int64_t n = 0;
+};
+
 struct SurfaceState {
   HeightField::State columns;
   std::vector<Real> h_seen, L_seen;
   bool pending = false;  ///< transitions wait for the pair list's next rebuild
+  std::vector<Blow> blows;
+  std::vector<GrainId> counted;  ///< (ascending)
 };
 
 class SurfaceFlow {
@@ -73,13 +85,17 @@ class SurfaceFlow {
   const HeightField& height_field() const { return hf_; }
 
   SurfaceState save_state() const {
-    return {hf_.state(), interface_.h_seen(), interface_.L_seen(), pending_};
+    std::vector<GrainId> counted(counted_.begin(), counted_.end());
+    std::sort(counted.begin(), counted.end());
+    return {hf_.state(), interface_.h_seen(), interface_.L_seen(), pending_, blows_, counted};
   }
   /// Restores a saved state (sizes checked by the caller).
   void restore_state(SurfaceState s) {
     hf_.restore(std::move(s.columns));
     interface_.restore_seen(std::move(s.h_seen), std::move(s.L_seen));
     pending_ = s.pending;
+    blows_ = std::move(s.blows);
+    counted_ = std::unordered_set<GrainId>(s.counted.begin(), s.counted.end());
   }
 
  private:
@@ -97,6 +113,10 @@ class SurfaceFlow {
   ColumnSet flowing_;                 ///< the columns where grains move the pile
   std::vector<std::uint32_t> moved_;  ///< scratch of take_moved()
   std::vector<std::uint32_t> fast_;  ///< the hot grains that move the pile, at the last update
+  template <class Strike>
+  void strike_with_blows(const Grains& hot, Real dt, Strike&& strike);
+  std::vector<Blow> blows_;              ///< the blows under way (the blow rule)
+  std::unordered_set<GrainId> counted_;  ///< the grains the blows under way have counted
   std::vector<Real> allow_;
   /// ACTIVE grains seated by seat_bed: part of the pile at the next measure (sorted ids)
   std::vector<GrainId> seated_;

@@ -81,6 +81,8 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
         sc.flow_speed ? (sc.trap_speed ? "" : " (trap_speed unset: the seat's bound)")
                       : " (flow_speed unset: the seat's bound)"));
   p.interface.density = scene.material.density;
+  p.interface.blows = sc.blows;
+  p.interface.friction = scene.material.friction;
   p.interface.margin = 0.25 * d;
   // a tenth of the time a grain takes to fall its diameter: the surface moves less than that
   const Real interval = sc.update_interval.value_or(0.1 * std::sqrt(d / std::max(g, 1e-12)));
