@@ -36,6 +36,8 @@ struct SeatParams {
   Real move_energy(Real r) const {
     return flow_speed >= 0 ? 0.5 * flow_speed * flow_speed : gravity * kSeatRise * r;
   }
+  /// move_energy as a speed, v_flow [m/s].
+  Real move_speed(Real r) const { return std::sqrt(2 * move_energy(r)); }
 };
 
 /// Kinetic energy per mass of grain i, rotation included [J/kg].

@@ -135,7 +135,7 @@ void SurfaceFlow::strike_with_blows(const Grains& hot, Real dt, Strike&& strike)
   const SeatParams& seat = p_.interface.seat;
   const Real stop = p_.interface.friction * seat.gravity;  // deceleration of the moving bed
   for (Blow& b : blows_) {
-    const Real v_flow = std::sqrt(2 * seat.move_energy(b.d / static_cast<Real>(b.n) / 2));
+    const Real v_flow = seat.move_speed(b.d / static_cast<Real>(b.n) / 2);
     b.p *= std::exp(-dt * stop / std::max(v_flow, 1e-12));
   }
   for (std::size_t i = 0; i < hot.size(); ++i) {
@@ -147,7 +147,7 @@ void SurfaceFlow::strike_with_blows(const Grains& hot, Real dt, Strike&& strike)
     const Real low = x.z - hot.r[i] + std::min(v.z, 0.0) * dt;  // its bottom at the next update
     const bool lands = low <= hf_.static_top_at(x.x, x.y);
     if (lands && !(contacts_[i] & DemSolver::kTouches)) strike(i);
-    if (-v.z <= std::sqrt(2 * seat.move_energy(hot.r[i])) || counted_.count(hot.id[i])) continue;
+    if (-v.z <= seat.move_speed(hot.r[i]) || counted_.count(hot.id[i])) continue;
     Blow* into = nullptr;
     for (Blow& b : blows_) {
       const Real d = b.d / static_cast<Real>(b.n);
@@ -181,7 +181,7 @@ void SurfaceFlow::strike_with_blows(const Grains& hot, Real dt, Strike&& strike)
   std::size_t kept = 0;
   for (Blow& b : blows_) {
     const Real n = static_cast<Real>(b.n), d = b.d / n;
-    b.rho = blow_radius(b.p / (b.m / n), std::sqrt(2 * seat.move_energy(d / 2)), d);
+    b.rho = blow_radius(b.p / (b.m / n), seat.move_speed(d / 2), d);
     if (b.rho <= d) continue;
     hf_.for_each_ray_hit(Vec3{b.px / b.p0, b.py / b.p0, b.z0}, b.rho,
                          [&](std::size_t c, Real bottom, Real) { hf_.limit_static_top(c, bottom); });

@@ -20,8 +20,6 @@
 
 namespace sandflow {
 
-/// What a restart needs of the surface flow: the height field's columns and the interface's
-/// memory of the last transfer (src/checkpoint/). The rest is scratch of one update.
 /// A blow under way (the blow rule, SurfaceFlow::apply_impacts): its momentum now and all it
 /// received [kg m/s], the received momentum's sums of x and y, the mass and the diameters of the
 /// grains counted and how many, where it struck (z0: the sand's surface there) and its radius [m].
@@ -30,6 +28,9 @@ struct Blow {
   std::int64_t n = 0;
 };
 
+/// What a restart needs of the surface flow: the height field's columns, the interface's memory
+/// of the last transfer and the blows under way (src/checkpoint/). The rest is scratch of one
+/// update.
 struct SurfaceState {
   HeightField::State columns;
   std::vector<Real> h_seen, L_seen;

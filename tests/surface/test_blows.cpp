@@ -65,7 +65,7 @@ TEST(Blows, AClodOpensTheBedAsFarAsItsMomentumReachesAndOnlyWithTheRule) {
         // its radius is the one its momentum sets moving
         const Real n = static_cast<Real>(b.n), d = b.d / n;
         const SeatParams& seat = w.surface()->params().interface.seat;
-        EXPECT_NEAR(b.rho, blow_radius(b.p / (b.m / n), std::sqrt(2 * seat.move_energy(d / 2)), d),
+        EXPECT_NEAR(b.rho, blow_radius(b.p / (b.m / n), seat.move_speed(d / 2), d),
                     1e-12);
         widest = std::max(widest, b.rho);
       }
