@@ -1,11 +1,12 @@
 // The bed generator (src/geometry/bed_packing.hpp) on --threads threads (default 1): a flat bed
 // of equal grains (or of radii spread by --spread) on a flat floor, sized for about --grains
-// grains. Prints grains,
+// grains (cells closing after --patience discarded drops, default the generator's). Prints grains,
 // seconds, grains per second, the packing fraction of the bulk (a box 5 diameters inside the
 // floor, the walls and the top) and the largest overlap over a diameter. Not a test: timings go
 // to docs/performance.md.
 //
 //   bench_bed_packing [--grains N] [--spread S] [--seed K] [--depth D] [--threads T]
+//                     [--patience P]
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -20,7 +21,7 @@ using namespace sandflow;
 
 int main(int argc, char** argv) {
   double grains = 1e6, spread = 0, depth_d = 22;
-  int threads = 1;
+  int threads = 1, patience = BedRegion{}.patience;
   std::uint64_t seed = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i];
@@ -35,10 +36,12 @@ int main(int argc, char** argv) {
       depth_d = v;
     else if (k == "--threads")
       threads = static_cast<int>(v);
+    else if (k == "--patience")
+      patience = static_cast<int>(v);
     else {
       std::fprintf(stderr,
                    "usage: bench_bed_packing [--grains N] [--spread S] [--seed K] [--depth D] "
-                   "[--threads T]\n");
+                   "[--threads T] [--patience P]\n");
       return 2;
     }
   }
@@ -56,6 +59,7 @@ int main(int argc, char** argv) {
   region.r_hi = 0.5 * d * (1 + spread);
   region.seed = seed;
   region.threads = threads;
+  region.patience = patience;
 
   // a small warm-up bed (page faults, caches), then the timed one
   {
@@ -73,14 +77,17 @@ int main(int argc, char** argv) {
   const double phi = packing_fraction_in(bed.x, bed.r, {m, m, m}, {side - m, side - m, height - m});
   const double overlap = largest_overlap(bed.x, bed.r);
   std::printf(
-      "footprint %.3f x %.3f m, top %.3f m, d = %.3f m, spread %.2f, seed %llu, threads %d\n", side,
-      side, height, d, spread, static_cast<unsigned long long>(seed), threads);
+      "footprint %.3f x %.3f m, top %.3f m, d = %.3f m, spread %.2f, seed %llu, threads %d, "
+      "patience %d\n",
+      side, side, height, d, spread, static_cast<unsigned long long>(seed), threads, patience);
   // (the machines are shared: the CPU time of the threads, summed, is printed beside the wall
   // time)
   std::printf(
-      "grains=%zu tiled=%lld drops=%lld discarded=%lld seconds=%.3f cpu_seconds=%.3f "
+      "grains=%zu tiled=%lld settled=%lld copied=%lld drops=%lld discarded=%lld seconds=%.3f "
+      "cpu_seconds=%.3f "
       "grains_per_s=%.0f grains_per_cpu_s=%.0f\n",
-      bed.size(), static_cast<long long>(bed.tiled), static_cast<long long>(bed.drops),
+      bed.size(), static_cast<long long>(bed.tiled), static_cast<long long>(bed.settled),
+      static_cast<long long>(bed.copied), static_cast<long long>(bed.drops),
       static_cast<long long>(bed.discarded), seconds, cpu,
       static_cast<double>(bed.size()) / seconds, static_cast<double>(bed.size()) / cpu);
   std::printf("bulk_packing_fraction=%.4f largest_overlap_over_d=%.3g\n", phi, overlap);

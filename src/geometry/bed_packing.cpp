@@ -306,14 +306,18 @@ class Packer {
   // checks the region, samples its floor and top, makes the grid; the columns open for drops
   std::int64_t prepare();
   // the slab under the top laid from a periodic tile, where one fits (see the top of the file):
-  // its grains inserted as the first ids; how many
-  std::int64_t lay_slab();
+  // its grains inserted as the first ids; how many (and out's settled and copied)
+  std::int64_t lay_slab(BedPacking& out);
   // the drops of one tile (see run)
   void run_tile(Tile& tile, std::vector<std::int32_t>& open);
   // where a grain of radius r dropped at (x, y) comes to rest (Rest), or Discard (it did not
   // settle), or Leave (it would read columns beyond w's); `support` (when given) the grains
-  // holding it at rest, -1 past the last
-  Drop drop(Real x, Real y, Real r, Walk& w, Vec3& rest, int* support = nullptr) const;
+  // holding it at rest, -1 past the last. From `z_start` (kInf: from above everything) the
+  // grain falls from (x, y, z_start), which must overlap nothing.
+  Drop drop(Real x, Real y, Real r, Walk& w, Vec3& rest, int* support = nullptr,
+            Real z_start = kInf) const;
+  // no grain overlaps a grain of radius r at p by more than 1e-6 of a cell
+  bool clear(const Vec3& p, Real r) const;
   // the highest contact below z_max on the vertical line at (x, y): a grain, or kFloor
   int fall(Real x, Real y, Real r, Real z_max, int exclude, Walk& w, Real& z, Cell& met) const;
   Real floor_rest(Real x, Real y, Real r) const;
@@ -607,10 +611,10 @@ void Packer::first_contact(const Arc& arc, Real r, const int* held, int n_held, 
   flush();
 }
 
-Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest, int* support) const {
+Drop Packer::drop(Real x, Real y, Real r, Walk& w, Vec3& rest, int* support, Real z_start) const {
   w.wall_w = {R_.x0 + r, -(R_.x1 - r), R_.y0 + r, -(R_.y1 - r)};
   w.out = false;
-  Vec3 p{x, y, kInf};
+  Vec3 p{x, y, z_start};
   // the contacts holding the grain, and (for grains) where they are, as the grid gave them
   int held[3];
   Cell at[3];
@@ -823,6 +827,31 @@ void Packer::insert(std::int32_t k, const Vec3& p, Real r) {
   }
   int& top = col_top_[static_cast<std::size_t>(iy) * nx_ + ix];
   top = std::max(top, iz);
+}
+
+bool Packer::clear(const Vec3& p, Real r) const {
+  // (a cell's three slots at once, in floats relative to it as in fall: within 1e-7 of a cell)
+  const int ix = column_x(p.x), iy = column_y(p.y), iz = layer(p.z);
+  const Real tol = 1e-6 * cs_;
+  const F4 reach = splat(static_cast<float>(r - tol));
+  for (int jy = std::max(iy - 1, 0); jy <= std::min(iy + 1, ny_ - 1); ++jy)
+    for (int jx = std::max(ix - 1, 0); jx <= std::min(ix + 1, nx_ - 1); ++jx) {
+      const F4 px = splat(static_cast<float>(p.x - (R_.x0 + jx * cs_)));
+      const F4 py = splat(static_cast<float>(p.y - (R_.y0 + jy * cs_)));
+      for (int jz = std::max(iz - 1, 0); jz <= std::min(iz + 1, nz_ - 1); ++jz) {
+        const Slots& sl = cells_[cell(jx, jy, jz)];
+        const F4 pz = splat(static_cast<float>(p.z - (z0_ + jz * cs_)));
+        const F4 dx = load4(sl.x) - px, dy = load4(sl.y) - py, dz = load4(sl.z) - pz;
+        const F4 s = load4(sl.r) + reach;
+        if (mask3(dx * dx + dy * dy + dz * dz < s * s)) return false;  // (NaN: an empty slot)
+        for (std::int32_t q = sl.more; q >= 0; q = next_[static_cast<std::size_t>(q)]) {
+          const Cell& o = g_[static_cast<std::size_t>(q)];
+          const Real sum = r + o.r - tol;
+          if (norm2(p - Vec3{o.x, o.y, o.z}) < sum * sum) return false;
+        }
+      }
+    }
+  return true;
 }
 
 void Packer::run_tile(Tile& tile, std::vector<std::int32_t>& open) {
@@ -1073,7 +1102,7 @@ std::vector<Packer::TileGrain> Packer::pack_periodic(int n_tile, int ghost) {
   return tile;
 }
 
-std::int64_t Packer::lay_slab() {
+std::int64_t Packer::lay_slab(BedPacking& out) {
   const Real z_cut = top_.lo - kSlabBelowTop * cs_;
   const Real L = kSlabTile * cs_;
   if (!flat_floor_ || z_cut - floor_.hi < kSlabLeast * cs_ || R_.x1 - R_.x0 < 2 * L ||
@@ -1106,7 +1135,8 @@ std::int64_t Packer::lay_slab() {
   const int na = static_cast<int>(std::ceil((R_.x1 - R_.x0 + ox) / L));
   const int nb = static_cast<int>(std::ceil((R_.y1 - R_.y0 + oy) / L));
   const std::size_t copies = static_cast<std::size_t>(na) * nb;
-  std::vector<std::uint8_t> laid(tile.size() * copies, 0);  // grain-major
+  enum : std::uint8_t { kCut, kLaid, kFallen };
+  std::vector<std::uint8_t> state(tile.size() * copies, kCut);  // grain-major
   auto where = [&](const TileGrain& t, int a, int b) {
     return Vec3{t.p.x - c_lo + R_.x0 - ox + a * L, t.p.y - c_lo + R_.y0 - oy + b * L, t.p.z};
   };
@@ -1116,30 +1146,154 @@ std::int64_t Packer::lay_slab() {
     for (int b = 0; b < nb; ++b)
       for (int a = 0; a < na; ++a) {
         const Vec3 p = where(t, a, b);
-        bool ok =
-            p.x - t.r >= R_.x0 && p.x + t.r <= R_.x1 && p.y - t.r >= R_.y0 && p.y + t.r <= R_.y1;
-        for (int s = 0; s < 3 && ok && t.support[s] >= 0; ++s) {
+        if (p.x - t.r < R_.x0 || p.x + t.r > R_.x1 || p.y - t.r < R_.y0 || p.y + t.r > R_.y1)
+          continue;
+        bool held = true;
+        for (int s = 0; s < 3 && held && t.support[s] >= 0; ++s) {
           const int sa = a + t.sx[s], sb = b + t.sy[s];
-          ok = sa >= 0 && sa < na && sb >= 0 && sb < nb &&
-               laid[static_cast<std::size_t>(t.support[s]) * copies +
-                    static_cast<std::size_t>(sb) * na + sa];
+          held = sa >= 0 && sa < na && sb >= 0 && sb < nb &&
+                 state[static_cast<std::size_t>(t.support[s]) * copies +
+                       static_cast<std::size_t>(sb) * na + sa] == kLaid;
         }
-        if (ok && R_.blocked) ok = !R_.blocked(p, t.r);
-        laid[k * copies + static_cast<std::size_t>(b) * na + a] = ok;
+        if (held && R_.blocked && R_.blocked(p, t.r)) continue;
+        state[k * copies + static_cast<std::size_t>(b) * na + a] = held ? kLaid : kFallen;
       }
   }
-  // into the grid, copy by copy
+  // into the grid, copy by copy; the id each grain of a copy takes, once it is in
+  std::vector<std::int32_t> id_of(tile.size() * copies, -1);
+  std::vector<std::uint32_t> kc_of;                  // by id - first_id: k * copies + c
+  std::vector<std::array<std::int32_t, 3>> held_by;  // by id - first_id: a fallen grain's holders
+  const auto first_id = static_cast<std::int32_t>(g_.size());
+  auto put = [&](std::size_t k, std::size_t c, const Vec3& p) {
+    const auto id = static_cast<std::int32_t>(g_.size());
+    g_.push_back({});
+    next_.push_back(-1);
+    insert(id, p, tile[k].r);
+    id_of[k * copies + c] = id;
+    kc_of.push_back(static_cast<std::uint32_t>(k * copies + c));
+    held_by.push_back({-1, -1, -1});
+  };
   std::int64_t n = 0;
   for (std::size_t c = 0; c < copies; ++c) {
     const int a = static_cast<int>(c % na), b = static_cast<int>(c / na);
     for (std::size_t k = 0; k < tile.size(); ++k) {
-      if (!laid[k * copies + c]) continue;
-      const auto id = static_cast<std::int32_t>(g_.size());
-      g_.push_back({});
-      next_.push_back(-1);
-      insert(id, where(tile[k], a, b), tile[k].r);
+      if (state[k * copies + c] != kLaid) continue;
+      put(k, c, where(tile[k], a, b));
       ++n;
     }
+  }
+  // Then the grains that lost a grain holding them (the cut's cone): each falls from where it lay
+  // in the tile and rolls to rest in the hole under it, from the lowest up (a grain after the
+  // grains that held it), unless one fallen before it has taken its place. (Dropped at random
+  // points instead, its holes were found by chance, layer after layer, with as many drops again
+  // discarded.)
+  //
+  // Along a wall the cone is the same in every copy, but for its ends: the copies of the middle
+  // row and column (the templates) settle theirs, and another copy takes a grain of the template
+  // in its column (or else in its row) shifted by the copies between them, where the grains
+  // holding it there lie shifted the same way (so it rests as the template's does) and nothing is
+  // in its place; a grain that cannot settles by itself (docs/performance.md, 2026-11-27, ninth).
+  const int a_mid = na / 2, b_mid = nb / 2;
+  struct Fallen {
+    float z;
+    bool copied;  // (a template's grain settles before its copies)
+    std::uint32_t k, c;
+  };
+  std::vector<Fallen> fallen;
+  for (std::size_t k = 0; k < tile.size(); ++k)
+    for (std::size_t c = 0; c < copies; ++c)
+      if (state[k * copies + c] == kFallen) {
+        const bool copied = static_cast<int>(c % na) != a_mid && static_cast<int>(c / na) != b_mid;
+        fallen.push_back({static_cast<float>(tile[k].p.z), copied, static_cast<std::uint32_t>(k),
+                          static_cast<std::uint32_t>(c)});
+      }
+  std::stable_sort(fallen.begin(), fallen.end(), [](const Fallen& u, const Fallen& v) {
+    return u.z < v.z || (u.z == v.z && !u.copied && v.copied);
+  });
+  auto shift_of = [&](std::int32_t id) {
+    const std::uint32_t kc = kc_of[static_cast<std::size_t>(id - first_id)];
+    const std::size_t c = kc % copies;
+    const Cell& g = g_[static_cast<std::size_t>(id)];
+    return Vec3{g.x, g.y, g.z} -
+           where(tile[kc / copies], static_cast<int>(c % na), static_cast<int>(c / na));
+  };
+  // where grain k of copy c stands in for the same grain of the template copy t: its shifted place
+  // and the grains holding it there, or false when it would not rest there as the template's does
+  auto copy_of = [&](std::size_t k, std::size_t c, std::size_t t, Vec3& q,
+                     std::array<std::int32_t, 3>& held) {
+    // (a laid template grain rests on its holders in the tile, which copy c has not all laid)
+    const std::int32_t tid = id_of[k * copies + t];
+    if (tid < 0 || state[k * copies + t] != kFallen) return false;
+    held = {-1, -1, -1};
+    int n_held = 0;
+    const int da = static_cast<int>(c % na) - static_cast<int>(t % na);
+    const int db = static_cast<int>(c / na) - static_cast<int>(t / na);
+    const Vec3 shift = shift_of(tid);
+    const Real tol = 1e-9 * cs_;
+    for (const std::int32_t h : held_by[static_cast<std::size_t>(tid - first_id)]) {
+      if (h < 0) break;
+      const std::uint32_t kc = kc_of[static_cast<std::size_t>(h - first_id)];
+      const int ha = static_cast<int>(kc % copies % na) + da;
+      const int hb = static_cast<int>(kc % copies / na) + db;
+      if (ha < 0 || ha >= na || hb < 0 || hb >= nb) return false;
+      const std::int32_t hid = id_of[kc / copies * copies + static_cast<std::size_t>(hb) * na + ha];
+      if (hid < 0 || norm2(shift_of(hid) - shift_of(h)) > tol * tol) return false;
+      held[static_cast<std::size_t>(n_held++)] = hid;
+    }
+    const Real r = tile[k].r;
+    const Cell& g = g_[static_cast<std::size_t>(tid)];
+    // (on a wall or across the way a copy is shifted: the template's walls are not the copy's)
+    const bool along_y = da == 0;
+    const Real lo = along_y ? R_.y0 : R_.x0, hi = along_y ? R_.y1 : R_.x1;
+    const Real u = along_y ? g.y : g.x;
+    if (u - r < lo + tol || u + r > hi - tol) return false;
+    q = where(tile[k], static_cast<int>(c % na), static_cast<int>(c / na)) + shift;
+    const Real v = along_y ? q.y : q.x;
+    return v - r >= lo + tol && v + r <= hi - tol && clear(q, r);
+  };
+  Walk w;
+  w.ix1 = nx_ - 1;
+  w.iy1 = ny_ - 1;
+  for (std::size_t i = 0; i < fallen.size(); ++i) {
+    const Fallen& f = fallen[i];
+    if (i + 1 < fallen.size()) {
+      // (the cells the next grain's place is checked in, asked for now: it lies elsewhere)
+      const Fallen& g = fallen[i + 1];
+      const Vec3 p = where(tile[g.k], static_cast<int>(g.c % na), static_cast<int>(g.c / na));
+      const int ix = column_x(p.x), iy = column_y(p.y), iz = std::max(layer(p.z) - 1, 0);
+      for (int jy = std::max(iy - 1, 0); jy <= std::min(iy + 1, ny_ - 1); ++jy)
+        for (int jx = std::max(ix - 1, 0); jx <= std::min(ix + 1, nx_ - 1); ++jx) {
+          const Slots* col = &cells_[cell(jx, jy, iz)];
+          __builtin_prefetch(col);
+          __builtin_prefetch(col + 1);
+          __builtin_prefetch(col + 2);
+        }
+    }
+    const Real r = tile[f.k].r;
+    const std::size_t in_column = static_cast<std::size_t>(b_mid) * na + f.c % na;
+    const std::size_t in_row = f.c / na * na + static_cast<std::size_t>(a_mid);
+    Vec3 q;
+    std::array<std::int32_t, 3> held;
+    if (f.copied && (copy_of(f.k, f.c, in_column, q, held) || copy_of(f.k, f.c, in_row, q, held)) &&
+        !(R_.blocked && R_.blocked(q, r))) {
+      put(f.k, f.c, q);
+      held_by.back() = held;
+      ++n;
+      ++out.settled;
+      ++out.copied;
+      continue;
+    }
+    const Vec3 p = where(tile[f.k], static_cast<int>(f.c % na), static_cast<int>(f.c / na));
+    if (!clear(p, r)) continue;
+    // (from a hair above: a fall skips a grain it touches at its start)
+    Vec3 rest;
+    int support[3] = {-1, -1, -1};
+    if (drop(p.x, p.y, r, w, rest, support, p.z + 1e-6 * cs_) != Drop::Rest) continue;
+    if (R_.blocked && R_.blocked(rest, r)) continue;
+    put(f.k, f.c, rest);
+    held_by.back() = {support[0], support[1], support[2]};
+    ++n;
+    ++out.settled;
   }
   return n;
 }
@@ -1147,7 +1301,7 @@ std::int64_t Packer::lay_slab() {
 BedPacking Packer::run() {
   std::int64_t n_open = prepare();
   BedPacking out;
-  out.tiled = lay_slab();
+  out.tiled = lay_slab(out);
   std::int64_t kept = out.tiled;
   const int threads = std::max(1, R_.threads);
   std::vector<std::vector<std::int32_t>> scratch(static_cast<std::size_t>(threads));

@@ -17,12 +17,16 @@
 // `patience` discarded drops in a row made in it (while every cell is open, the drops are uniform
 // over the footprint). Why this fills the top everywhere: a drop that lands in a cell and rolls to
 // rest below top - r proves a hole was left; one that cannot means the surface under it is full
-// up to a grain below the top. A hole covering half a cell survives 6 drops with probability
-// 0.5^6 = 1.6 %, and a grain fitting a smaller hole would rest within a grain of the top anyway.
-// Measured (2026-11-26, a 40 d x 40 d bed 10 d deep, equal grains): patience 4, 8 and 16 give
-// 16,438, 16,446 and 16,443 grains, the same bulk packing fraction (0.583), and every 2 d x 2 d
-// patch of the top has a grain reaching within 0.62 d of it (median 0.11 d): the top is full, not
-// ragged, already at 4, while 16 makes 1.8 times the drops of 4. The default, 6, keeps a margin.
+// up to a grain below the top. A hole covering half a cell survives 3 drops made in it with
+// probability 0.5^3 = 12.5 %, but the drops made around it roll into it too, and a grain fitting
+// a smaller hole would rest within a grain of the top anyway. Measured (2026-11-26, a 40 d x 40 d
+// bed 10 d deep, equal grains): patience 4, 8 and 16 give 16,438, 16,446 and 16,443 grains, the
+// same bulk packing fraction (0.583), and every 2 d x 2 d patch of the top has a grain reaching
+// within 0.62 d of it (median 0.11 d), while 16 makes 1.8 times the drops of 4. Again
+// (2026-11-27, a 60 d x 60 d bed 22 d deep): patience 2, 3, 4 and 6 give 84,745, 84,730, 84,745
+// and 84,751 grains, every patch within 0.60-0.65 d (median 0.11-0.12 d, 99 % within 0.49-0.53
+// d); on the 1 M bench the same, 0.67-0.74 d. The top is full, not ragged, already at 2; the
+// default, 3, keeps a margin of one.
 // A cell where the top lies below the floor + 2 r_lo at every sample never opens.
 //
 // The order of the drops: in rounds. Each round cuts the footprint into tiles of 16 x 16 cells,
@@ -48,13 +52,21 @@
 // across it in ghost columns of their images), copied over the footprint at a random offset.
 // A grain of a copy is laid when it lies under the cut, inside the footprint and not in an
 // obstacle, and every grain that held it in the tile is laid: what is laid rests as it did. What
-// the cut takes away (the grains crossing a wall, and above them every grain they held, in a cone
-// up to about 30 d wide along the walls of a 20 d bed) is then dropped as before, with the top
-// over the cut. The slab's grains repeat every 32 columns; its bulk packs as the dropped bed does
-// (0.5838 against 0.5839 in the test). Mirror-image copies of a tile packed between walls, whose
-// sides would match with nothing removed, ran twice as fast but packed the bulk at 0.572 against
-// 0.582 (planes packed as at a wall every 32 d), so they are not used (docs/performance.md,
-// 2026-11-27, seventh).
+// the cut takes away (the grains crossing a wall) leaves a cone above it, up to about 30 d wide
+// along the walls of a 20 d bed, of grains that lost a grain holding them. Those fall, from the
+// lowest up, each from where it lay in the tile, and roll to rest in the hole under them (one
+// whose place a grain fallen before it has taken is left out). Along a wall, the copies cut the
+// same way as the one in the middle of their row or column take its fallen grains shifted, where
+// the grains holding each lie shifted the same way and nothing is in its place: they rest as
+// there (two thirds of the cone of the 1 M bench). Then the rest of the bed is dropped as before,
+// with the top over the cut. The slab's grains repeat every 32 columns; its bulk packs as the
+// dropped bed does (0.5829 against 0.5825 in the test). Mirror-image copies of a tile packed
+// between walls, whose sides would match with nothing removed, ran twice as fast but packed the
+// bulk at 0.572 against 0.582 (planes packed as at a wall every 32 d), so they are not used
+// (docs/performance.md, 2026-11-27, seventh). The cone's grains were dropped at random points
+// before, its holes found by chance layer after layer: on the 1 M bench 566,000 drops made the
+// cone and the top, now 64,000 grains fall by themselves, 157,000 are copied and 221,000 drops
+// make the top, 1.5 times as fast (docs/performance.md, 2026-11-27, ninth).
 //
 // Speed (docs/performance.md, 2026-11-27): a uniform grid of cells 2 r_hi wide, filed column by
 // column (z fastest), with each column's highest filled cell, so that a fall scans only the top
@@ -91,7 +103,7 @@ struct BedRegion {
   std::function<bool(const Vec3&, Real)> blocked;
   Real r_lo = 0.005, r_hi = 0.005;  ///< radii uniform in [r_lo, r_hi] [m]
   std::uint64_t seed = 1;
-  int patience = 6;  ///< discarded drops in a row that close a cell (see above); a drop refused
+  int patience = 3;  ///< discarded drops in a row that close a cell (see above); a drop refused
                      ///< by `blocked` counts an eighth
   /// Refused (std::length_error) before any grain is placed when the region's volume would hold
   /// more grains than this (estimate_bed_grains).
@@ -107,6 +119,8 @@ struct BedPacking {
   std::int64_t discarded = 0;  ///< of them: came to rest above the top, or did not settle
   std::int64_t blocked = 0;    ///< of them: refused by `blocked`
   std::int64_t tiled = 0;      ///< grains laid from the periodic tile (not dropped)
+  std::int64_t settled = 0;    ///< of them: fell from where they lay in the tile (see above)
+  std::int64_t copied = 0;     ///< of those: laid as their template's grain, shifted
   std::size_t size() const { return x.size(); }
 };
 

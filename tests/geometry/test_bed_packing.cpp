@@ -196,7 +196,7 @@ TEST(BedPacking, EveryGrainIsStablySupported) {
 TEST(BedPacking, TheSlabFromAPeriodicTileIsADropBedAtRest) {
   // 80 d square, 11 d deep, radii from 0.4 d to 0.6 d: wide and deep enough for the slab (two
   // tiles of 32 columns of 1.2 d, 4 cells under a cut 2 cells below the top). Its grains, those
-  // dropped into the bands its cut leaves along the walls and those dropped over it form one bed:
+  // fallen into the bands its cut leaves along the walls and those dropped over it form one bed:
   // no overlap, every grain inside and at rest, the bulk packed as a bed dropped grain by grain is
   // (the same region 70 d wide, too narrow for the slab), and the same bed on 1 and 2 threads.
   BedRegion R = flat_bed(80, 11);
@@ -226,6 +226,34 @@ TEST(BedPacking, TheSlabFromAPeriodicTileIsADropBedAtRest) {
   R.threads = 2;
   const BedPacking d = pack_bed(R);
   EXPECT_TRUE(d.x == b.x && d.r == b.r);
+}
+
+TEST(BedPacking, TheCopiesAlongAWallRestAsTheirTemplateAndPackAsADroppedBed) {
+  // 224 d x 80 d, 10 d deep, equal grains: seven copies of the tile along each long wall, so the
+  // cut's cone along it is settled once, in the middle copy, and laid shifted in the copies cut
+  // the same way. Those grains must rest (every grain held), overlap nothing, and the band along
+  // the wall must pack as in a bed dropped grain by grain (the same depth, too narrow for the
+  // slab). Without the check that each copied grain's holders lie shifted too, grains float.
+  BedRegion R = flat_bed(224, 10);
+  R.y1 = 80 * kD;
+  const BedPacking b = pack_bed(R);
+  ASSERT_GT(b.tiled, static_cast<std::int64_t>(b.size() / 2));
+  EXPECT_GT(b.copied, 5000);
+  EXPECT_LT(largest_overlap(b.x, b.r), 1e-5);
+  EXPECT_EQ(count_unsupported(b, R), 0u);
+  // the bands 1 d to 12 d from the two walls along x, from 3 d over the floor up to 7 d
+  const Real m = 3 * kD;
+  auto band = [&](const BedPacking& p, const BedRegion& r) {
+    return 0.5 *
+           (packing_fraction_in(p.x, p.r, {m, kD, m}, {r.x1 - m, 12 * kD, 7 * kD}) +
+            packing_fraction_in(p.x, p.r, {m, r.y1 - 12 * kD, m}, {r.x1 - m, r.y1 - kD, 7 * kD}));
+  };
+  BedRegion narrow = R;
+  narrow.x1 = narrow.y1 = 60 * kD;
+  const BedPacking c = pack_bed(narrow);
+  ASSERT_EQ(c.tiled, 0);
+  const Real phi = band(b, R), phi_dropped = band(c, narrow);
+  EXPECT_NEAR(phi, phi_dropped, 0.01) << "slab " << phi << ", dropped " << phi_dropped;
 }
 
 TEST(BedPacking, TheSameSeedGivesTheSameBed) {
