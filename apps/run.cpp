@@ -18,6 +18,7 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include "analysis/crater.hpp"
 #include "calibration/calibration.hpp"
 #include "commands.hpp"
 #include "core/atomic_file.hpp"
@@ -30,6 +31,7 @@
 #include "io/run_output.hpp"
 #include "progress.hpp"
 #include "scene/scene_loader.hpp"
+#include "sim/emitters.hpp"
 
 namespace fs = std::filesystem;
 
@@ -711,12 +713,51 @@ std::string last_frame(const std::string& dir) {
   return best;
 }
 
+/// The crater of a finished run of a scene with a bed, measured as `compare` measures it: from the
+/// bed's top as packed for the run's seed, at the scene's crater site.
+void print_crater(const SceneConfig& scene, const FrameData& f) {
+  const CraterSite site = crater_site(scene);
+  const Geometry geometry = Geometry::from_config(scene.geometry, scene.material);
+  BedPacking bed;
+  const bool packed = !pack_bed_emitter(scene.emitters[site.bed_index], scene.material, geometry,
+                                        bed_seed(scene.simulation.seed, site.bed_index), bed);
+  const double z_ref = packed ? bed_level(bed.x, bed.r) : std::nan("");
+  const CraterFit c = measure_crater(site, z_ref, f.position, f.radius);
+  fmt::print("bed's top        {:.4f} m (as packed, seed {})\n", z_ref, scene.simulation.seed);
+  fmt::print("crater centre    {:.4f}, {:.4f} m ({})\n", c.centre.x, c.centre.y, site.centre_from);
+  if (!c.ok) {
+    fmt::print("crater           n/a ({})\n", c.reason);
+    return;
+  }
+  fmt::print("crater_depth     {:.4f} m\n", c.depth);
+  fmt::print("crater radius    {:.4f} m\n", c.radius);
+  fmt::print("rim_height       {:.4f} m\n", c.rim_height);
+  fmt::print("rim radius       {:.4f} m\n", c.rim_radius);
+}
+
 int measure_command(const std::string& dir) {
-  const std::string path = last_frame(dir);
+  // the final state, every grain (a surface run's frames hold only the visible ones), else the
+  // last frame written (a run not finished)
+  std::error_code ec;
+  const fs::path final_state = fs::path(dir) / "final_grains.ply";
+  const std::string path = fs::exists(final_state, ec) ? final_state.string() : last_frame(dir);
   const FrameData f = read_ply(path);
-  const HeapFit fit = measure_heap(f.position, f.radius);
   fmt::print("frame            {}\n", path);
   fmt::print("grains           {}\n", f.size());
+  // a scene with a bed makes a crater, not a heap (kNoHeapInABed)
+  if (fs::exists(fs::path(dir) / "run.json", ec)) {
+    nlohmann::json record;
+    std::string text;
+    const RunOptions r = read_run_record(dir, record, text);
+    const SceneConfig scene =
+        apply_run_options(load_scene_from_string(text, r.scene, run_overrides(r)), r);
+    if (std::any_of(scene.emitters.begin(), scene.emitters.end(),
+                    [](const EmitterConfig& e) { return e.type == EmitterType::Bed; })) {
+      print_crater(scene, f);
+      return 0;
+    }
+  }
+  const HeapFit fit = measure_heap(f.position, f.radius);
   if (!fit.ok) {
     fmt::print("repose angle     n/a ({})\n", fit.reason);
     return 0;

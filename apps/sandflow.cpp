@@ -124,7 +124,9 @@ int main(int argc, char** argv) {
       "~/.cache/sandflow), and surface mode uses it where the scene sets no angle.");
 
   std::string dir;
-  auto* measure = app.add_subcommand("measure", "print the angle of repose of a run's last frame");
+  auto* measure = app.add_subcommand(
+      "measure",
+      "print the angle of repose of a run's final state, or its crater in a scene with a bed");
   measure->add_option("dir", dir, "run folder")->required();
 
   RunOptions co;

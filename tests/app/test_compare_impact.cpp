@@ -121,6 +121,25 @@ TEST(CompareImpact, TheCraterOfEveryRunAndTheModesAgainstThePlainDemSpread) {
   EXPECT_NE(log.find("crater depth, mean"), std::string::npos) << log;
   EXPECT_NE(log.find("where 'clod' lands"), std::string::npos) << log;
   EXPECT_NE(log.find(fmt::format("{:.4f} m", depth[0][0])), std::string::npos) << log;
+
+  // `sandflow measure` finds each run's crater as compare did, from the final state with its
+  // static grains (a surface run's frames hold only the visible ones)
+  for (const auto& run : j["runs"]) {
+    std::string m;
+    ASSERT_EQ(sandflow("measure " + (out / run["folder"].get<std::string>()).string(), &m), 0) << m;
+    EXPECT_EQ(m.find("repose"), std::string::npos) << m;
+    const auto& f = run["crater"];
+    if (f["ok"].get<bool>()) {
+      EXPECT_NE(m.find(fmt::format("crater_depth     {:.4f} m", f["depth"].get<double>())),
+                std::string::npos)
+          << m;
+      EXPECT_NE(m.find(fmt::format("rim_height       {:.4f} m", f["rim_height"].get<double>())),
+                std::string::npos)
+          << m;
+    } else {
+      EXPECT_NE(m.find(f["reason"].get<std::string>()), std::string::npos) << m;
+    }
+  }
 }
 
 // Before the clod lands the bed is flat: no crater in any run, each saying so, and no figures
