@@ -23,15 +23,23 @@ void CellGrid::build(const std::vector<Vec3>& x, Real min_cell) {
     return cells;
   };
   if (n > 100 && cells_for(lo, hi, min_cell) > static_cast<double>(max_cells)) {
-    // a few far-away grains: grid the central 99 % and clamp the rest into the border cells
+    // a few far-away grains: grid the central 99 % and clamp the rest into the border cells; if
+    // that box still needs coarser cells, trim up to a tenth on each side (the frozen grains
+    // along a large bed's walls, metres from the grains that move, would otherwise make every
+    // cell centimetres wide, and each grain search hundreds of candidates)
     std::vector<Real> axis(n);
-    for (int a = 0; a < 3; ++a) {
-      for (std::size_t i = 0; i < n; ++i) axis[i] = x[i][a];
-      const std::size_t k_lo = n / 200, k_hi = n - 1 - n / 200;
-      std::nth_element(axis.begin(), axis.begin() + k_lo, axis.end());
-      lo[a] = axis[k_lo];
-      std::nth_element(axis.begin(), axis.begin() + k_hi, axis.end());
-      hi[a] = axis[k_hi];
+    const Vec3 lo_all = lo, hi_all = hi;
+    for (const std::size_t per : {200, 50, 20, 10}) {
+      lo = lo_all, hi = hi_all;
+      for (int a = 0; a < 3; ++a) {
+        for (std::size_t i = 0; i < n; ++i) axis[i] = x[i][a];
+        const std::size_t k_lo = n / per, k_hi = n - 1 - n / per;
+        std::nth_element(axis.begin(), axis.begin() + k_lo, axis.end());
+        lo[a] = axis[k_lo];
+        std::nth_element(axis.begin(), axis.begin() + k_hi, axis.end());
+        hi[a] = axis[k_hi];
+      }
+      if (cells_for(lo, hi, min_cell) <= static_cast<double>(max_cells)) break;
     }
   }
   // coarser cells when even that box needs too many

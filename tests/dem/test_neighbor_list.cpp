@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <set>
@@ -58,6 +59,30 @@ TEST(NeighbourList, SamePairsAsBruteForce) {
     ASSERT_FALSE(expected.empty());
     EXPECT_EQ(listed_pairs(pl), expected) << "seed " << seed;
   }
+}
+
+// A large bed's frozen grains along its walls, metres from the grains that move (7 % of them):
+// the grid keeps its finest cells over the cluster, so that each grain searches a few
+// candidates, not hundreds, and still lists exactly the brute-force pairs (those along the walls
+// too, clamped into the border cells)
+TEST(CellGrid, GrainsAlongFarWallsKeepTheCellsFine) {
+  Grains g = random_grains(2000, 7, 0.15);
+  for (int k = 0; k < 140; ++k) {  // 35 to a wall of an 8 m sandbox, some of them touching
+    const Real t = -4 + 0.2 * (k / 4) + 0.009 * (k % 2);
+    const std::array<Vec3, 4> at{Vec3{t, -4, 0.05}, Vec3{t, 4, 0.05}, Vec3{-4, t, 0.05},
+                                 Vec3{4, t, 0.05}};
+    g.add(10000 + k, at[static_cast<std::size_t>(k % 4)], {}, 0.005, 2600);
+  }
+  const Real skin = 0.002;
+  CellGrid grid;
+  PairList pl, none;
+  build_pair_list(g, skin, true, grid, none, {}, pl);
+  auto expected = brute_force_pairs(g, skin);
+  std::sort(expected.begin(), expected.end());
+  ASSERT_GT(expected.size(), 1000u);
+  EXPECT_EQ(listed_pairs(pl), expected);
+  // the finest cells: the largest diameter and the skin (1.4 cm)
+  EXPECT_LE(grid.cell_size(), 0.014) << grid.cell_size();
 }
 
 // A few grains with large allowances (a fast stream) look further than the grid's cells: their
