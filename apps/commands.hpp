@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "analysis/crater.hpp"
 #include "analysis/heap.hpp"
 #include "analysis/surface_diff.hpp"
 #include "calibration/calibration.hpp"
@@ -188,6 +189,11 @@ std::string compare_run_dir(const std::string& out, const std::string& mode, std
 int compare_scene(const RunOptions& o, const CompareOptions& co, const std::string& out, bool force,
                   bool resume, const std::string* scene_text, const std::string& resume_with,
                   const std::string& label, Comparison& c);
+
+/// The top of the crater site's bed as packed for the scene seed `seed` (bed_level), the level a
+/// crater is measured from; NaN when the bed cannot be packed (measure_crater then finds it).
+double packed_bed_level(const SceneConfig& scene, const Geometry& geometry, const CraterSite& site,
+                        std::uint64_t seed);
 
 /// The last frame file of a run folder (InputError when it has none).
 std::string last_frame(const std::string& dir);

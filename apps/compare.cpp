@@ -18,7 +18,6 @@
 #include "core/error.hpp"
 #include "io/folder_lock.hpp"
 #include "scene/scene_loader.hpp"
-#include "sim/emitters.hpp"
 #include "surface/surface_params.hpp"
 
 namespace fs = std::filesystem;
@@ -240,11 +239,8 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
   std::vector<double> z_ref;
   if (site.bed) {
     for (std::size_t k = 0; k < c.seeds.size(); ++k) {
-      BedPacking bed;
-      const bool packed =
-          !pack_bed_emitter(scene.emitters[site.bed_index], scene.material, geometry,
-                            bed_seed(static_cast<std::uint64_t>(c.seeds[k]), site.bed_index), bed);
-      z_ref.push_back(packed ? bed_level(bed.x, bed.r) : std::nan(""));
+      z_ref.push_back(
+          packed_bed_level(scene, geometry, site, static_cast<std::uint64_t>(c.seeds[k])));
       crater_dem.push_back(measure_crater(site, z_ref[k], c.dem[k].x, c.dem[k].r));
       crater_surf.push_back(measure_crater(site, z_ref[k], c.surface[k].x, c.surface[k].r));
     }

@@ -713,15 +713,19 @@ std::string last_frame(const std::string& dir) {
   return best;
 }
 
-/// The crater of a finished run of a scene with a bed, measured as `compare` measures it: from the
-/// bed's top as packed for the run's seed, at the scene's crater site.
-void print_crater(const SceneConfig& scene, const FrameData& f) {
-  const CraterSite site = crater_site(scene);
-  const Geometry geometry = Geometry::from_config(scene.geometry, scene.material);
+double packed_bed_level(const SceneConfig& scene, const Geometry& geometry, const CraterSite& site,
+                        std::uint64_t seed) {
   BedPacking bed;
   const bool packed = !pack_bed_emitter(scene.emitters[site.bed_index], scene.material, geometry,
-                                        bed_seed(scene.simulation.seed, site.bed_index), bed);
-  const double z_ref = packed ? bed_level(bed.x, bed.r) : std::nan("");
+                                        bed_seed(seed, site.bed_index), bed);
+  return packed ? bed_level(bed.x, bed.r) : std::nan("");
+}
+
+/// The crater of a finished run of a scene with a bed (`site`), measured as `compare` measures it:
+/// from the bed's top as packed for the run's seed.
+void print_crater(const SceneConfig& scene, const CraterSite& site, const FrameData& f) {
+  const Geometry geometry = Geometry::from_config(scene.geometry, scene.material);
+  const double z_ref = packed_bed_level(scene, geometry, site, scene.simulation.seed);
   const CraterFit c = measure_crater(site, z_ref, f.position, f.radius);
   fmt::print("bed's top        {:.4f} m (as packed, seed {})\n", z_ref, scene.simulation.seed);
   fmt::print("crater centre    {:.4f}, {:.4f} m ({})\n", c.centre.x, c.centre.y, site.centre_from);
@@ -751,9 +755,8 @@ int measure_command(const std::string& dir) {
     const RunOptions r = read_run_record(dir, record, text);
     const SceneConfig scene =
         apply_run_options(load_scene_from_string(text, r.scene, run_overrides(r)), r);
-    if (std::any_of(scene.emitters.begin(), scene.emitters.end(),
-                    [](const EmitterConfig& e) { return e.type == EmitterType::Bed; })) {
-      print_crater(scene, f);
+    if (const CraterSite site = crater_site(scene); site.bed) {
+      print_crater(scene, site, f);
       return 0;
     }
   }
