@@ -218,7 +218,9 @@ void DemSolver::restore_state(DemState s, const Geometry& geometry) {
   walls_ = std::move(s.walls);
   bounds_ = std::move(s.bounds);
   slot_of_id_ = std::move(s.slot_of_id);
-  ids_at_build_known_ = false;  // (the next rebuild clears the whole table)
+  ids_at_build_.clear();
+  for (GrainId id = 0; id < slot_of_id_.size(); ++id)
+    if (slot_of_id_[id] != kNoSlot) ids_at_build_.push_back(id);
   x_at_build_ = std::move(s.x_at_build);
   allow_ = std::move(s.allow);
   allow2_.resize(n);
@@ -312,16 +314,11 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
   // rebuild's grains are cleared, so that a rebuild costs what the simulated grains cost
   GrainId max_id = 0;
   for (GrainId id : grains.id) max_id = std::max(max_id, id);
-  if (ids_at_build_known_) {
-    for (GrainId id : ids_at_build_)
-      if (id < slot_of_id_.size()) slot_of_id_[id] = kNoSlot;
-  } else {
-    std::fill(slot_of_id_.begin(), slot_of_id_.end(), kNoSlot);
-  }
+  for (GrainId id : ids_at_build_)
+    if (id < slot_of_id_.size()) slot_of_id_[id] = kNoSlot;
   slot_of_id_.resize(n ? max_id + 1 : 0, kNoSlot);
   for (std::size_t i = 0; i < n; ++i) slot_of_id_[grains.id[i]] = static_cast<std::uint32_t>(i);
   ids_at_build_ = grains.id;
-  ids_at_build_known_ = true;
   x_at_build_ = grains.x;
   // accumulators are zero between steps; only their size follows the grains
   acc_f_.resize(n);

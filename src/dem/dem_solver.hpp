@@ -192,7 +192,6 @@ class DemSolver {
   WallList bounds_, old_bounds_;  ///< per grain: the boundary particles it may touch
   std::vector<std::uint32_t> slot_of_id_;  ///< grain id -> slot at the last rebuild
   std::vector<GrainId> ids_at_build_;      ///< the ids slot_of_id_ holds a slot for
-  bool ids_at_build_known_ = false;        ///< false: after a restore, not known
   std::vector<Vec3> x_at_build_;
   std::vector<Real> allow_, allow2_;  ///< per grain: how far it may move before a rebuild [m, m^2]
   std::vector<Vec3> acc_f_, acc_q_, acc_t_;  ///< per grain: reversed pair results of this step

@@ -28,9 +28,7 @@ void CellGrid::build(const std::vector<Vec3>& x, Real min_cell) {
     // along a large bed's walls, metres from the grains that move, would otherwise make every
     // cell centimetres wide, and each grain search hundreds of candidates)
     std::vector<Real> axis(n);
-    const Vec3 lo_all = lo, hi_all = hi;
     for (const std::size_t per : {200, 50, 20, 10}) {
-      lo = lo_all, hi = hi_all;
       for (int a = 0; a < 3; ++a) {
         for (std::size_t i = 0; i < n; ++i) axis[i] = x[i][a];
         const std::size_t k_lo = n / per, k_hi = n - 1 - n / per;
