@@ -8,6 +8,7 @@
 // of 0.31 sqrt(|g| d).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -77,6 +78,14 @@ constexpr Real kBlowPacking = 0.6;
 inline Real blow_radius(Real v, Real v_flow, Real d) {
   if (!(v > v_flow) || !(v_flow > 0)) return 0;
   return d * std::cbrt((v / v_flow - 1) / (4 * kBlowPacking));
+}
+
+/// How long the bed a blow of radius rho set moving keeps moving [s]: friction stops bed moving at
+/// v_flow in v_flow / (mu g), but the sand of the half-sphere it opened falls and flows back into
+/// it over the crater's own time, sqrt(rho / g) (a crater's growth in the gravity regime: the
+/// time gravity takes to undo an opening of size rho), and the blow holds the bed open as long.
+inline Real blow_lifetime(Real v_flow, Real friction, Real gravity, Real rho) {
+  return std::max(v_flow / (friction * gravity), std::sqrt(rho / gravity));
 }
 
 }  // namespace sandflow

@@ -130,13 +130,13 @@ void SurfaceFlow::strike_with_blows(const Grains& hot, Real dt, Strike&& strike)
   // falling into the bed faster than the flow speed shares its whole momentum with the bed, not
   // one grain's: each blow is a record of where it struck and of the downward momentum brought
   // into its footprint, down to the bed's level there, by every fast-falling grain (each counted
-  // once), decaying as the bed it set moving stops (over v_flow / (mu g)). While it lasts, the
+  // once), decaying as the bed it set moving stops (seat.hpp, blow_lifetime). While it lasts, the
   // static top stays under the half-sphere that momentum sets moving (seat.hpp, blow_radius).
   const SeatParams& seat = p_.interface.seat;
-  const Real stop = p_.interface.friction * seat.gravity;  // deceleration of the moving bed
   for (Blow& b : blows_) {
     const Real v_flow = seat.move_speed(b.d / static_cast<Real>(b.n) / 2);
-    b.p *= std::exp(-dt * stop / std::max(v_flow, 1e-12));
+    const Real life = blow_lifetime(v_flow, p_.interface.friction, seat.gravity, b.rho);
+    b.p *= std::exp(-dt / std::max(life, 1e-12));
   }
   for (std::size_t i = 0; i < hot.size(); ++i) {
     if (hot.state[i] != GrainState::Active ||
