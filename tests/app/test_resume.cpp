@@ -76,6 +76,15 @@ pid_t spawn(const std::string& args, const fs::path& log, rlim_t max_file_bytes 
   return pid;
 }
 
+/// Sends SIGINT to `pid`, stopped first: on a loaded machine a run of 40 short frames could
+/// otherwise finish between the frame the test waited for and the signal (it did once). The
+/// SIGINT waits, pending, until the run goes on.
+void interrupt(pid_t pid) {
+  kill(pid, SIGSTOP);
+  kill(pid, SIGINT);
+  kill(pid, SIGCONT);
+}
+
 /// Waits for `pid`; its exit status, or 128 + the signal that ended it.
 int wait_for(pid_t pid) {
   int status = 0;
@@ -158,7 +167,7 @@ TEST(Resume, SigintFinishesTheFrameCheckpointsAndSaysHowToResume) {
                           box.dir / "run.log");
   while (!fs::exists(out / "frames" / "0005.ply") && waitpid(pid, nullptr, WNOHANG) == 0)
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  kill(pid, SIGINT);
+  interrupt(pid);
   EXPECT_EQ(wait_for(pid), 130);
   const std::string log = read_text(box.dir / "run.log");
   const long long frame = number_after(log, "interrupted at frame ");
@@ -201,7 +210,7 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   while (!fs::exists(out / "seed-2" / "dem" / "frames" / "0005.ply") &&
          waitpid(pid, nullptr, WNOHANG) == 0)
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  kill(pid, SIGINT);
+  interrupt(pid);
   EXPECT_EQ(wait_for(pid), 130);
   log = read_text(box.dir / "cmp.log");
   EXPECT_NE(log.find("; resume with: sandflow compare --resume " + out.string() + "\n"),
@@ -251,7 +260,7 @@ TEST(Resume, TheExportsOfAResumedRunAreThoseOfTheRunUninterrupted) {
                           box.dir / "run.log");
   while (!fs::exists(out / "frames" / "0005.vtp") && waitpid(pid, nullptr, WNOHANG) == 0)
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  kill(pid, SIGINT);
+  interrupt(pid);
   ASSERT_EQ(wait_for(pid), 130) << read_text(box.dir / "run.log");
   std::string log;
   ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
