@@ -76,10 +76,12 @@ pid_t spawn(const std::string& args, const fs::path& log, rlim_t max_file_bytes 
   return pid;
 }
 
-/// Sends SIGINT to `pid`, stopped first: on a loaded machine a run of 40 short frames could
-/// otherwise finish between the frame the test waited for and the signal (it did once). The
-/// SIGINT waits, pending, until the run goes on.
-void interrupt(pid_t pid) {
+/// Waits until `file` appears (or `pid` ends), then sends `pid` SIGINT, stopped first: on a
+/// loaded machine a run of 40 short frames could otherwise finish between the file and the signal
+/// (it did once). The SIGINT waits, pending, until the run goes on.
+void interrupt_once_written(pid_t pid, const fs::path& file) {
+  while (!fs::exists(file) && waitpid(pid, nullptr, WNOHANG) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
   kill(pid, SIGSTOP);
   kill(pid, SIGINT);
   kill(pid, SIGCONT);
@@ -165,9 +167,7 @@ TEST(Resume, SigintFinishesTheFrameCheckpointsAndSaysHowToResume) {
   const pid_t pid = spawn(fmt::format("run {} --frames {} --checkpoint-every 0 --out {}",
                                       (box.dir / "pour.toml").string(), kFrames, out.string()),
                           box.dir / "run.log");
-  while (!fs::exists(out / "frames" / "0005.ply") && waitpid(pid, nullptr, WNOHANG) == 0)
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  interrupt(pid);
+  interrupt_once_written(pid, out / "frames" / "0005.ply");
   EXPECT_EQ(wait_for(pid), 130);
   const std::string log = read_text(box.dir / "run.log");
   const long long frame = number_after(log, "interrupted at frame ");
@@ -207,10 +207,7 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
       << log;
   const pid_t pid =
       spawn(fmt::format("compare {} {} --out {}", scene, options, out.string()), box.dir / "cmp.log");
-  while (!fs::exists(out / "seed-2" / "dem" / "frames" / "0005.ply") &&
-         waitpid(pid, nullptr, WNOHANG) == 0)
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  interrupt(pid);
+  interrupt_once_written(pid, out / "seed-2" / "dem" / "frames" / "0005.ply");
   EXPECT_EQ(wait_for(pid), 130);
   log = read_text(box.dir / "cmp.log");
   EXPECT_NE(log.find("; resume with: sandflow compare --resume " + out.string() + "\n"),
@@ -258,9 +255,7 @@ TEST(Resume, TheExportsOfAResumedRunAreThoseOfTheRunUninterrupted) {
   const pid_t pid = spawn(fmt::format("run {} --frames {} --export ply,vtk,geo_gz --out {}", scene,
                                       kFrames, out.string()),
                           box.dir / "run.log");
-  while (!fs::exists(out / "frames" / "0005.vtp") && waitpid(pid, nullptr, WNOHANG) == 0)
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  interrupt(pid);
+  interrupt_once_written(pid, out / "frames" / "0005.vtp");
   ASSERT_EQ(wait_for(pid), 130) << read_text(box.dir / "run.log");
   std::string log;
   ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
