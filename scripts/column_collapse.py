@@ -42,8 +42,10 @@ def law(a):
     return 1.24 * a if a <= 1.7 else 1.6 * math.sqrt(a)
 
 
-def read_ply(path):
-    """(x, y, z, radius) of every vertex of a sandflow PLY (binary little endian or ASCII)."""
+def read_ply(path, names=("x", "y", "z", "radius")):
+    """The named properties of every vertex of a sandflow PLY (binary little endian or ASCII), as
+    tuples in the order of `names`; x, y, z and radius must be there, any other is 0 where the
+    PLY does not hold it (velocities in a final state, say)."""
     with open(path, "rb") as f:
         data = f.read()
     end = data.index(b"end_header\n") + len(b"end_header\n")
@@ -59,20 +61,18 @@ def read_ply(path):
             count = int(w[2])
         elif w and w[0] == "property":
             props.append((w[2], kinds[w[1]]))
-    names = [p[0] for p in props]
-    ix, iy, iz, ir = (names.index(n) for n in ("x", "y", "z", "radius"))
-    out = []
+    have = [p[0] for p in props]
+    for n in ("x", "y", "z", "radius"):
+        if n in names and n not in have:
+            raise ValueError(f"{path}: the PLY has no vertex property {n}")
+    cols = [have.index(n) if n in have else None for n in names]
     if fmt == "ascii":
         lines = data[end:].decode("ascii").split("\n")
-        for k in range(count):
-            v = [float(t) for t in lines[k].split()]
-            out.append((v[ix], v[iy], v[iz], v[ir]))
+        rows = ([float(t) for t in lines[k].split()] for k in range(count))
     else:
         rec = struct.Struct("<" + "".join(p[1] for p in props))
-        for k in range(count):
-            v = rec.unpack_from(data, end + k * rec.size)
-            out.append((v[ix], v[iy], v[iz], v[ir]))
-    return out
+        rows = rec.iter_unpack(data[end:end + count * rec.size])
+    return [tuple(v[c] if c is not None else 0.0 for c in cols) for v in rows]
 
 
 def median(v):
