@@ -176,5 +176,6 @@ def main():
                                     for r in results)
         print(line)
 
+
 if __name__ == "__main__":
     main()
