@@ -428,15 +428,19 @@ struct Started {
   bool done = false;     ///< nothing to run (--check, or a finished run)
 };
 
+/// How a run was started and how long it is, from its run.json: what its checkpoints' seal covers
+/// (an edited run.json cannot resume into another run).
+std::string start_record(const nlohmann::json& record) {
+  return record["start"].dump() + " frames " + record["frames"].dump();
+}
+
 /// Runs `run` with checkpoints and the stop signals into `res`; returns the exit status of an
 /// interrupted run (128 + the signal), 0 otherwise. `resume_with` is the command that continues
 /// it, for the messages; `label` prefixes the progress line.
 int run_resumable(Started& run, RunResult& res, const std::string& resume_with,
                   const std::string& label = "") {
   RunControl control;
-  // (the checkpoint's seal covers how the run was started and how long it is: an edited run.json
-  // cannot resume into another run)
-  control.start_record = run.record["start"].dump() + " frames " + run.record["frames"].dump();
+  control.start_record = start_record(run.record);
   control.checkpoint_every = run.record["checkpoint_every"].get<int>();
   control.resume = run.checkpoint ? &*run.checkpoint : nullptr;
   control.resumed = run.resumed;
@@ -739,24 +743,60 @@ void print_crater(const SceneConfig& scene, const CraterSite& site, const FrameD
   fmt::print("rim radius       {:.4f} m\n", c.rim_radius);
 }
 
+/// Every grain of a run at its last checkpoint, hot and static: the World rebuilt from its run.json
+/// and the checkpoint restored into it (which checks that the two belong together).
+FrameData grains_at_checkpoint(const SceneConfig& scene, const nlohmann::json& record,
+                               const std::string& path, int& frame) {
+  World world(scene);
+  Checkpoint c = read_checkpoint(path);
+  restore_checkpoint(world, std::move(c), scene_hash(world, start_record(record)), path);
+  frame = world.frame();
+  return world.all_grains_frame();
+}
+
 int measure_command(const std::string& dir) {
-  // the final state, every grain (a surface run's frames hold only the visible ones), else the
-  // last frame written (a run not finished)
+  // the final state, every grain; else, for a run not finished, its last checkpoint (a surface
+  // run's frames hold only the grains it simulates: a sleeping column's top is not in them) or,
+  // in plain DEM, its last frame
   std::error_code ec;
-  const fs::path final_state = fs::path(dir) / "final_grains.ply";
-  const std::string path = fs::exists(final_state, ec) ? final_state.string() : last_frame(dir);
-  const FrameData f = read_ply(path);
-  fmt::print("frame            {}\n", path);
-  fmt::print("grains           {}\n", f.size());
-  // a scene with a bed makes a crater, not a heap (kNoHeapInABed)
+  std::optional<SceneConfig> scene;
+  nlohmann::json record;
   if (fs::exists(fs::path(dir) / "run.json", ec)) {
-    nlohmann::json record;
     std::string text;
     const RunOptions r = read_run_record(dir, record, text);
-    const SceneConfig scene =
-        apply_run_options(load_scene_from_string(text, r.scene, run_overrides(r)), r);
-    if (const CraterSite site = crater_site(scene); site.bed) {
-      print_crater(scene, site, f);
+    scene = apply_run_options(load_scene_from_string(text, r.scene, run_overrides(r)), r);
+    if (record.contains("surface_angles")) apply_surface_angles(*scene, record["surface_angles"]);
+  }
+  const fs::path final_state = fs::path(dir) / "final_grains.ply";
+  const fs::path checkpoint = fs::path(dir) / "checkpoint.bin";
+  FrameData f;
+  if (fs::exists(final_state, ec)) {
+    f = read_ply(final_state.string());
+    fmt::print("frame            {}\n", final_state.string());
+  } else if (scene && scene->simulation.mode == Mode::Surface) {
+    if (!fs::exists(checkpoint, ec))
+      throw InputError(fmt::format(
+          "{}: the run is not finished and has no checkpoint yet. A surface run's frames hold only "
+          "the grains it simulates, not the sand asleep under them, so its heap cannot be measured "
+          "from them; measure it after its first checkpoint, or finish it: {}",
+          dir, resume_command(dir)));
+    int frame = 0;
+    f = grains_at_checkpoint(*scene, record, checkpoint.string(), frame);
+    fmt::print("frame            {} (frame {}, every grain)\n", checkpoint.string(), frame);
+  } else {
+    const std::string path = last_frame(dir);
+    f = read_ply(path);
+    fmt::print("frame            {}\n", path);
+  }
+  fmt::print("grains           {}\n", f.size());
+  if (!fs::exists(fs::path(dir) / "summary.json", ec))
+    fmt::print(
+        "note             the run is not finished: grains still falling or flowing are "
+        "measured with the rest\n");
+  // a scene with a bed makes a crater, not a heap (kNoHeapInABed)
+  if (scene) {
+    if (const CraterSite site = crater_site(*scene); site.bed) {
+      print_crater(*scene, site, f);
       return 0;
     }
   }

@@ -95,6 +95,34 @@ TEST(Cli, SurfaceModeReportsTransitionsAndTheHeightField) {
   EXPECT_EQ(summary["n_total"], 200);
 }
 
+// A surface run's frames hold only the grains it simulates: measured before its end, the heap is
+// read from the last checkpoint, every grain, and a run with no checkpoint yet is refused.
+TEST(Cli, MeasureReadsAnUnfinishedSurfaceRunFromItsCheckpointWithEveryGrain) {
+  Sandbox box;
+  const auto out = box.dir / "out";
+  std::string log;
+  // the block settles and its columns close within the run, so grains go to sleep
+  ASSERT_EQ(sandflow("run " + box.write("t.toml", kTinyScene).string() +
+                         " --mode surface --frames 30 --set surface.close_after=0.1 --out " +
+                         out.string(),
+                     &log),
+            0)
+      << log;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  ASSERT_GT(summary["n_static_final"].get<int>(), 0) << "no grain asleep: the test shows nothing";
+  ASSERT_LT(sandflow::read_ply((out / "frames" / "0030.ply").string()).size(), 200u);
+  // the run as it stood at its last checkpoint, before it finished
+  fs::remove(out / "final_grains.ply");
+  fs::remove(out / "summary.json");
+  ASSERT_EQ(sandflow("measure " + out.string(), &log), 0) << log;
+  EXPECT_NE(log.find("(frame 30, every grain)"), std::string::npos) << log;
+  EXPECT_NE(log.find("grains           200\n"), std::string::npos) << log;
+  EXPECT_NE(log.find("the run is not finished"), std::string::npos) << log;
+  fs::remove(out / "checkpoint.bin");
+  EXPECT_EQ(sandflow("measure " + out.string(), &log), 2) << log;
+  EXPECT_NE(log.find("no checkpoint yet"), std::string::npos) << log;
+}
+
 TEST(Cli, CompareWritesBothRunsAndTheTable) {
   Sandbox box;
   const auto out = box.dir / "cmp";
