@@ -347,6 +347,15 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
   return r;
 }
 
+/// The scene of a recorded run, `r` and `text` as read_run_record returned them: its file's text
+/// with its options, and the surface angles it ran with (measured or cached when it started).
+SceneConfig recorded_scene(const RunOptions& r, const std::string& text,
+                           const nlohmann::json& record) {
+  SceneConfig scene = apply_run_options(load_scene_from_string(text, r.scene, run_overrides(r)), r);
+  if (record.contains("surface_angles")) apply_surface_angles(scene, record["surface_angles"]);
+  return scene;
+}
+
 namespace {
 
 // ---- Resumable runs (docs/checkpoints.md) -------------------------------------------------------
@@ -488,8 +497,7 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
   }
   if (o.threads > 0) r.threads = o.threads;
   if (o.checkpoint_every >= 0) record["checkpoint_every"] = o.checkpoint_every;
-  run.scene = apply_run_options(load_scene_from_string(text, r.scene, run_overrides(r)), r);
-  if (record.contains("surface_angles")) apply_surface_angles(run.scene, record["surface_angles"]);
+  run.scene = recorded_scene(r, text, record);
   run.out = dir;
   run.record = record;
   run.resumed = true;
@@ -764,8 +772,7 @@ int measure_command(const std::string& dir) {
   if (fs::exists(fs::path(dir) / "run.json", ec)) {
     std::string text;
     const RunOptions r = read_run_record(dir, record, text);
-    scene = apply_run_options(load_scene_from_string(text, r.scene, run_overrides(r)), r);
-    if (record.contains("surface_angles")) apply_surface_angles(*scene, record["surface_angles"]);
+    scene = recorded_scene(r, text, record);
   }
   const fs::path final_state = fs::path(dir) / "final_grains.ply";
   const fs::path checkpoint = fs::path(dir) / "checkpoint.bin";
