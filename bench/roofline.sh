@@ -133,7 +133,10 @@ WORKING_MB=$(awk -v b="$BYTES" -v n="$GRAINS" 'BEGIN { m = b * n / 1e6; printf "
 lb() {  # TEST SIZE THREADS FIELD -> the value of likwid-bench's FIELD line
   local out
   out=$(likwid-bench -t "$1" -w "N:$2:$3" 2>&1) || { echo "$out" >&2; die "likwid-bench -t $1 failed"; }
-  sed -n "s|^$4:[[:space:]]*||p" <<<"$out" | head -n1
+  local v
+  v=$(sed -n "s|^$4:[[:space:]]*||p" <<<"$out" | head -n1)
+  [[ "$v" =~ ^[0-9.]+$ ]] || { echo "$out" >&2; die "likwid-bench -t $1 gave no $4"; }
+  echo "$v"
 }
 VEC=
 grep -qw avx512f /proc/cpuinfo && VEC=peakflops_avx512_fma
