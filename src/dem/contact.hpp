@@ -118,9 +118,10 @@ inline Vec3 capped_spring(Vec3& s, const Vec3& rate, Real k, Real c, Real cap, R
 
 /// The full law. v_rel = v_i - v_j (centres); w_i, w_j angular velocities. With kRolling = false
 /// the rolling part is skipped (a compile-time switch: without rolling resistance it costs
-/// nothing).
+/// nothing). Inlined by force: GCC 12 keeps the rolling variant out of line in the sweep, a call
+/// per contact that cost 6-12 % of a surface run of the floor (docs/performance.md).
 template <bool kRolling>
-inline ContactForce contact_force(const ContactParams& p, const ContactGeometry& g,
+[[gnu::always_inline]] inline ContactForce contact_force(const ContactParams& p, const ContactGeometry& g,
                                   const Vec3& v_rel, const Vec3& w_i, const Vec3& w_j,
                                   ContactHistory& h, Real dt) {
   const Vec3& n = g.n;
