@@ -38,8 +38,8 @@ Logs go to bench_cache/ in the repository root.
 EOF
 }
 
-die() { echo "compare_lammps.sh: error: $*" >&2; exit 1; }
-note() { echo "compare_lammps.sh: $*" >&2; }
+# die, note, bench_paths, bed_label, apt_install, ensure_bench_bed, field
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 # ---------------------------------------------------------------- options
 CASE=bed
@@ -73,19 +73,11 @@ esac
 [[ "$GRAINS" =~ ^[1-9][0-9]*$ ]] || die "--grains must be a positive integer, got '$GRAINS'"
 [[ "$STEPS" =~ ^[1-9][0-9]*$ ]] || die "--steps must be a positive integer, got '$STEPS'"
 
-ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-cd "$ROOT"
-[[ "$BUILD" = /* ]] || BUILD="$ROOT/$BUILD"
-BENCH_BED="$BUILD/bench/bench_bed"
+bench_paths "$BUILD"
 LMP_INPUT="$ROOT/bench/lammps/bed.in"
 [[ -f "$LMP_INPUT" ]] || die "missing $LMP_INPUT"
 
-CACHE="$ROOT/bench_cache"
-mkdir -p "$CACHE"
-# Keep the cache (beds, data files, logs) out of git whatever .gitignore says.
-[[ -f "$CACHE/.gitignore" ]] || printf '*\n' > "$CACHE/.gitignore"
-
-if (( GRAINS % 1000 == 0 )); then LABEL="$((GRAINS / 1000))k"; else LABEL="$GRAINS"; fi
+LABEL=$(bed_label "$GRAINS")
 BED="bench_cache/bed${LABEL}.bin"
 DATA="bench_cache/${CASE}${LABEL}.data"
 LABEL="${CASE}${LABEL}"   # the logs' names
@@ -124,22 +116,6 @@ read -r KT MASS < <(awk -v d="$D" -v rho="$RHO" -v kn="$KN" 'BEGIN {
 }')
 
 # ------------------------------------------------------------- LAMMPS setup
-SUDO=()
-if [[ $(id -u) -ne 0 ]]; then
-  if command -v sudo >/dev/null 2>&1; then SUDO=(sudo); fi
-fi
-
-apt_install() {
-  command -v apt-get >/dev/null 2>&1 || die "apt-get not found: install $* by hand"
-  if [[ $(id -u) -ne 0 && ${#SUDO[@]} -eq 0 ]]; then
-    die "need root or sudo to install $* (or install it by hand: apt-get install $*)"
-  fi
-  note "installing $* with apt-get"
-  "${SUDO[@]}" apt-get update -q >&2 || die "apt-get update failed"
-  "${SUDO[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "$@" >&2 \
-    || die "apt-get install $* failed"
-}
-
 # Debian's lammps depends on mpi-default-bin (openmpi-bin), so mpirun usually
 # arrives with it; openmpi-bin is installed separately only if it did not.
 command -v lmp >/dev/null 2>&1 || apt_install lammps
@@ -165,26 +141,7 @@ if ! "${MPIRUN[@]}" -np 2 true >/dev/null 2>&1; then
 fi
 
 # -------------------------------------------------------------- sandflow setup
-if [[ ! -x "$BENCH_BED" ]]; then
-  note "building bench_bed in $BUILD"
-  if [[ ! -f "$BUILD/CMakeCache.txt" ]]; then
-    cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release >&2 || die "cmake configure failed"
-  fi
-  cmake --build "$BUILD" -j2 --target bench_bed >&2 || die "building bench_bed failed"
-elif [[ $REBUILD -eq 1 ]]; then
-  cmake --build "$BUILD" -j2 --target bench_bed >&2 || die "building bench_bed failed"
-fi
-[[ -x "$BENCH_BED" ]] || die "no executable $BENCH_BED after building"
-if [[ -f "$BUILD/CMakeCache.txt" ]]; then
-  btype=$(sed -n 's/^CMAKE_BUILD_TYPE:[A-Z]*=//p' "$BUILD/CMakeCache.txt")
-  case "$btype" in
-    Release|RelWithDebInfo) ;;
-    *) note "WARNING: $BUILD is a '${btype:-<none>}' build, not Release: sandflow's numbers will be low" ;;
-  esac
-fi
-
-# value of key=VALUE in a line of key=value words
-field() { tr ' ' '\n' <<<"$1" | sed -n "s/^$2=//p" | head -n1; }
+ensure_bench_bed "$REBUILD"
 
 # run_sandflow THREADS [extra args...]: sets SF_SECONDS SF_GSS SF_CPG
 run_sandflow() {

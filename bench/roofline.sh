@@ -30,8 +30,8 @@ apt-get if they are missing. Run it on an idle machine.
 EOF
 }
 
-die() { echo "roofline.sh: error: $*" >&2; exit 1; }
-note() { echo "roofline.sh: $*" >&2; }
+# die, note, bench_paths, bed_label, apt_install, ensure_bench_bed, field
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 GRAINS=100000
 STEPS=1000
@@ -50,43 +50,19 @@ done
 [[ "$GRAINS" =~ ^[1-9][0-9]*$ ]] || die "--grains must be a positive integer, got '$GRAINS'"
 [[ "$STEPS" =~ ^[1-9][0-9]*$ ]] || die "--steps must be a positive integer, got '$STEPS'"
 
-ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-cd "$ROOT"
-[[ "$BUILD" = /* ]] || BUILD="$ROOT/$BUILD"
-BENCH_BED="$BUILD/bench/bench_bed"
-CACHE="$ROOT/bench_cache"
-mkdir -p "$CACHE"
-[[ -f "$CACHE/.gitignore" ]] || printf '*\n' > "$CACHE/.gitignore"
-label() { if (( $1 % 1000 == 0 )); then echo "$(($1 / 1000))k"; else echo "$1"; fi; }
+bench_paths "$BUILD"
 
-SUDO=()
-[[ $(id -u) -ne 0 ]] && command -v sudo >/dev/null 2>&1 && SUDO=(sudo)
-apt_install() {
-  command -v apt-get >/dev/null 2>&1 || die "apt-get not found: install $* by hand"
-  [[ $(id -u) -eq 0 || ${#SUDO[@]} -gt 0 ]] || die "need root or sudo to install $*"
-  note "installing $* with apt-get"
-  "${SUDO[@]}" apt-get update -q >&2 || die "apt-get update failed"
-  "${SUDO[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "$@" >&2 \
-    || die "apt-get install $* failed"
-}
 command -v likwid-bench >/dev/null 2>&1 || apt_install likwid
 if (( INSTRUCTIONS )); then command -v valgrind >/dev/null 2>&1 || apt_install valgrind; fi
 
-if [[ ! -x "$BENCH_BED" ]]; then
-  note "building bench_bed in $BUILD"
-  [[ -f "$BUILD/CMakeCache.txt" ]] \
-    || cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release >&2 || die "cmake configure failed"
-  cmake --build "$BUILD" -j2 --target bench_bed >&2 || die "building bench_bed failed"
-fi
-
-field() { tr ' ' '\n' <<<"$1" | sed -n "s/^$2=//p" | head -n1; }
+ensure_bench_bed
 
 # ---------------------------------------------------------------- the kernel
 # bench_bed THREADS: sets GSS (grain-steps/s), TOUCH and LISTED (pairs per grain)
 bench() {
   local log="$CACHE/roofline_t$1.log"
   OMP_NUM_THREADS=$1 "$BENCH_BED" --case bed --grains "$GRAINS" --threads "$1" --steps "$STEPS" \
-    --bed "bench_cache/bed$(label "$GRAINS").bin" >"$log" 2>&1 \
+    --bed "bench_cache/bed$(bed_label "$GRAINS").bin" >"$log" 2>&1 \
     || { tail -n 20 "$log" >&2; die "bench_bed failed, see $log"; }
   local line
   line=$(grep -E '^engine=' "$log" | tail -n1)
