@@ -159,10 +159,10 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
       }
     }
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
-    std::vector<std::uint32_t>& buf = buffers[t];
-    auto& side = side_buffers[t];
-    buf.clear();
-    side.clear();
+    // each thread's buffers are its own until the end: two vectors side by side in `buffers`
+    // share a cache line, and every push_back would pass it between the cores
+    std::vector<std::uint32_t> buf;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> side;
     for (std::size_t i = range_start[t]; i < range_start[t + 1]; ++i) {
       const std::size_t first = buf.size();
       const int k = reach[i];
@@ -184,6 +184,8 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
       std::sort(buf.begin() + first, buf.end());
       own_count[i + 1] = static_cast<std::uint32_t>(buf.size() - first);
     }
+    buffers[t] = std::move(buf);
+    side_buffers[t] = std::move(side);
   }
   std::vector<std::uint32_t> own_start(std::move(own_count));
   for (std::size_t i = 0; i < n; ++i) own_start[i + 1] += own_start[i];
@@ -345,15 +347,15 @@ void build_boundary_list(const Grains& grains, const std::vector<Real>& allow,
   {
 #pragma omp single
     buffers.resize(omp_get_num_threads());
-    std::vector<std::uint32_t>& buf = buffers[omp_get_thread_num()];
-    buf.clear();
-#pragma omp for schedule(static)
+    std::vector<std::uint32_t> buf;  // (the thread's own until the end: see build_pair_list)
+#pragma omp for schedule(static) nowait
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t first = buf.size();
       each_near(i, [&](std::uint32_t b) { buf.push_back(b); });
       std::sort(buf.begin() + first, buf.end());
       out.start[i + 1] = static_cast<std::uint32_t>(buf.size() - first);
     }
+    buffers[omp_get_thread_num()] = std::move(buf);
   }
   for (std::size_t i = 0; i < n; ++i) out.start[i + 1] += out.start[i];
   for (const auto& buf : buffers) out.obstacle.insert(out.obstacle.end(), buf.begin(), buf.end());
