@@ -419,6 +419,13 @@ void DemSolver::balance_ranges(const Grains& grains, std::size_t threads) {
       target += share_[t++] * static_cast<double>(total);
     }
   }
+  // the rows whose pairs reach past their range's end (rows are sorted by j: the last one says)
+  cross_rows_.clear();
+  for (std::size_t r = 0; r + 1 < threads; ++r)
+    for (std::size_t i = range_start_[r]; i < range_start_[r + 1]; ++i)
+      if (pairs_.start[i + 1] > pairs_.start[i] &&
+          pairs_.j[pairs_.start[i + 1] - 1] >= range_start_[r + 1])
+        cross_rows_.push_back(static_cast<std::uint32_t>(i));
   ranges_stale_ = false;
 }
 
@@ -505,12 +512,22 @@ SweepData sweep_data(const DemParams& p, PairList& pairs, Grains& grains, std::v
           .decay = p.preload_relax_time > 0 ? std::exp(-dt / p.preload_relax_time) : 1.0};
 }
 
-/// One thread's tallies: its copies of the sweep's reduction variables, and its energy events.
+/// An energy in whole femtojoules. The sweep sums the energy of its transitions in integers:
+/// integer sums do not depend on their order, so the totals are the same for any thread count
+/// without keeping the terms to add them in slot order (which cost 4 % of a surface run in
+/// sorting). A femtojoule is a billionth of the smallest term a run shows; a sweep's total stays
+/// far below the 9,000 J an int64 holds.
+[[gnu::always_inline]] inline std::int64_t femtojoules(Real energy) {
+  return static_cast<std::int64_t>(std::llround(energy * 1e15));
+}
+
+/// One thread's tallies: its copies of the sweep's reduction variables.
 struct Tally {
   std::int64_t& contacts;
   std::int64_t& wall_contacts;
   Real& max_ov;
-  std::vector<SlotEnergy>& ev;
+  std::int64_t& inert_fj;    ///< in the springs of contacts going inert [fJ]
+  std::int64_t& relaxed_fj;  ///< the work of preloads relaxing [fJ]
 };
 
 // --- fixed partners: walls, boundary particles, frozen grains --------------------------------
@@ -604,7 +621,7 @@ template <bool kRolling>
   PairList& pl = d.pl;
   if (!pl.touch[s]) return;
   if (dist2 < rsum * rsum) [[unlikely]]
-    tally.ev.push_back({s, inert_energy(d.cp, pl, s, rsum, dist2, kRolling), 0.0});
+    tally.inert_fj += femtojoules(inert_energy(d.cp, pl, s, rsum, dist2, kRolling));
   pl.touch[s] = 0;
   pl.delta0[s] = 0;
   pl.xi[s] = {};
@@ -642,7 +659,7 @@ template <bool kRolling>
   const Real d_small = 2 * std::min(r[i], r[j]);
   if (g.delta > tally.max_ov * d_small) tally.max_ov = g.delta / d_small;
   if (pl.touch[s] & kPreloaded) [[unlikely]]
-    tally.ev.push_back({s, 0.0, relax_preload(cp.k_n, d.decay, pl.delta0[s], g.delta)});
+    tally.relaxed_fj += femtojoules(relax_preload(cp.k_n, d.decay, pl.delta0[s], g.delta));
   ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
   cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, d.dt);
   SANDFLOW_ASSERT(!(dist > 0 && tame(dx) && tame(v[i] - v[j]) && tame(w[i]) && tame(w[j]) &&
@@ -667,15 +684,24 @@ template <bool kRolling>
   if constexpr (kRolling) d.acc_t[j] -= cf.t_roll;
 }
 
+/// The first slot of grain i's row that reaches past `end` (rows are sorted by j).
+[[gnu::always_inline]] inline std::uint32_t first_reaching(const PairList& pl, std::size_t i,
+                                                           std::size_t end) {
+  std::uint32_t first = pl.start[i + 1];
+  while (first > pl.start[i] && pl.j[first - 1] >= end) --first;
+  return first;
+}
+
 /// Grain i's pair sums, into f, q and tr: its remaining pairs (computed here, their reverses
-/// scattered), its waiting ones (computed in the thread partition), then its accumulator, which
-/// is cleared.
+/// scattered), its waiting ones (those reaching past its range's end, computed in the thread
+/// partition), then its accumulator, which is cleared.
 template <bool kRolling>
-[[gnu::always_inline]] inline void pair_sums(const SweepData& d, const std::uint32_t* split,
+[[gnu::always_inline]] inline void pair_sums(const SweepData& d, std::size_t range_end,
                                              std::size_t i, Vec3& f, Vec3& q, Vec3& tr,
                                              Tally& tally) {
   const PairList& pl = d.pl;
-  for (std::uint32_t s = pl.start[i]; s < split[i]; ++s) {
+  const std::uint32_t split = first_reaching(pl, i, range_end);
+  for (std::uint32_t s = pl.start[i]; s < split; ++s) {
     ContactForce cf;
     if (!pair_force<kRolling>(d, i, s, cf, tally)) continue;
     f += cf.force_i;
@@ -683,7 +709,7 @@ template <bool kRolling>
     if constexpr (kRolling) tr += cf.t_roll;
     scatter<kRolling>(d, pl.j[s], cf);
   }
-  for (std::uint32_t s = split[i]; s < pl.start[i + 1]; ++s) {
+  for (std::uint32_t s = split; s < pl.start[i + 1]; ++s) {
     if (!pl.touch[s]) continue;
     f += pl.force[s];
     q += pl.q[s];
@@ -715,27 +741,21 @@ template <bool kRolling>
 
 /// Phase 1 of the sweep, called by every thread of its parallel region (the `omp for` binds to
 /// it); thread t's range is [range[t], range[t + 1]), the last one ending at n. The pairs that
-/// reach into a later thread's range, from the state at the start of the step, are computed into
-/// their slots by whichever thread is free (each slot's result depends on its pair alone); then,
-/// after the barrier that ends that loop, each thread takes those that reach into its range into
-/// its accumulators, in grain order. split[i] becomes the first slot of i that reaches a later
-/// range.
+/// reach into a later thread's range (in the rows `cross_rows`), from the state at the start of
+/// the step, are computed into their slots by whichever thread is free: each slot's result
+/// depends on its pair alone.
 template <bool kRolling>
 [[gnu::always_inline]] inline void cross_range_pairs(const SweepData& d,
                                                      const std::vector<std::size_t>& range,
-                                                     std::size_t t, std::uint32_t* split,
+                                                     const std::vector<std::uint32_t>& cross_rows,
                                                      Tally& tally) {
   PairList& pl = d.pl;
-  const std::size_t threads = range.size() - 1, n = range.back();
-  const std::size_t lo = range[t], hi = range[t + 1];
-#pragma omp for schedule(dynamic, 64)
-  for (std::size_t i = 0; i < range[threads - 1]; ++i) {
+#pragma omp for schedule(dynamic, 16)
+  for (std::size_t k = 0; k < cross_rows.size(); ++k) {
+    const std::uint32_t i = cross_rows[k];
     const std::size_t end_of_range =
         *std::upper_bound(range.begin(), range.end(), i);  // (i's range ends there)
-    std::uint32_t first = pl.start[i + 1];                 // rows are sorted by j
-    while (first > pl.start[i] && pl.j[first - 1] >= end_of_range) --first;
-    split[i] = first;
-    for (std::uint32_t s = first; s < pl.start[i + 1]; ++s) {
+    for (std::uint32_t s = first_reaching(pl, i, end_of_range); s < pl.start[i + 1]; ++s) {
       ContactForce cf;
       if (!pair_force<kRolling>(d, i, s, cf, tally)) continue;
       pl.force[s] = cf.force_i;
@@ -743,16 +763,28 @@ template <bool kRolling>
       if constexpr (kRolling) pl.t_roll[s] = cf.t_roll;
     }
   }
-  if (t == threads - 1)  // the last range reaches no later one
-    for (std::size_t i = lo; i < n; ++i) split[i] = pl.start[i + 1];
-  for (std::size_t i = 0; i < lo; ++i)
-    for (std::uint32_t s = split[i]; s < pl.start[i + 1]; ++s) {
-      const std::uint32_t j = pl.j[s];
-      if (!pl.touch[s] || j < lo || j >= hi) continue;
-      d.acc_f[j] -= pl.force[s];
-      d.acc_q[j] += pl.q[s];
-      if constexpr (kRolling) d.acc_t[j] -= pl.t_roll[s];
+}
+
+/// After phase 1 (and the barrier that ends it): the pairs of earlier ranges' rows that reach
+/// into [lo, hi), into their grains' accumulators, in the order of the rows. Each row meets a
+/// partner at most once, so every accumulator adds its terms in ascending order of the other
+/// grain, as on one thread. Reads only what phase 1 wrote and the list: a per-grain array
+/// written by either thread would pass its cache lines between the cores every step.
+template <bool kRolling>
+[[gnu::always_inline]] inline void take_cross_pairs(const SweepData& d,
+                                                    const std::vector<std::uint32_t>& cross_rows,
+                                                    std::size_t lo, std::size_t hi) {
+  const PairList& pl = d.pl;
+  for (std::size_t k = 0; k < cross_rows.size() && cross_rows[k] < lo; ++k) {
+    const std::uint32_t i = cross_rows[k];
+    for (std::uint32_t s = pl.start[i + 1]; s > pl.start[i] && pl.j[s - 1] >= lo; --s) {
+      const std::uint32_t slot = s - 1, j = pl.j[slot];
+      if (!pl.touch[slot] || j >= hi) continue;
+      d.acc_f[j] -= pl.force[slot];
+      d.acc_q[j] += pl.q[slot];
+      if constexpr (kRolling) d.acc_t[j] -= pl.t_roll[slot];
     }
+  }
 }
 
 }  // namespace
@@ -762,15 +794,11 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   const std::size_t n = grains.size();
   std::int64_t contacts = 0, wall_contacts = 0;
   Real max_ov = counters_.max_overlap_rel;
-  // the energy of contacts going inert and of preloads relaxing: rare, kept per slot and summed
-  // in slot order after the sweep, so that the totals do not depend on the threads
-  std::vector<std::vector<SlotEnergy>>& events = energy_events_;
-  int moved_out = 0;  // some grain left its allowance
-  split_.resize(n);
-  std::uint32_t* split = split_.data();
+  std::int64_t inert_fj = 0, relaxed_fj = 0;  // (femtojoules: see there)
+  int moved_out = 0;                          // some grain left its allowance
 
 #pragma omp parallel if (n >= kParallelMinGrains) \
-    reduction(+ : contacts, wall_contacts) reduction(max : max_ov, moved_out)
+    reduction(+ : contacts, wall_contacts, inert_fj, relaxed_fj) reduction(max : max_ov, moved_out)
   {
     const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
@@ -779,11 +807,8 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
     const SweepData data =
         sweep_data(params_, pairs_, grains, acc_f_, acc_q_, acc_t_, x_at_build_, allow2_, dt);
     const FixedPartners fixed{geometry, walls_, wall_params_, bounds_, boundary_, boundary_params_};
-#pragma omp single
-    events.resize(std::max(events.size(), threads));
-    events[t].clear();
     // made inside the parallel region, so that the kernels update this thread's reduction copies
-    Tally tally{contacts, wall_contacts, max_ov, events[t]};
+    Tally tally{contacts, wall_contacts, max_ov, inert_fj, relaxed_fj};
 
     // 1. the threads' ranges (cut again after a rebuild), and the pairs that reach into a later
     // thread's range
@@ -791,13 +816,15 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
     if (ranges_stale_ || range_start_.size() != threads + 1 || range_start_.back() != n)
       balance_ranges(grains, threads);
     const std::size_t lo = range_start_[t], hi = range_start_[t + 1];
-    cross_range_pairs<kRolling>(data, range_start_, t, split, tally);
+    cross_range_pairs<kRolling>(data, range_start_, cross_rows_, tally);
 
-    // 2. the sweep: i's remaining pairs, its waiting ones, then i moves
+    // 2. the sweep: the pairs of phase 1 that reach into this range, then i's remaining pairs,
+    // its waiting ones, and i moves (all of it timed: the thread's share follows its time)
     const double sweep_start = omp_get_wtime();
+    take_cross_pairs<kRolling>(data, cross_rows_, lo, hi);
     for (std::size_t i = lo; i < hi; ++i) {
       Vec3 f{}, q{}, tr{};
-      pair_sums<kRolling>(data, split, i, f, q, tr, tally);
+      pair_sums<kRolling>(data, hi, i, f, q, tr, tally);
       if (data.st[i] != GrainState::Active) continue;
       Vec3 torque = tr + q * (-data.r[i]);
       fixed_forces<kRolling>(data, fixed, i, f, torque, tally);
@@ -808,25 +835,9 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   counters_.contacts = contacts;
   counters_.wall_contacts = wall_contacts;
   counters_.max_overlap_rel = max_ov;
-  add_energy_events();
+  counters_.energy_inert += static_cast<Real>(inert_fj) * 1e-15;
+  counters_.energy_released += static_cast<Real>(relaxed_fj) * 1e-15;
   return moved_out != 0;
-}
-
-void DemSolver::add_energy_events() {
-  std::vector<SlotEnergy>& all = events_merged_;
-  all.clear();
-  for (auto& e : energy_events_) {
-    all.insert(all.end(), e.begin(), e.end());
-    e.clear();  // (a sweep on fewer threads leaves the others' empty)
-  }
-  if (all.empty()) return;
-  // (a slot is computed once a step: one event each)
-  std::sort(all.begin(), all.end(),
-            [](const SlotEnergy& a, const SlotEnergy& b) { return a.slot < b.slot; });
-  for (const SlotEnergy& e : all) {
-    counters_.energy_inert += e.inert;
-    counters_.energy_released += e.relaxed;
-  }
 }
 
 }  // namespace sandflow

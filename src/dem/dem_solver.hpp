@@ -85,13 +85,6 @@ struct DeepestOverlap {
   std::uint32_t other = 0;   ///< the other grain's slot, the obstacle or the boundary particle
 };
 
-/// Energy of one pair slot in one step of the sweep: its contact going inert, or its preload
-/// relaxing [J] (DemSolver keeps them per thread and adds them in slot order).
-struct SlotEnergy {
-  std::uint32_t slot;
-  Real inert, relaxed;
-};
-
 class DemSolver {
  public:
   explicit DemSolver(const DemParams& params);
@@ -174,8 +167,6 @@ class DemSolver {
   /// grain has moved further than its allowance since the last rebuild.
   template <bool kRolling>
   bool sweep(Grains& grains, const Geometry& geometry, Real dt);
-  /// After a sweep: the energy events of its threads, added to the counters in slot order.
-  void add_energy_events();
   /// Splits the grains into `threads` contiguous ranges of about equal time for the sweep: each
   /// thread's share of the estimated work follows the speed it showed since the last split.
   void balance_ranges(const Grains& grains, std::size_t threads);
@@ -195,17 +186,15 @@ class DemSolver {
   std::vector<Vec3> x_at_build_;
   std::vector<Real> allow_, allow2_;  ///< per grain: how far it may move before a rebuild [m, m^2]
   std::vector<Vec3> acc_f_, acc_q_, acc_t_;  ///< per grain: reversed pair results of this step
-  std::vector<std::uint32_t> split_;         ///< per grain: first slot reaching a later thread
   /// The sweep's ranges, one per thread, of about equal work (set after each rebuild).
   std::vector<std::size_t> range_start_;
+  std::vector<std::uint32_t> cross_rows_;  ///< ascending: rows with pairs past their range's end
   bool ranges_stale_ = true;
   std::vector<double> share_;  ///< per thread: its share of the estimated work
   std::vector<double> busy_;   ///< per thread: seconds in its range since the last split
   bool need_rebuild_ = true;
   std::int64_t rebuild_count_ = 0;
   std::vector<GrainId> released_;  ///< since the last rebuild (always empty between steps)
-  std::vector<std::vector<SlotEnergy>> energy_events_;  ///< per thread, in one sweep
-  std::vector<SlotEnergy> events_merged_;
   DemCounters counters_;
 };
 
