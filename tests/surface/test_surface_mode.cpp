@@ -154,7 +154,7 @@ TEST(SurfaceMode, OneAndTwoThreadsGiveTheSameState) {
   EXPECT_EQ(one.hash, two.hash);
   EXPECT_EQ(one.trapped, two.trapped);
   EXPECT_GT(one.trapped, 0);  // the transitions took part
-  // and the same energy statistics, to the last bit (summed in slot order, not thread order)
+  // and the same energy statistics, to the last bit (summed in integers, in any order)
   EXPECT_EQ(one.energy_trapped, two.energy_trapped);
   EXPECT_EQ(one.energy_woken, two.energy_woken);
   EXPECT_EQ(one.energy_preloaded, two.energy_preloaded);
