@@ -362,6 +362,55 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
     else if (!closed(c) || flows)
       pending_.add(static_cast<std::uint32_t>(c));
   }
+  // a free face steeper than theta_max fails at once, with the wedge behind it: the avalanche's
+  // rate alone held a lifted tube's sand up as a wall while it eroded; how fast the released
+  // grains fall is the DEM's
+  hold_max_slope(todo);
+}
+
+Real HeightField::max_slope_top(std::size_t c, const std::vector<Real>& z) const {
+  constexpr Real kNone = std::numeric_limits<Real>::infinity();
+  const int i = static_cast<int>(c % p_.nx), j = static_cast<int>(c / p_.nx);
+  // the lower neighbour on each axis: the exchange's upwind slope is measured towards it
+  const Real a = std::min(i > 0 ? z[c - 1] : kNone, i + 1 < p_.nx ? z[c + 1] : kNone);
+  const Real b = std::min(j > 0 ? z[c - p_.nx] : kNone, j + 1 < p_.ny ? z[c + p_.nx] : kNone);
+  const Real s = p_.cell * std::tan(p_.theta_max);
+  // the h at which (h - a)^2 + (h - b)^2 = s^2 (each term only where h is above it)
+  if (std::abs(a - b) >= s || !std::isfinite(a) || !std::isfinite(b)) return std::min(a, b) + s;
+  return 0.5 * (a + b + std::sqrt(2 * s * s - (a - b) * (a - b)));
+}
+
+void HeightField::hold_max_slope(const std::vector<std::uint32_t>& seeds) {
+  const Real tol = 1e-9 * p_.cell;  // (rounding must not keep the sweep going)
+  // 1. free faces: static sand standing steeper than theta_max above the sand beside it (H: the
+  // grains there, moving or not, buttress it; under an impact's pit they still do)
+  queue_.clear();
+  auto face = [&](std::size_t c) {
+    if (h_[c] > max_slope_top(c, H_) + tol) queue_.push_back(static_cast<std::uint32_t>(c));
+  };
+  for (std::uint32_t c : seeds) {
+    const int i = static_cast<int>(c % p_.nx), j = static_cast<int>(c / p_.nx);
+    face(c);
+    if (i > 0) face(c - 1);
+    if (i + 1 < p_.nx) face(c + 1);
+    if (j > 0) face(c - p_.nx);
+    if (j + 1 < p_.ny) face(c + p_.nx);
+  }
+  // 2. the wedge behind each face fails with it: a label-correcting sweep of the static top to
+  // the theta_max slope from the face's foot (h only falls, never below L, so it ends)
+  for (std::size_t q = 0; q < queue_.size(); ++q) {
+    const std::size_t c = queue_[q];
+    const Real h = std::max(std::min(h_[c], max_slope_top(c, h_)), L_[c]);
+    if (!(h < h_[c] - tol)) continue;
+    h_[c] = h;
+    R_[c] = H_[c] - h_[c];
+    moved(c);
+    const int i = static_cast<int>(c % p_.nx), j = static_cast<int>(c / p_.nx);
+    if (i > 0) queue_.push_back(static_cast<std::uint32_t>(c - 1));
+    if (i + 1 < p_.nx) queue_.push_back(static_cast<std::uint32_t>(c + 1));
+    if (j > 0) queue_.push_back(static_cast<std::uint32_t>(c - p_.nx));
+    if (j + 1 < p_.ny) queue_.push_back(static_cast<std::uint32_t>(c + p_.nx));
+  }
 }
 
 Real HeightField::static_volume() const {

@@ -171,6 +171,13 @@ class HeightField {
                std::uint32_t q1) const;
   /// h or L of column c changed: its neighbours' slopes did, and static grains there may wake.
   void moved(std::size_t c);
+  /// Static sand standing steeper than theta_max above the sand beside it (a free face, found
+  /// among `seeds` and their neighbours) fails with the wedge behind it: h falls to the theta_max
+  /// slope from the face's foot (docs/physics.md, step 3 of the update).
+  void hold_max_slope(const std::vector<std::uint32_t>& seeds);
+  /// The highest top column c may have with its neighbours' heights z: its upwind slope (as the
+  /// exchange measures it) at theta_max; +infinity with no neighbour.
+  Real max_slope_top(std::size_t c, const std::vector<Real>& z) const;
   /// Every column may have changed: the next update evaluates them all.
   void everything_changed();
 
@@ -190,6 +197,7 @@ class HeightField {
   bool moved_all_ = true;
   std::size_t evaluated_ = 0;
   std::vector<Real> h_new_;
+  std::vector<std::uint32_t> queue_;  ///< scratch of hold_max_slope()
 
   // scratch of measure(): ray hits filed by column, for the columns hit only
   struct ColumnHit {

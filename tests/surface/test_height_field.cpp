@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "surface/height_field.hpp"
@@ -181,6 +182,63 @@ TEST(Exchange, AvalancheStartsOnlyAboveThetaMax) {
     EXPECT_LT(steep.static_top()[c], s0[c]) << c;
     EXPECT_DOUBLE_EQ(held.static_top()[c], h0[c]) << c;
   });
+}
+
+// A 30 x 30 field on a flat terrain at 0, sand 2 mm deep, with a 10 x 10 block of static sand
+// 20 cm high in the middle; the sand surface H is `beside` outside the block and the block's top
+// inside it.
+HeightField block(Real beside) {
+  HeightFieldParams p = ramp_params();
+  p.nx = p.ny = 30;
+  HeightField hf(p, std::vector<Real>(static_cast<std::size_t>(p.nx) * p.ny, 0.0));
+  std::vector<Real> h(hf.columns(), 0.002), H(hf.columns(), beside);
+  for (int j = 10; j < 20; ++j)
+    for (int i = 10; i < 20; ++i)
+      h[static_cast<std::size_t>(j) * p.nx + i] = H[static_cast<std::size_t>(j) * p.nx + i] = 0.2;
+  hf.set_surface(H);
+  hf.set_static_top(h);
+  return hf;
+}
+
+TEST(Exchange, AFreeFaceAboveThetaMaxFailsWithTheWedgeBehindIt) {
+  // the block stands free, as a tube's sand does when the tube is lifted away: one update leaves
+  // no column steeper than theta_max (upwind, as the exchange measures slopes), a cone of
+  // theta_max slopes where the block stood, and the sand around it untouched. The avalanche's
+  // rate alone lowers the wall by about a millimetre an update.
+  HeightField hf = block(0.002);
+  hf.exchange(0.003);
+  const std::vector<Real>& top = hf.static_top();
+  const HeightFieldParams& p = hf.params();
+  const Real s = kCell * std::tan(p.theta_max);
+  auto at = [&](int i, int j) {
+    return i < 0 || j < 0 || i >= p.nx || j >= p.ny ? std::numeric_limits<Real>::infinity()
+                                                    : top[static_cast<std::size_t>(j) * p.nx + i];
+  };
+  Real highest = 0;
+  for (int j = 0; j < p.ny; ++j)
+    for (int i = 0; i < p.nx; ++i) {
+      const Real z = at(i, j);
+      const Real gx = std::max(0.0, z - std::min(at(i - 1, j), at(i + 1, j)));
+      const Real gy = std::max(0.0, z - std::min(at(i, j - 1), at(i, j + 1)));
+      EXPECT_LE(std::hypot(gx, gy), s * (1 + 1e-6)) << i << " " << j;
+      EXPECT_GE(z, 0.0);
+      highest = std::max(highest, z);
+    }
+  // the centre stands five steps of theta_max above the sand around the block, not lower
+  EXPECT_GT(highest, 0.002 + 4.5 * s);
+  EXPECT_LT(highest, 0.002 + 5.5 * s * std::sqrt(2.0));
+  EXPECT_DOUBLE_EQ(at(2, 2), 0.002);
+}
+
+TEST(Exchange, StaticSandButtressedByMovingSandDoesNotFail) {
+  // the same block with sand as high around it (H), moving (not static): an impact's pit in the
+  // static layer, not a free face. Only the avalanche's rate erodes its edge.
+  HeightField hf = block(0.2);
+  hf.exchange(0.003);
+  const HeightFieldParams& p = hf.params();
+  for (int j = 10; j < 20; ++j)
+    for (int i = 10; i < 20; ++i)
+      EXPECT_GT(hf.static_top()[static_cast<std::size_t>(j) * p.nx + i], 0.19) << i << " " << j;
 }
 
 TEST(Exchange, StableForLongUpdateSteps) {
