@@ -67,12 +67,8 @@ void HeightField::everything_changed() {
 void HeightField::moved(std::size_t c) {
   if (!moved_all_) moved_.add(static_cast<std::uint32_t>(c));
   // its slope and its neighbours' (the exchange's upwind slopes reach one column)
-  const int i = static_cast<int>(c % p_.nx), j = static_cast<int>(c / p_.nx);
   pending_.add(static_cast<std::uint32_t>(c));
-  if (i > 0) pending_.add(static_cast<std::uint32_t>(c - 1));
-  if (i + 1 < p_.nx) pending_.add(static_cast<std::uint32_t>(c + 1));
-  if (j > 0) pending_.add(static_cast<std::uint32_t>(c - p_.nx));
-  if (j + 1 < p_.ny) pending_.add(static_cast<std::uint32_t>(c + p_.nx));
+  for_each_neighbour(c, [&](std::size_t n) { pending_.add(static_cast<std::uint32_t>(n)); });
 }
 
 void HeightField::take_moved(std::vector<std::uint32_t>& out, bool& all) {
@@ -389,12 +385,8 @@ void HeightField::hold_max_slope(const std::vector<std::uint32_t>& seeds) {
     if (h_[c] > max_slope_top(c, H_) + tol) queue_.push_back(static_cast<std::uint32_t>(c));
   };
   for (std::uint32_t c : seeds) {
-    const int i = static_cast<int>(c % p_.nx), j = static_cast<int>(c / p_.nx);
     face(c);
-    if (i > 0) face(c - 1);
-    if (i + 1 < p_.nx) face(c + 1);
-    if (j > 0) face(c - p_.nx);
-    if (j + 1 < p_.ny) face(c + p_.nx);
+    for_each_neighbour(c, face);
   }
   // 2. the wedge behind each face fails with it: a label-correcting sweep of the static top to
   // the theta_max slope from the face's foot (h only falls, never below L, so it ends)
@@ -405,11 +397,7 @@ void HeightField::hold_max_slope(const std::vector<std::uint32_t>& seeds) {
     h_[c] = h;
     R_[c] = H_[c] - h_[c];
     moved(c);
-    const int i = static_cast<int>(c % p_.nx), j = static_cast<int>(c / p_.nx);
-    if (i > 0) queue_.push_back(static_cast<std::uint32_t>(c - 1));
-    if (i + 1 < p_.nx) queue_.push_back(static_cast<std::uint32_t>(c + 1));
-    if (j > 0) queue_.push_back(static_cast<std::uint32_t>(c - p_.nx));
-    if (j + 1 < p_.ny) queue_.push_back(static_cast<std::uint32_t>(c + p_.nx));
+    for_each_neighbour(c, [&](std::size_t n) { queue_.push_back(static_cast<std::uint32_t>(n)); });
   }
 }
 

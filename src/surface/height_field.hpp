@@ -171,6 +171,16 @@ class HeightField {
                std::uint32_t q1) const;
   /// h or L of column c changed: its neighbours' slopes did, and static grains there may wake.
   void moved(std::size_t c);
+  /// Calls f(n) for each column n beside c on the grid (-x, +x, -y, +y).
+  template <class F>
+  void for_each_neighbour(std::size_t c, F&& f) const {
+    const int i = static_cast<int>(c % p_.nx), j = static_cast<int>(c / p_.nx);
+    const std::size_t nx = static_cast<std::size_t>(p_.nx);
+    if (i > 0) f(c - 1);
+    if (i + 1 < p_.nx) f(c + 1);
+    if (j > 0) f(c - nx);
+    if (j + 1 < p_.ny) f(c + nx);
+  }
   /// Static sand standing steeper than theta_max above the sand beside it (a free face, found
   /// among `seeds` and their neighbours) fails with the wedge behind it: h falls to the theta_max
   /// slope from the face's foot (docs/physics.md, step 3 of the update).
