@@ -196,7 +196,7 @@ std::string section(std::uint32_t tag, const Checkpoint& c) {
       w.u8(s.surface ? 1 : 0);
       if (s.surface) {
         const HeightField::State& hf = s.surface->columns;
-        for (const auto* a : {&hf.L, &hf.H, &hf.h, &hf.R, &hf.theta, &hf.Gamma, &hf.rest})
+        for (const auto* a : {&hf.L, &hf.H, &hf.h, &hf.R, &hf.theta, &hf.Gamma, &hf.rest, &hf.hold})
           w.reals(*a, "a height-field column");
         w.reals(s.surface->h_seen, "the interface's h");
         w.reals(s.surface->L_seen, "the interface's L");
@@ -422,7 +422,7 @@ void read_section(std::uint32_t tag, Reader& r, Checkpoint& c) {
       if (!present) break;
       SurfaceState sf;
       HeightField::State& hf = sf.columns;
-      for (auto* a : {&hf.L, &hf.H, &hf.h, &hf.R, &hf.theta, &hf.Gamma, &hf.rest})
+      for (auto* a : {&hf.L, &hf.H, &hf.h, &hf.R, &hf.theta, &hf.Gamma, &hf.rest, &hf.hold})
         *a = r.reals("a height-field array");
       sf.h_seen = r.reals("the interface's h");
       sf.L_seen = r.reals("the interface's L");
@@ -721,7 +721,7 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   if (!sf) return;
   const std::size_t nc = sf->height_field().columns();
   const HeightField::State& hf = s.surface->columns;
-  for (const auto* a : {&hf.L, &hf.H, &hf.h, &hf.R, &hf.theta, &hf.Gamma, &hf.rest})
+  for (const auto* a : {&hf.L, &hf.H, &hf.h, &hf.R, &hf.theta, &hf.Gamma, &hf.rest, &hf.hold})
     if (a->size() != nc)
       fail(fmt::format("a height-field array has {} columns, the grid {}", a->size(), nc));
   for (const auto* a : {&s.surface->h_seen, &s.surface->L_seen})

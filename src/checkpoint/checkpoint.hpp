@@ -35,7 +35,9 @@ namespace sandflow {
 /// 5: STAT holds the static store's compact form (12 bytes a grain), not doubles; the height
 ///    field keeps each column's time at rest (closed columns).
 /// 6: SURF holds the blows under way and the grains they counted (surface.blows).
-constexpr std::uint32_t kCheckpointFormat = 6;
+/// 7: the height field keeps how much longer each column holds a stopped flow's layer
+///    (surface.flowing_hold).
+constexpr std::uint32_t kCheckpointFormat = 7;
 
 struct Checkpoint {
   std::uint32_t format = kCheckpointFormat;

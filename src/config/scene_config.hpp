@@ -56,6 +56,7 @@ struct SurfaceConfig {
   std::string angles_source;
   std::optional<Real> rolling_min;          ///< R_min [m]; default one mean diameter
   std::optional<Real> flowing_min;          ///< R_min under a flowing layer [m]; default 4 d
+  Real flowing_hold = 0.5;                  ///< how long a stopped flow keeps flowing_min [s]
   Real close_after = 2.0;                   ///< rest after which a column's top freezes [s]
   /// a body striking the bed opens it as far as its whole momentum reaches (the blow rule)
   bool blows = false;

@@ -52,6 +52,7 @@ HeightField::HeightField(const HeightFieldParams& p, TerrainColumns terrain)
   Gamma_.assign(columns(), 0);
   // every column starts open (a bed born at rest closes its own: close())
   rest_.assign(columns(), 0);
+  hold_left_.assign(columns(), 0);
   for (ColumnSet* set : {&measured_, &pending_, &evaluate_, &flow_all_, &moved_})
     set->resize(columns());
   hit_slot_.assign(columns(), kNoSlot);
@@ -254,6 +255,7 @@ void HeightField::restore(State s) {
   theta_ = std::move(s.theta);
   Gamma_ = std::move(s.Gamma);
   rest_ = std::move(s.rest);
+  hold_left_ = std::move(s.hold);
   ++level_revision_;
   everything_changed();
 }
@@ -338,6 +340,8 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
     Gamma_[c] = -(h_new_[w] - h_[c]) / dt;
   }
   const Real flowing_min = p_.flowing_floor();
+  // a layer that stopped flowing keeps its depth while DEM brings it to rest (flowing_hold)
+  const Real hold = std::min(p_.flowing_hold, p_.close_after);
   for (std::size_t w = 0; w < todo.size(); ++w) {
     const std::size_t c = todo[w];
     // R_min: the visible surface is made of grains that can move, until the column has been at
@@ -347,7 +351,8 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
     // steep.
     const bool flows = flowing.contains(c);
     rest_[c] = flows ? 0 : std::min(rest_[c] + dt, p_.close_after);
-    const Real r_min = flows ? flowing_min : closed(c) ? 0 : p_.rolling_min;
+    hold_left_[c] = flows ? hold : std::max(hold_left_[c] - dt, 0.0);
+    const Real r_min = flows || hold_left_[c] > 0 ? flowing_min : closed(c) ? 0 : p_.rolling_min;
     const Real h = std::max(std::min(h_new_[w], H_[c] - r_min), L_[c]);
     const bool changed = h != h_[c];
     h_[c] = h;

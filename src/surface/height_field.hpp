@@ -37,6 +37,10 @@ struct HeightFieldParams {
   Real theta_max = 0.66;      ///< a static slope steeper than this erodes on its own [rad]
   Real rolling_min = 0.01;    ///< R_min [m]
   Real flowing_min = 0;       ///< R_min under a flowing layer [m] (never below rolling_min)
+  /// A column that stopped flowing keeps flowing_min for this long, so that the layer DEM still
+  /// shears comes to rest on its own instead of on a bed frozen under it (no longer than
+  /// close_after) [s]
+  Real flowing_hold = 0;
   Real avalanche_depth = 0.01;///< thickness that rolls where theta > theta_max [m]
   Real gap = 0.01;            ///< a grain separated from the pile below by more is airborne [m]
   /// A column whose grains have not moved the pile for this long is closed: R_min no longer holds
@@ -123,9 +127,9 @@ class HeightField {
 
   /// For restarts (src/checkpoint/): every per-column array the next update reads or reports.
   struct State {
-    std::vector<Real> L, H, h, R, theta, Gamma, rest;
+    std::vector<Real> L, H, h, R, theta, Gamma, rest, hold;
   };
-  State state() const { return {L_, H_, h_, R_, theta_, Gamma_, rest_}; }
+  State state() const { return {L_, H_, h_, R_, theta_, Gamma_, rest_, hold_left_}; }
   /// Sets the arrays as saved (sizes checked by the caller).
   void restore(State s);
 
@@ -147,10 +151,16 @@ class HeightField {
   const std::vector<Real>& exchange_rate() const { return Gamma_; }  ///< Gamma [m/s]
   /// Per column: how long since grains last moved the pile there, up to close_after [s].
   const std::vector<Real>& rest() const { return rest_; }
+  /// Per column: how much longer the layer of a flow that stopped keeps flowing_min (counts down
+  /// from flowing_hold; 0 where nothing has flowed) [s].
+  const std::vector<Real>& hold_left() const { return hold_left_; }
   /// A column at rest for close_after: its whole top is static (no R_min).
   bool closed(std::size_t c) const { return rest_[c] >= p_.close_after; }
   /// Closes column c now, as if at rest for close_after (a bed born at rest).
-  void close(std::size_t c) { rest_[c] = p_.close_after; }
+  void close(std::size_t c) {
+    rest_[c] = p_.close_after;
+    hold_left_[c] = 0;
+  }
   /// Counts the changes of any column's level (L): what the static tops follow.
   std::uint64_t level_revision() const { return level_revision_; }
   /// The columns whose h or L changed since the last call (where static grains may have to
@@ -194,7 +204,7 @@ class HeightField {
   HeightFieldParams p_;
   TerrainColumns solids_;
   std::uint64_t initial_terrain_hash_ = 0;
-  std::vector<Real> L_, H_, h_, R_, theta_, Gamma_, rest_;
+  std::vector<Real> L_, H_, h_, R_, theta_, Gamma_, rest_, hold_left_;
   std::uint64_t level_revision_ = 0;
 
   // what can change (see the top of the file)

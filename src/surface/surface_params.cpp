@@ -62,6 +62,7 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   hf.theta_max = sc.max_angle.value_or(sc.repose_angle + deg_to_rad(6.0));
   hf.rolling_min = rolling_min(scene);
   hf.flowing_min = flowing_min(scene);
+  hf.flowing_hold = sc.flowing_hold;
   hf.close_after = sc.close_after;
   hf.avalanche_depth = d;
   hf.gap = d;  // a quarter of d cut H at gaps left below grains held up from the side

@@ -324,6 +324,7 @@ k_n = 1.0e4
 [surface]
 repose_angle = 32
 max_angle = 38
+flowing_hold = 0  # (the layer freezes as the lattice settles: this test reads it)
 [output]
 fps = 30
 export = ["vdb"]

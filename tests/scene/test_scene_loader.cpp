@@ -327,6 +327,7 @@ TEST(SceneLoader, SurfaceTableIsReadWithAnglesInRadians) {
       "max_angle = 30\n"  // equal to the repose angle is allowed
       "rolling_min = 0\n"
       "flowing_min = 0.03\n"
+      "flowing_hold = 0.25\n"
       "interface_thickness = 0.015\n"
       "update_interval = 0.004\n"
       "trap_speed = 0.05\n"
@@ -344,6 +345,7 @@ TEST(SceneLoader, SurfaceTableIsReadWithAnglesInRadians) {
   EXPECT_DOUBLE_EQ(*s.max_angle, kPi / 6);
   EXPECT_EQ(*s.rolling_min, 0.0);
   EXPECT_EQ(*s.flowing_min, 0.03);
+  EXPECT_EQ(s.flowing_hold, 0.25);
   EXPECT_EQ(*s.interface_thickness, 0.015);
   EXPECT_EQ(*s.update_interval, 0.004);
   EXPECT_EQ(*s.trap_speed, 0.05);
@@ -380,6 +382,8 @@ TEST(SceneLoader, BadSurfaceValuesNameTheKey) {
                {"t.toml:4:1: surface.rolling_min = -0.01 is not >= 0"});
   expect_error(s + "flowing_min = -0.01\n",
                {"t.toml:4:1: surface.flowing_min = -0.01 is not >= 0"});
+  expect_error(s + "flowing_hold = -0.5\n",
+               {"t.toml:4:1: surface.flowing_hold = -0.5 is not >= 0"});
   expect_error(s + "interface_thickness = 0\n",
                {"t.toml:4:1: surface.interface_thickness = 0 is not > 0"});
   expect_error(s + "update_interval = 0\n", {"t.toml:4:1: surface.update_interval = 0 is not > 0"});

@@ -155,6 +155,49 @@ TEST(Exchange, AFlowingLayerKeepsFlowingMinAndOneAtRestOnlyRmin) {
   }
 }
 
+TEST(Exchange, AStoppedFlowKeepsFlowingMinForFlowingHoldThenOnlyRmin) {
+  // a layer that stops flowing keeps flowing_min while DEM brings it to rest, for flowing_hold
+  // (counted from its last flowing update), then deposits down to R_min
+  const Real r_min = 0.01, flowing_min = 0.04, hold = 0.3, dt = 0.003;
+  HeightField hf = ramp(10, 0.08, r_min);
+  HeightFieldParams p = hf.params();
+  p.flowing_min = flowing_min;
+  p.flowing_hold = hold;
+  HeightField field(p, hf.terrain());
+  field.set_surface(hf.surface());
+  field.set_static_top(hf.static_top());
+  for (int k = 0; k < 100; ++k) field.exchange(dt, std::vector<std::uint8_t>(field.columns(), 1));
+  const std::vector<std::uint8_t> at_rest(field.columns(), 0);
+  Real t = 0;
+  for (; t < hold - 2 * dt; t += dt) {
+    field.exchange(dt, at_rest);
+    for_interior(field, [&](std::size_t c) {
+      ASSERT_GE(field.rolling()[c], flowing_min - 1e-12) << "at " << t << " s, column " << c;
+    });
+  }
+  for (int k = 0; k < 200; ++k) field.exchange(dt, at_rest);
+  for_interior(
+      field, [&](std::size_t c) { EXPECT_LE(field.rolling()[c], r_min + 1e-9) << "column " << c; });
+}
+
+TEST(Exchange, FlowingHoldNeverOutlastsCloseAfter) {
+  // a column closed after close_after freezes whole, however long flowing_hold is
+  HeightField hf = ramp(10, 0.08, 0.01);
+  HeightFieldParams p = hf.params();
+  p.flowing_min = 0.04;
+  p.flowing_hold = 10;
+  p.close_after = 0.1;
+  HeightField field(p, hf.terrain());
+  field.set_surface(hf.surface());
+  field.set_static_top(hf.static_top());
+  for (int k = 0; k < 400; ++k)
+    field.exchange(0.003, std::vector<std::uint8_t>(field.columns(), 0));
+  for_interior(field, [&](std::size_t c) {
+    EXPECT_TRUE(field.closed(c)) << c;
+    EXPECT_LE(field.rolling()[c], 0.01 + 1e-9) << c;
+  });
+}
+
 TEST(Exchange, FlowingMinBelowRminChangesNothing) {
   // flowing_min never thins the layer below R_min
   HeightField hf = ramp(10, 0.08, 0.01);

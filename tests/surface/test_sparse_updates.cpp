@@ -24,6 +24,8 @@ HeightFieldParams bed_params(int n) {
   p.rolling_min = 0.01;
   p.avalanche_depth = 0.01;
   p.close_after = 0.05;
+  p.flowing_min = 0.02;  // (a stopped flow's layer held for a while: one more state to follow)
+  p.flowing_hold = 0.03;
   return p;
 }
 
@@ -88,6 +90,7 @@ TEST(SparseUpdates, SkippingTheColumnsThatCannotChangeChangesNothing) {
     ASSERT_EQ(sparse.slope(), full.slope()) << "update " << update;
     ASSERT_EQ(sparse.exchange_rate(), full.exchange_rate()) << "update " << update;
     ASSERT_EQ(sparse.rest(), full.rest()) << "update " << update;
+    ASSERT_EQ(sparse.hold_left(), full.hold_left()) << "update " << update;
   }
   // the work followed the grains, the mound and the woken columns, not the 1,600 columns
   EXPECT_LT(most, sparse.columns() / 2);
