@@ -341,7 +341,7 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
   }
   const Real flowing_min = p_.flowing_floor();
   // a layer that stopped flowing keeps its depth while DEM brings it to rest (flowing_hold)
-  const Real hold = std::min(p_.flowing_hold, p_.close_after);
+  const Real hold = p_.hold_time();
   for (std::size_t w = 0; w < todo.size(); ++w) {
     const std::size_t c = todo[w];
     // R_min: the visible surface is made of grains that can move, until the column has been at

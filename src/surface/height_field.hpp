@@ -50,6 +50,8 @@ struct HeightFieldParams {
 
   /// R_min under a flowing layer as used: never below rolling_min [m].
   Real flowing_floor() const { return std::max(flowing_min, rolling_min); }
+  /// flowing_hold as used: never longer than close_after [s].
+  Real hold_time() const { return std::min(flowing_hold, close_after); }
 };
 
 /// The solid intervals [bottom, top] crossed by the vertical line through each column centre,
