@@ -5,9 +5,9 @@
 
 For each run folder and frame (RUN/frames/NNNN.ply), the grains moving faster than --speed (m/s)
 below the sand's top, how deep they lie (in grain diameters below the top of their cell of side
---cell), and in how many cells. For a surface run (its PLY has `state`) also the ACTIVE and
-INTERFACE grains, and the ACTIVE grains idle: with no moving grain in their cell or the eight
-around it. With the `height` export (RUN/heightfield/) a surface run adds the rolling layer R = H - h
+--cell), and in how many cells. Where the PLY has `state` also the ACTIVE and INTERFACE grains,
+and the ACTIVE grains idle: with no moving grain in their cell or the eight around it (in plain
+DEM every grain is ACTIVE, so there "idle" counts the grains at rest). With the `height` export (RUN/heightfield/) a surface run adds the rolling layer R = H - h
 of its sand columns in diameters and the share of those columns (R over 1.5 d) whose static top
 stands at theta_max towards a lower neighbour, where the exchange deposits nothing more.
 Plain DEM and surface flow side by side say whether the surface run's ACTIVE layer is deeper
@@ -103,6 +103,7 @@ def rolling_layer(run, frame, d):
             # the exchange's slope: on each axis the steeper edge down from the column
             gx = max([0.0] + [(h[y][x] - h[y][i]) * scale / dx for i in (x - 1, x + 1) if 0 <= i < nx])
             gy = max([0.0] + [(h[y][x] - h[j][x]) * scale / dx for j in (y - 1, y + 1) if 0 <= j < ny])
+            # (within 1 %: h is read back from 16-bit levels)
             pinned += math.hypot(gx, gy) >= math.tan(theta_max) * 0.99
     q = quantiles(R, (0.25, 0.5, 0.75))
     return (f"  {q[0]:5.2f} {q[1]:5.2f} {q[2]:5.2f} {deep:6d} "
