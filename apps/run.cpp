@@ -85,6 +85,7 @@ nlohmann::json stiffness_json(const Stiffness& s) {
   if (s.from_load) {
     j["depth"] = s.depth;
     j["impact_speed"] = s.impact_speed;
+    j["impact_mass_ratio"] = s.impact_mass_ratio;
     j["k_static"] = s.k_static;
     j["k_impact"] = s.k_impact;
   }

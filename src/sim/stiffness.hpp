@@ -12,7 +12,8 @@ struct Stiffness {
   Real k_n = 0;            ///< the stiffness used [N/m]
   bool from_load = false;  ///< false: material.k_n as given
   Real depth = 0;          ///< deepest loaded grain [m]
-  Real impact_speed = 0;   ///< fastest impact [m/s]
+  Real impact_speed = 0;   ///< speed of the impact that sets k_impact [m/s]
+  Real impact_mass_ratio = 0.5;  ///< its m_eff / m: 1/2 a grain of a pour, 1 a landing body
   Real k_static = 0;       ///< k_n that keeps the static overlap under stiffness.max_overlap [N/m]
   Real k_impact = 0;       ///< k_n that keeps impacts under stiffness.impact_overlap [N/m]
 };
