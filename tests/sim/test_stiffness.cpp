@@ -93,7 +93,7 @@ TEST(Stiffness, ALandingBodyIsSizedForTheGrainAgainstWhatDoesNotRecoil) {
   EmitterConfig slow = both.emitters[0];
   slow.type = EmitterType::Block;
   slow.size = {0.1, 0.1, 0.1};
-  slow.center = {1, 0, 0.05};  // its top 0.1 m over the floor: no fall to speak of
+  slow.center = {1, 0, 0.05};  // its top 0.1 m over the floor: it falls 0.1 m
   slow.velocity = {0, 0, -2.0};
   both.emitters[0].center = {0, 0, 0};  // the pour at the floor: its own speed only
   both.emitters[0].velocity = {0, 0, -2.5};
