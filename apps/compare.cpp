@@ -29,17 +29,6 @@ namespace {
 constexpr const char* kPlanFile = "compare_plan.json";
 constexpr const char* kEqualStiffnessDir = "dem-equal-stiffness";
 
-/// Mean of the simulated fraction (active + interface over all grains) over frames [first, end).
-double simulated_fraction(const std::vector<FrameStats>& frames, std::size_t first) {
-  double sum = 0;
-  std::size_t n = 0;
-  for (std::size_t k = first; k < frames.size(); ++k, ++n)
-    sum += frames[k].n_total > 0 ? static_cast<double>(frames[k].n_active + frames[k].n_interface) /
-                                       static_cast<double>(frames[k].n_total)
-                                 : 1.0;
-  return n ? sum / static_cast<double>(n) : 0.0;
-}
-
 double max_overlap(const RunResult& r) {
   double m = 0;
   for (const FrameStats& f : r.frames) m = std::max(m, f.max_overlap_rel);

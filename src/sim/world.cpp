@@ -75,6 +75,15 @@ ContactParams contact_params(const MaterialConfig& m) {
   return p;
 }
 
+double simulated_fraction(std::span<const FrameStats> frames, std::size_t first) {
+  double simulated = 0, all = 0;
+  for (std::size_t k = first; k < frames.size(); ++k) {
+    simulated += static_cast<double>(frames[k].n_active + frames[k].n_interface);
+    all += static_cast<double>(frames[k].n_total);
+  }
+  return all > 0 ? simulated / all : 1.0;
+}
+
 void scale_grain_count(SceneConfig& scene, std::int64_t total) {
   // a bed keeps its region, so its grains: the other emitters make the rest
   std::int64_t beds = 0;

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -78,6 +79,12 @@ struct FrameStats {
   std::int64_t left_domain = 0;      ///< grains removed on leaving the domain (on_leave = count)
   double wall_seconds = 0;           ///< wall-clock time of the frame [s]
 };
+
+/// The simulated fraction of frames [first, end): simulated grain-frames (ACTIVE + INTERFACE) over
+/// all grain-frames, the share of plain DEM's grain work that a surface run does. (A mean of each
+/// frame's fraction would weigh a pour's early frames, when few grains are in, as much as its
+/// last ones.) Frames without grains: 1, nothing is saved.
+double simulated_fraction(std::span<const FrameStats> frames, std::size_t first = 0);
 
 /// Everything a restart needs to continue a World exactly as if it had not stopped
 /// (src/checkpoint/ writes and checks it): the grains in their storage order, the solver's lists
