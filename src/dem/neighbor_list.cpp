@@ -126,7 +126,7 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   // are then joined in thread order, so the list is in grain order for any thread count. A pair
   // found by its higher-index grain goes to a side list and joins the lower one's row after.
   // The ranges are of about equal work: a grain searches (2k + 1)^3 cells, k = 1 for most and
-  // 2-3 for the fast grains of a stream, which sit together at the end of the storage order.
+  // 2-3 for the fast grains of a stream, which sit together in the storage order.
   std::vector<std::uint32_t> own_count(n + 1, 0);
   std::vector<std::uint8_t> reach(n);
   std::uint64_t work = 0;

@@ -205,6 +205,38 @@ TEST(NeighbourList, FrozenGrainsWithoutAllowanceLoseNoPair) {
   }
 }
 
+TEST(NeighbourList, TheSortPutsTheAxisTheGrainsSpreadFurthestAlongOutermost) {
+  // a layer 40 grains long in y, 8 wide in x, 3 deep in z, stored in reverse lattice order: after
+  // the first rebuild (which sorts) the storage runs along y, so that the threads' ranges are
+  // slabs across y and meet across the smallest faces
+  const Real d = 0.01, skin = 0.2 * d;
+  Grains g;
+  GrainId id = 0;
+  for (int k = 0; k < 3; ++k)
+    for (int b = 0; b < 40; ++b)
+      for (int a = 0; a < 8; ++a)
+        g.add(id++, {a * 1.03 * d, b * 1.03 * d, k * 1.03 * d}, {}, d / 2, 2600);
+  std::vector<std::uint32_t> reverse(g.size());
+  for (std::uint32_t k = 0; k < reverse.size(); ++k)
+    reverse[k] = static_cast<std::uint32_t>(reverse.size() - 1 - k);
+  g.permute(reverse);
+  DemParams p;
+  p.gravity = {0, 0, 0};
+  p.skin = skin;
+  p.sort_every = 1;
+  DemSolver dem(p);
+  Profile prof;
+  dem.step(g, Geometry{}, 0.0, prof);  // (no motion: the cells are those of the lattice)
+  auto cell = [&](std::size_t i, int axis) {
+    return static_cast<int>(std::floor(g.x[i][axis] / (d + skin)));  // (none on a cell edge)
+  };
+  for (std::size_t i = 1; i < g.size(); ++i) {
+    const std::array<int, 3> prev{cell(i - 1, 1), cell(i - 1, 0), cell(i - 1, 2)};
+    const std::array<int, 3> here{cell(i, 1), cell(i, 0), cell(i, 2)};
+    ASSERT_LE(prev, here) << "slot " << i << ": not in (y, x, z) cell order";
+  }
+}
+
 TEST(NeighbourList, HistorySurvivesARebuildWithResorting) {
   // a compressed random packing, so that many contacts carry tangential history
   Grains g = random_grains(2000, 11, 0.08);
