@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <bit>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 
@@ -299,12 +302,9 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
 
   // allowances; a frozen grain has none, so its pairs reach only as far as the active partner
   // may go and it searches for none itself
-  allow_.resize(n);
+  allowances(grains, dt, allow_);
   allow2_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    allow_[i] = allowance(grains, i, dt);
-    allow2_[i] = allow_[i] * allow_[i];
-  }
+  for (std::size_t i = 0; i < n; ++i) allow2_[i] = allow_[i] * allow_[i];
 
   std::swap(pairs_, old_pairs_);
   std::swap(walls_, old_walls_);
@@ -351,11 +351,61 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
   ranges_stale_ = true;
 }
 
-Real DemSolver::allowance(const Grains& grains, std::size_t i, Real dt) const {
-  if (grains.state[i] != GrainState::Active) return 0;
+void DemSolver::allowances(const Grains& grains, Real dt, std::vector<Real>& out) const {
+  const std::size_t n = grains.size();
+  const Real horizon = dt * params_.skin_steps;
   const Real a_min = params_.skin / 2;
   const Real a_max = std::max(a_min, params_.skin_max);
-  return std::clamp(norm(grains.v[i]) * (dt * params_.skin_steps), a_min, a_max);
+  // squared speeds: each ACTIVE grain's own, then raised to that of a faster partner that can
+  // reach it within the horizon. Squares of non-negative doubles order as their bit patterns, so
+  // the partners' maxima are atomic integer maxima: the same for any thread count and order.
+  std::vector<std::uint64_t> speed2(n, 0);
+  std::vector<Real> own2(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    if (grains.state[i] == GrainState::Active) {
+      own2[i] = norm2(grains.v[i]);
+      speed2[i] = std::bit_cast<std::uint64_t>(own2[i]);
+    }
+  const std::size_t listed = pairs_.start.empty() ? 0 : pairs_.start.size() - 1;
+  // a partner faster than this would get more than a_min of its own: slower ones change nothing
+  const Real fast2 =
+      horizon > 0 ? (a_min / horizon) * (a_min / horizon) : std::numeric_limits<Real>::infinity();
+  if (horizon > 0 && listed > 0) {
+    std::vector<std::uint32_t> now(listed, kNoSlot);  // slot at the last rebuild -> index now
+    for (std::size_t i = 0; i < n; ++i) {
+      const GrainId id = grains.id[i];
+      const std::uint32_t o = id < slot_of_id_.size() ? slot_of_id_[id] : kNoSlot;
+      if (o < listed) now[o] = static_cast<std::uint32_t>(i);
+    }
+    auto raise = [&](std::uint32_t k, Real v2) {
+      std::atomic_ref<std::uint64_t> a(speed2[k]);
+      const std::uint64_t b = std::bit_cast<std::uint64_t>(v2);
+      std::uint64_t cur = a.load(std::memory_order_relaxed);
+      while (cur < b && !a.compare_exchange_weak(cur, b, std::memory_order_relaxed)) {
+      }
+    };
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
+    for (std::size_t o = 0; o < listed; ++o) {
+      const std::uint32_t i = now[o];
+      if (i == kNoSlot) continue;
+      for (std::uint32_t s = pairs_.start[o]; s < pairs_.start[o + 1]; ++s) {
+        const std::uint32_t j = pairs_.j[s] < listed ? now[pairs_.j[s]] : kNoSlot;
+        if (j == kNoSlot || (own2[i] <= fast2 && own2[j] <= fast2)) continue;
+        if (own2[i] == own2[j]) continue;
+        const Real gap = norm(grains.x[i] - grains.x[j]) - grains.r[i] - grains.r[j];
+        if (gap >= (std::sqrt(own2[i]) + std::sqrt(own2[j])) * horizon) continue;
+        if (own2[j] > own2[i] && grains.state[i] == GrainState::Active)
+          raise(i, own2[j]);
+        else if (own2[i] > own2[j] && grains.state[j] == GrainState::Active)
+          raise(j, own2[i]);
+      }
+    }
+  }
+  out.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    out[i] = grains.state[i] != GrainState::Active
+                 ? 0
+                 : std::clamp(std::sqrt(std::bit_cast<Real>(speed2[i])) * horizon, a_min, a_max);
 }
 
 void DemSolver::open_released_contacts(const Grains& grains, Real dt) {

@@ -106,10 +106,14 @@ class DemSolver {
 
   /// Call after grains were added, removed or changed state: the next step rebuilds the lists.
   void invalidate() { need_rebuild_ = true; }
-  /// How far grain i may move before the lists are rebuilt, as a rebuild now would set it: half
-  /// the skin, or for a fast ACTIVE grain the way it goes in skin_steps steps at its speed, up to
-  /// skin_max; a frozen grain none (it moves only through a change of state, which rebuilds) [m].
-  Real allowance(const Grains& grains, std::size_t i, Real dt) const;
+  /// How far each grain may move before the lists are rebuilt, as a rebuild now would set it,
+  /// into `out` (one per grain) [m]: half the skin, or for a fast ACTIVE grain the way it goes in
+  /// skin_steps steps at the speed it may have, up to skin_max; a frozen grain none (it moves only
+  /// through a change of state, which rebuilds). The speed a grain may have is its own, or that of
+  /// a faster ACTIVE partner in the present lists close enough to meet it within skin_steps
+  /// steps: a grain struck by a faster one leaves at up to the striker's speed, and with the
+  /// allowance of its own old speed it would leave it within a few steps and force a rebuild.
+  void allowances(const Grains& grains, Real dt, std::vector<Real>& out) const;
   /// Applies the changes of state the surface flow decided, before the next step: a grain that
   /// goes to sleep leaves the lists, a woken one joins them without contact history, and a woken
   /// or dislodged one is released: the lists are rebuilt, and a contact it opens there with a

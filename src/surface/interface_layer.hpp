@@ -108,7 +108,7 @@ class InterfaceLayer {
 
   /// The invariant: wakes (to INTERFACE) every STATIC grain k within reach of an ACTIVE grain i,
   /// |x_i - x_k| < r_i + r_k + allow[i], allow[i] being how far the coming rebuild lets i move
-  /// (DemSolver::allowance). Call it before every rebuild of the pair list, after the transfer;
+  /// (DemSolver::allowances). Call it before every rebuild of the pair list, after the transfer;
   /// returns the woken grains, for the DEM to apply.
   Transitions wake_within_reach(const HeightField& hf, Grains& hot, StaticStore& st,
                                 const std::vector<Real>& allow);

@@ -202,8 +202,7 @@ Transitions SurfaceFlow::transfer(Grains& hot, StaticStore& st, const DemSolver&
 
 Transitions SurfaceFlow::wake_within_reach(Grains& hot, StaticStore& st, const DemSolver& dem,
                                            Real dt) {
-  allow_.resize(hot.size());
-  for (std::size_t i = 0; i < hot.size(); ++i) allow_[i] = dem.allowance(hot, i, dt);
+  dem.allowances(hot, dt, allow_);
   return interface_.wake_within_reach(hf_, hot, st, allow_);
 }
 

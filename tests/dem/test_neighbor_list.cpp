@@ -237,6 +237,47 @@ TEST(NeighbourList, TheSortPutsTheAxisTheGrainsSpreadFurthestAlongOutermost) {
   }
 }
 
+TEST(NeighbourList, AGrainAFasterPartnerCanReachGetsThePartnersAllowance) {
+  // B flies at 3 m/s towards A, 2 mm away; C lies 10 mm behind B, listed, but further than the
+  // two close in skin_steps steps (9.6 mm); D lies 0.5 mm from A, listed with no fast grain; E is
+  // frozen beside B
+  const Real r = 0.005, dt = 1e-4, v = 3.0;
+  DemParams p;
+  p.gravity = {0, 0, 0};
+  p.skin = 0.002;
+  p.skin_steps = 32;
+  p.skin_max = 0.02;
+  p.sort_every = 0;  // (the grains keep their slots: allow[k] is grain k's)
+  p.contact.k_n = 1e4;
+  Grains g;
+  g.add(0, {0, 0, 0}, {}, r, 2600);                          // A
+  g.add(1, {2 * r + 0.002, 0, 0}, {-v, 0, 0}, r, 2600);      // B
+  g.add(2, {4 * r + 0.012, 0, 0}, {}, r, 2600);              // C
+  g.add(3, {-2 * r - 0.0005, 0, 0}, {}, r, 2600);            // D
+  g.add(4, {2 * r + 0.002, 2 * r + 0.001, 0}, {}, r, 2600);  // E
+  g.state[4] = GrainState::Interface;
+  DemSolver dem(p);
+  std::vector<Real> allow;
+  const Real a_min = p.skin / 2, a_fast = v * dt * p.skin_steps;
+  // before any list there are no partners: each grain's own speed
+  dem.allowances(g, dt, allow);
+  EXPECT_DOUBLE_EQ(allow[0], a_min);
+  EXPECT_DOUBLE_EQ(allow[1], a_fast);
+  Profile prof;
+  dem.step(g, Geometry{}, dt, prof);  // lists them; B moves 0.3 mm
+  const auto pairs = listed_pairs(dem.pairs());
+  for (const std::pair<std::uint32_t, std::uint32_t>& ab :
+       {std::pair{0u, 1u}, {1u, 2u}, {0u, 3u}, {1u, 4u}})
+    ASSERT_TRUE(std::find(pairs.begin(), pairs.end(), ab) != pairs.end())
+        << ab.first << " and " << ab.second << " are not listed";
+  dem.allowances(g, dt, allow);
+  EXPECT_DOUBLE_EQ(allow[0], a_fast) << "A, struck by B within the horizon";
+  EXPECT_DOUBLE_EQ(allow[1], a_fast);
+  EXPECT_DOUBLE_EQ(allow[2], a_min) << "C, further than B goes in skin_steps steps";
+  EXPECT_DOUBLE_EQ(allow[3], a_min) << "D, beside A but not B";
+  EXPECT_EQ(allow[4], 0) << "E, frozen";
+}
+
 TEST(NeighbourList, HistorySurvivesARebuildWithResorting) {
   // a compressed random packing, so that many contacts carry tangential history
   Grains g = random_grains(2000, 11, 0.08);

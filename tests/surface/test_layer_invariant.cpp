@@ -64,8 +64,8 @@ struct Creep {
   TransitionCounts step(bool hold_invariant, Real* deepest = nullptr) {
     TransitionCounts c;
     if (hold_invariant && dem.needs_rebuild()) {
-      std::vector<Real> allow(hot.size());
-      for (std::size_t i = 0; i < hot.size(); ++i) allow[i] = dem.allowance(hot, i, dt);
+      std::vector<Real> allow;
+      dem.allowances(hot, dt, allow);
       const Transitions t = layer.wake_within_reach(hf, hot, st, allow);
       dem.apply(t.changes);
       c = t.counts;
