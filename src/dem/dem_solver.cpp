@@ -389,9 +389,8 @@ void DemSolver::allowances(const Grains& grains, Real dt, std::vector<Real>& out
       const std::uint32_t i = now[o];
       if (i == kNoSlot) continue;
       for (std::uint32_t s = pairs_.start[o]; s < pairs_.start[o + 1]; ++s) {
-        const std::uint32_t j = pairs_.j[s] < listed ? now[pairs_.j[s]] : kNoSlot;
+        const std::uint32_t j = now[pairs_.j[s]];
         if (j == kNoSlot || (own2[i] <= fast2 && own2[j] <= fast2)) continue;
-        if (own2[i] == own2[j]) continue;
         const Real gap = norm(grains.x[i] - grains.x[j]) - grains.r[i] - grains.r[j];
         if (gap >= (std::sqrt(own2[i]) + std::sqrt(own2[j])) * horizon) continue;
         if (own2[j] > own2[i] && grains.state[i] == GrainState::Active)
