@@ -289,7 +289,8 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
     emitters.push_back({{"name", e.name()},
                         {"count", e.count()},
                         {"emitted", e.emitted()},
-                        {"delayed_by_occupied_slots", e.delayed()}});
+                        {"delayed_by_occupied_slots", e.delayed()},
+                        {"left_out_by_occupied_slots", e.left_out()}});
   summary["emitters"] = emitters;
   nlohmann::json prof;
   for (int s = 0; s < static_cast<int>(Stage::kCount); ++s)
@@ -671,11 +672,20 @@ int run_command(const RunOptions& o) {
   for (const auto& e : s["emitters"]) {
     const auto emitted = e["emitted"].get<std::int64_t>(), count = e["count"].get<std::int64_t>();
     const auto delayed = e["delayed_by_occupied_slots"].get<std::int64_t>();
-    if (emitted < count)
+    const auto left_out = e.value("left_out_by_occupied_slots", std::int64_t{0});
+    if (left_out > 0)
       fmt::print(stderr,
-                 "warning: emitter '{}' emitted {} of its {} grains before the run ended; {} "
-                 "grains waited for slots taken by grains below it: raise it or add frames\n",
-                 e["name"].get<std::string>(), emitted, count, delayed);
+                 "warning: emitter '{}' left out {} of its {} grains: grains already there took "
+                 "their places (start it earlier, or move it)\n",
+                 e["name"].get<std::string>(), left_out, count);
+    if (emitted + left_out < count)
+      fmt::print(stderr,
+                 "warning: emitter '{}' emitted {} of its {} grains before the run ended{}\n",
+                 e["name"].get<std::string>(), emitted, count,
+                 delayed > 0 ? fmt::format("; {} grains waited for slots taken by grains below it: "
+                                           "raise it or add frames",
+                                           delayed)
+                             : std::string(": add frames"));
     else if (delayed > 0)
       fmt::print("emitter          '{}': {} grains waited for a free slot\n",
                  e["name"].get<std::string>(), delayed);

@@ -151,6 +151,7 @@ std::string section(std::uint32_t tag, const Checkpoint& c) {
         w.real(e.next_time, "an emitter's next batch time");
         w.i64(e.emitted);
         w.i64(e.delayed);
+        w.i64(e.left_out);
       }
       break;
     case kSections[2]: {  // GRNS
@@ -367,6 +368,7 @@ void read_section(std::uint32_t tag, Reader& r, Checkpoint& c) {
         e.next_time = r.real("an emitter's next batch time");
         e.emitted = r.count_value("an emitter's emitted grains");
         e.delayed = r.count_value("an emitter's delayed grains");
+        e.left_out = r.count_value("an emitter's grains left out");
         s.emitters.push_back(e);
       }
       break;
@@ -658,7 +660,8 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   std::int64_t emitted = 0;
   for (std::size_t k = 0; k < s.emitters.size(); ++k) {
     const Emitter::Progress& e = s.emitters[k];
-    if (e.emitted > world.emitters()[k].count() || e.owed < 0 || e.owed > 1e12 || e.delayed < 0)
+    if (e.emitted < 0 || e.left_out < 0 || e.emitted + e.left_out > world.emitters()[k].count() ||
+        e.owed < 0 || e.owed > 1e12 || e.delayed < 0)
       fail(fmt::format("emitter {}'s progress is out of range", k));
     emitted += e.emitted;
   }

@@ -37,7 +37,9 @@ namespace sandflow {
 /// 6: SURF holds the blows under way and the grains they counted (surface.blows).
 /// 7: the height field keeps how much longer each column holds a stopped flow's layer
 ///    (surface.flowing_hold).
-constexpr std::uint32_t kCheckpointFormat = 7;
+/// 8: each emitter's progress counts the grains a block, lattice or bed left out (their places
+///    were taken).
+constexpr std::uint32_t kCheckpointFormat = 8;
 
 struct Checkpoint {
   std::uint32_t format = kCheckpointFormat;

@@ -244,8 +244,11 @@ std::vector<std::pair<std::string, std::string>> run_rows(const json& s) {
     for (const json& em : *e)
       rows.push_back({"emitter '" + text(em, {"name"}) + "'",
                       count(em, {"emitted"}) + " of " + count(em, {"count"}) + " grains emitted, " +
-                          count(em, {"delayed_by_occupied_slots"}) +
-                          " waited for a free slot"});
+                          count(em, {"delayed_by_occupied_slots"}) + " waited for a free slot" +
+                          (find(em, {"left_out_by_occupied_slots"})
+                               ? ", " + count(em, {"left_out_by_occupied_slots"}) +
+                                     " left out (their places were taken)"
+                               : std::string())});
   if (const json* st = find(s, {"stage_seconds"}); st && st->is_object()) {
     std::string v;
     for (const auto& [k, x] : st->items())

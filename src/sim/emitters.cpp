@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <compare>
 #include <numbers>
+#include <tuple>
 
 #include <fmt/format.h>
 #include <omp.h>
@@ -23,6 +25,58 @@ Vec3 half_extent(const EmitterConfig& e) {
   if (e.shape == PourShape::Disk) return {e.radius, e.radius, 0};
   return {e.size.x / 2, e.size.y / 2, 0};
 }
+
+// The grains already near an emitter (centres and radii), filed in cubic cells so that a block or
+// a bed of a million new grains tests each one against the few old grains near it.
+class Occupancy {
+ public:
+  // reach: the largest distance of a new grain's surface from its place that will be asked about
+  Occupancy(const std::vector<Vec3>& x, const std::vector<Real>& r, Real reach) : x_(x), r_(r) {
+    if (x.empty()) return;
+    cell_ = reach + *std::max_element(r.begin(), r.end());
+    cells_.reserve(x.size());
+    for (std::size_t g = 0; g < x.size(); ++g) {
+      const auto [i, j, k] = cell_of(x[g]);
+      cells_.push_back({i, j, k, static_cast<std::uint32_t>(g)});
+    }
+    std::sort(cells_.begin(), cells_.end());
+  }
+
+  // True when a new grain whose surface reaches `reach` from p (at most the constructor's) would
+  // overlap an old one.
+  bool taken(const Vec3& p, Real reach) const {
+    if (cells_.empty()) return false;
+    const auto [i, j, k] = cell_of(p);
+    for (std::int64_t c = k - 1; c <= k + 1; ++c)
+      for (std::int64_t b = j - 1; b <= j + 1; ++b)
+        for (std::int64_t a = i - 1; a <= i + 1; ++a) {
+          const Entry lo{a, b, c, 0};
+          for (auto e = std::lower_bound(cells_.begin(), cells_.end(), lo);
+               e != cells_.end() && e->i == a && e->j == b && e->k == c; ++e) {
+            const Real touch = reach + r_[e->grain];
+            if (norm2(x_[e->grain] - p) < touch * touch) return true;
+          }
+        }
+    return false;
+  }
+
+ private:
+  struct Entry {
+    std::int64_t i, j, k;
+    std::uint32_t grain;
+    auto operator<=>(const Entry&) const = default;
+  };
+  std::tuple<std::int64_t, std::int64_t, std::int64_t> cell_of(const Vec3& p) const {
+    return {static_cast<std::int64_t>(std::floor(p.x / cell_)),
+            static_cast<std::int64_t>(std::floor(p.y / cell_)),
+            static_cast<std::int64_t>(std::floor(p.z / cell_))};
+  }
+
+  const std::vector<Vec3>& x_;
+  const std::vector<Real>& r_;
+  Real cell_ = 0;
+  std::vector<Entry> cells_;  // sorted by cell, then grain
+};
 
 }  // namespace
 
@@ -218,6 +272,12 @@ void Emitter::set_bed(BedPacking bed, const std::string& where) {
         "packing's: load the scene, or call resolve_beds, with this geometry and seed)",
         where, bed.size(), config_.count));
   bed_ = std::move(bed);
+  if (bed_.size() == 0) return;
+  slot_lo_ = slot_hi_ = bed_.x[0];
+  for (std::size_t k = 0; k < bed_.size(); ++k) {
+    slot_lo_ = min(slot_lo_, bed_.x[k]);
+    slot_hi_ = max(slot_hi_, bed_.x[k]);
+  }
 }
 
 std::uint64_t bed_seed(std::uint64_t scene_seed, std::size_t index) {
@@ -387,20 +447,34 @@ void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vect
                    (1.0 / std::sqrt(3.0));
   };
 
+  // a place is taken when a grain already there would overlap a new grain at it: placing one
+  // there would fire both off. A pour owes the grains of taken slots to its next batches; a block,
+  // a lattice or a bed leaves them out.
+  const Occupancy old_grains(nearby_x, nearby_r, std::max(reach_, d_max_ / 2));
   if (config_.type == EmitterType::Bed) {
     // the packed grains, at rest (the World seats them in surface mode)
     out.reserve(out.size() + bed_.size());
-    for (std::size_t k = 0; k < bed_.size(); ++k) out.push_back({bed_.x[k], Vec3{}, bed_.r[k]});
-    emitted_ = static_cast<std::int64_t>(bed_.size());
+    for (std::size_t k = 0; k < bed_.size(); ++k) {
+      if (old_grains.taken(bed_.x[k], bed_.r[k])) {
+        ++left_out_;
+        continue;
+      }
+      out.push_back({bed_.x[k], Vec3{}, bed_.r[k]});
+      ++emitted_;
+    }
     bed_ = {};
     return;
   }
   if (config_.type != EmitterType::Pour) {
     out.reserve(out.size() + static_cast<std::size_t>(config_.count));
     for_each_box_slot([&](const Vec3& p) {
+      if (old_grains.taken(p, reach_)) {
+        ++left_out_;
+        return;
+      }
       out.push_back({jittered(p), config_.velocity, draw_radius(rng)});
+      ++emitted_;
     });
-    emitted_ = config_.count;
     return;
   }
   // pour: a batch of randomly chosen free slots, emitted tau after its time (it waited for a
@@ -416,22 +490,13 @@ void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vect
   owed_ -= static_cast<Real>(k);
   std::vector<std::uint32_t> order(slots_.size());
   for (std::uint32_t q = 0; q < order.size(); ++q) order[q] = q;
-  // a slot is taken when a grain already there (the top of a heap grown up to the pour, or a
-  // grain thrown back up) would overlap a new grain at it: placing one there would fire both off
-  auto occupied = [&](const Vec3& slot) {
-    for (std::size_t g = 0; g < nearby_x.size(); ++g) {
-      const Real reach = reach_ + nearby_r[g];
-      if (norm2(nearby_x[g] - slot) < reach * reach) return true;
-    }
-    return false;
-  };
   std::int64_t placed = 0;
   for (std::size_t q = 0; q < order.size() && placed < k; ++q) {  // partial Fisher-Yates
     const auto pick =
         q + static_cast<std::size_t>(rng.uniform() * static_cast<Real>(order.size() - q));
     std::swap(order[q], order[std::min(pick, order.size() - 1)]);
     const Vec3 slot = slots_[order[q]] + shift;
-    if (occupied(slot)) continue;
+    if (old_grains.taken(slot, reach_)) continue;  // (the top of a heap grown up to the pour)
     out.push_back({jittered(slot), velocity, draw_radius(rng)});
     ++placed;
   }

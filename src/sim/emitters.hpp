@@ -80,9 +80,10 @@ class Emitter {
   Emitter(const EmitterConfig& config, const MaterialConfig& material, const Vec3& gravity,
           const std::string& where);
 
-  /// Appends the grains due by time t (radii drawn from rng). A pour leaves out the slots that
-  /// `nearby` (grains already near its slots: centres and radii) would overlap, and owes their
-  /// grains to its next batches.
+  /// Appends the grains due by time t (radii drawn from rng), none where it would overlap one of
+  /// `nearby` (the grains already near its places, near_slots: centres and radii). A pour owes
+  /// the grains of such slots to its next batches; a block, a lattice or a bed leaves them out
+  /// (left_out()).
   void emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vector<Vec3>& nearby_x = {},
             const std::vector<Real>& nearby_r = {});
 
@@ -101,12 +102,14 @@ class Emitter {
   }
   /// Time of the next batch [s].
   Real next_time() const { return next_time_; }
-  /// True when a grain centred at x with radius r may overlap a new grain of this pour.
+  /// True when a grain centred at x with radius r may overlap a new grain of this emitter.
   bool near_slots(const Vec3& x, Real r) const;
   /// The box [lo, hi] that holds the centre of every grain of radius up to r near_slots.
   void near_box(Real r, Vec3& lo, Vec3& hi) const;
   /// Grains a pour owed but could not place because its slots were occupied (summed per batch).
   std::int64_t delayed() const { return delayed_; }
+  /// Grains of a block, lattice or bed not placed because grains already there took their places.
+  std::int64_t left_out() const { return left_out_; }
   const std::string& name() const { return config_.name; }
   EmitterType type() const { return config_.type; }
 
@@ -114,14 +117,15 @@ class Emitter {
   struct Progress {
     Real owed = 0;        ///< pour: fractional grains carried to the next batch
     Real next_time = 0;   ///< time of the next batch [s]
-    std::int64_t emitted = 0, delayed = 0;
+    std::int64_t emitted = 0, delayed = 0, left_out = 0;
   };
-  Progress progress() const { return {owed_, next_time_, emitted_, delayed_}; }
+  Progress progress() const { return {owed_, next_time_, emitted_, delayed_, left_out_}; }
   void restore(const Progress& p) {
     owed_ = p.owed;
     next_time_ = p.next_time;
     emitted_ = p.emitted;
     delayed_ = p.delayed;
+    left_out_ = p.left_out;
     if (done()) bed_ = {};  // (a bed emitted before the checkpoint: its grains are in the state)
   }
 
@@ -129,7 +133,7 @@ class Emitter {
   Real end_time() const;
   std::int64_t emitted() const { return emitted_; }
   std::int64_t count() const { return config_.count; }
-  bool done() const { return emitted_ >= config_.count; }
+  bool done() const { return emitted_ + left_out_ >= config_.count; }
 
  private:
   Real draw_radius(Rng& rng) const;
@@ -150,9 +154,10 @@ class Emitter {
   Vec3 gravity_;             ///< [m/s^2]
   Real reach_ = 0;           ///< largest distance of a new grain's surface from its slot [m]
   Real drop_ = 0;            ///< pour: more than a batch can fall during its wait [m]
-  Vec3 slot_lo_, slot_hi_;   ///< bounds of the slot centres (pour) or of the grains (box) [m]
+  Vec3 slot_lo_, slot_hi_;   ///< bounds of the slot centres (pour) or of the grains (box, bed) [m]
   std::int64_t emitted_ = 0;
   std::int64_t delayed_ = 0;
+  std::int64_t left_out_ = 0;
   BedPacking bed_;  ///< bed: its grains until they are emitted
 };
 

@@ -325,13 +325,13 @@ int World::planned_frames() const {
 void World::emit() {
   new_grains_.clear();
   for (Emitter& e : emitters_) {
-    // a pour skips slots taken by grains already there: the hot ones, the static ones, and the
-    // ones placed this step by an earlier emitter
+    // no new grain is placed on one already there: a hot one, a static one, or one placed this
+    // step by an earlier emitter
     nearby_x_.clear();
     nearby_r_.clear();
     // new grains need a new pair list: a batch waits for the list's next rebuild, a little
     if (e.due(time_) && !dem_.needs_rebuild() && time_ < e.next_time() + e.max_wait()) continue;
-    if (e.due(time_) && e.type() == EmitterType::Pour) {
+    if (e.due(time_)) {
       auto consider = [&](const Vec3& x, Real r) {
         if (e.near_slots(x, r)) {
           nearby_x_.push_back(x);
@@ -359,7 +359,7 @@ void World::emit() {
 
 void World::seat_bed(Emitter& e) {
   std::vector<NewGrain> bed;
-  e.emit(time_, rng_, bed);
+  e.emit(time_, rng_, bed, nearby_x_, nearby_r_);
   if (bed.empty()) return;
   std::vector<GrainId> ids(bed.size());
   std::vector<Vec3> x(bed.size());

@@ -208,7 +208,7 @@ class World {
   std::vector<Emitter> emitters_;
   Rng rng_;
   std::vector<NewGrain> new_grains_;
-  std::vector<Vec3> nearby_x_;  ///< grains near a pour's slots
+  std::vector<Vec3> nearby_x_;  ///< grains near an emitter's places
   std::vector<Real> nearby_r_;
   GrainId next_id_ = 0;
   Real time_ = 0;

@@ -241,5 +241,32 @@ TEST(BedEmitter, OneAndTwoThreadsAndARestartGiveTheSameState) {
   }
 }
 
+TEST(BedEmitter, ABedStartedOverGrainsAlreadyThereLeavesOutTheTakenPlaces) {
+  // a lattice at rest fills the low-y half of the container two grains deep; the bed comes a
+  // tenth of a second later: its grains there would sit in the lattice's, fired apart
+  for (Mode mode : {Mode::Dem, Mode::Surface}) {
+    SceneConfig s = bed_scene(mode);
+    EmitterConfig lattice;
+    lattice.type = EmitterType::Lattice;
+    lattice.center = {0, -2 * kD, kD};
+    lattice.size = {8 * kD, 4 * kD, 2 * kD};
+    lattice.count = static_cast<std::int64_t>(box_slots(lattice, s.material));
+    s.emitters[0].start = 0.1;
+    s.emitters.push_back(lattice);  // (after the bed: a bed's packing is seeded by its index)
+    World w(s);
+    Real max_overlap = 0;
+    for (int f = 0; f < 6; ++f)
+      max_overlap = std::max(max_overlap, w.advance_frame().max_overlap_rel);
+    const Emitter& bed = w.emitters()[0];
+    EXPECT_TRUE(bed.done()) << static_cast<int>(mode);
+    EXPECT_GT(bed.left_out(), 0) << static_cast<int>(mode);
+    EXPECT_GT(bed.emitted(), bed.left_out()) << static_cast<int>(mode);  // the free half is placed
+    EXPECT_EQ(bed.emitted() + bed.left_out(), bed.count());
+    EXPECT_EQ(w.total_grains(), lattice.count + bed.emitted());
+    // grains that settled under gravity, not grains placed in each other (a diameter's worth then)
+    EXPECT_LT(max_overlap, 0.05) << static_cast<int>(mode);
+  }
+}
+
 }  // namespace
 }  // namespace sandflow
