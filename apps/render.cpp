@@ -453,7 +453,9 @@ int render_command(const RenderOptions& o) {
       const auto& hi = heights[static_cast<std::size_t>(std::find(runs.begin(), runs.end(), t.run) -
                                                         runs.begin())];
       const SandSurface sf = hi ? static_layer(t.run, t.frame, *hi, scene) : SandSurface{};
-      write_pov_scene(stem + ".pov", f, scene.geometry, opt, scene.meshes, &sf);
+      PovOptions frame_opt = opt;
+      frame_opt.time = t.frame / scene.fps.value_or(30.0);  // (a removed solid is not drawn)
+      write_pov_scene(stem + ".pov", f, scene.geometry, frame_opt, scene.meshes, &sf);
       render_pov(stem + ".pov", stem + ".png", o.width, o.height, threads_each,
                  o.quality == "final");
       if (!o.keep_pov) {

@@ -186,8 +186,8 @@ void FrameExporter::write(const World& world) {
         frame_file(".pov"),
         fmt::format("// sandflow {} frame {}, t = {} s: {} visible grains. Render in "
                     "this folder, 16:9: povray +I{} +W1280 +H720\n#version 3.7;\n"
-                    "#include \"{}\"\n",
-                    world.scene().name, n, t, f.size(), frame_name(n, ".pov"), kPovInclude) +
+                    "#declare SandflowTime = {};\n#include \"{}\"\n",
+                    world.scene().name, n, t, f.size(), frame_name(n, ".pov"), t, kPovInclude) +
             pov_grain_lines(f));
   if (has(ExportFormat::Vdb)) {
     const FrameData vdb_grains = grains ? FrameData{} : world.visible_frame();

@@ -13,6 +13,8 @@
 #include <string_view>
 #include <type_traits>
 
+#include <fmt/format.h>
+
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/process.hpp"
@@ -615,8 +617,17 @@ void write_pov_scene(const std::string& path, const FrameData& f,
   std::string s;
   s.reserve(2048 + 48 * f.size());
   write_header(s, cam, b, opt, f.size());
-  for (std::size_t k = 0; k < geometry.size(); ++k)
-    write_geometry(s, geometry[k], b, k < meshes.size() ? meshes[k] : nullptr);
+  line(s, fmt::format("#ifndef (SandflowTime) #declare SandflowTime = {}; #end", opt.time));
+  for (std::size_t k = 0; k < geometry.size(); ++k) {
+    const GeometryConfig& g = geometry[k];
+    // a removed solid is drawn up to the frame whose steps it still acted in (its time, to the
+    // step's rounding)
+    if (g.remove_at)
+      line(s, fmt::format("#if (SandflowTime <= {})  // remove_at",
+                          *g.remove_at * (1 + 1e-9) + 1e-12));
+    write_geometry(s, g, b, k < meshes.size() ? meshes[k] : nullptr);
+    if (g.remove_at) line(s, "#end");
+  }
   // below everything drawn, by a hair so that it does not touch a flat bottom; not when the
   // camera is under it (it would hide everything)
   const double floor_z = b.lo.z - 1e-3 * b.radius();

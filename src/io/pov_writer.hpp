@@ -77,6 +77,9 @@ struct PovOptions {
   bool soft_light = true;  ///< an area light (soft shadows); false: a point light (draft)
   bool floor = true;       ///< draw a floor under the scene when its geometry has no plane (and the
                            ///< camera is above it)
+  /// The frame's time [s]: a solid removed before it (`remove_at`) is not drawn. The scene
+  /// declares it as SandflowTime unless the file that includes it already has.
+  double time = 0;
 };
 
 /// The automatic camera's position and look-at point for `bounds` (what write_pov_scene uses

@@ -314,6 +314,58 @@ std::string camera_and_lights(const std::string& pov) {
   return a == std::string::npos || b == std::string::npos ? "" : pov.substr(a, b - a);
 }
 
+// Sand pixels in the picture of `pov` (rendered 160 x 120).
+int sand_pixels(const std::string& pov, const std::string& png) {
+  render_pov(pov, png, 160, 120, 1, false);
+  const Image img = read_png(png);
+  int n = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) n += is_sand(img.at(x, y)) ? 1 : 0;
+  return n;
+}
+
+TEST_F(PovTest, ARemovedSolidIsDrawnUntilItsTimeOnly) {
+  if (find_povray().empty()) GTEST_SKIP() << "povray is not installed";
+  // a grain behind a gate, seen through it: hidden while the gate stands, seen once it is gone
+  FrameData f;
+  f.position = {{0, 0, 1}};
+  f.radius = {0.3};
+  GeometryConfig gate;
+  gate.type = GeometryType::Box;
+  gate.name = "gate";
+  gate.center = {0, -2, 1};
+  gate.size = {3, 0.1, 3};
+  gate.remove_at = 0.5;
+  PovOptions opt;
+  opt.width = 160;
+  opt.height = 120;
+  opt.auto_camera = false;
+  opt.camera_position = {0, -6, 1};
+  opt.camera_look_at = {0, 0, 1};
+  for (const double t : {0.4, 0.5, 0.6}) {
+    opt.time = t;
+    write_pov_scene(path("gate.pov"), f, {gate}, opt);
+    const int sand = sand_pixels(path("gate.pov"), path("gate.png"));
+    if (t <= 0.5)
+      EXPECT_EQ(sand, 0) << t;  // (in frame 0.5 s the gate still held the grains)
+    else
+      EXPECT_GT(sand, 100) << t;
+  }
+  // --export pov: the scene written once, without grains; each frame declares its time
+  opt.time = 0;
+  write_pov_scene(path("scene.inc"), FrameData{}, {gate}, opt);
+  for (const double t : {0.4, 0.6}) {
+    std::ofstream(path("frame.pov"))
+        << "#version 3.7;\n#declare SandflowTime = " << t << ";\n#include \"scene.inc\"\n"
+        << pov_grain_lines(f);
+    const int sand = sand_pixels(path("frame.pov"), path("frame.png"));
+    if (t < 0.5)
+      EXPECT_EQ(sand, 0) << t;
+    else
+      EXPECT_GT(sand, 100) << t;
+  }
+}
+
 TEST_F(PovTest, GivenBoundsFixTheCameraAndLightsAcrossFrames) {
   FrameData a = small_mound();
   FrameData b = a;
