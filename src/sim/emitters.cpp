@@ -449,8 +449,8 @@ void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vect
 
   // a place is taken when a grain already there would overlap a new grain at it: placing one
   // there would fire both off. A pour owes the grains of taken slots to its next batches; a block,
-  // a lattice or a bed leaves them out.
-  const Occupancy old_grains(nearby_x, nearby_r, std::max(reach_, d_max_ / 2));
+  // a lattice or a bed leaves them out. (reach_ >= d_max_ / 2 covers a bed's grains too.)
+  const Occupancy old_grains(nearby_x, nearby_r, reach_);
   if (config_.type == EmitterType::Bed) {
     // the packed grains, at rest (the World seats them in surface mode)
     out.reserve(out.size() + bed_.size());

@@ -257,6 +257,17 @@ TEST_F(PovTest, RendersMoundOnFloor) {
   EXPECT_GT(x1 - x0, img.width / 3);
 }
 
+// A 160 x 120 picture from a fixed camera on -y, 6 m out, looking along +y at (0, 0, 1), z up.
+PovOptions side_view() {
+  PovOptions opt;
+  opt.width = 160;
+  opt.height = 120;
+  opt.auto_camera = false;
+  opt.camera_position = {0, -6, 1};
+  opt.camera_look_at = {0, 0, 1};
+  return opt;
+}
+
 TEST_F(PovTest, PictureIsNotMirrored) {
   if (find_povray().empty()) GTEST_SKIP() << "povray is not installed";
   // Camera on -y looking along +y with z up: in a right-handed world +x is to the right.
@@ -264,12 +275,7 @@ TEST_F(PovTest, PictureIsNotMirrored) {
   FrameData f;
   f.position = {{0.8, 0, 1.5}};
   f.radius = {0.3};
-  PovOptions opt;
-  opt.width = 160;
-  opt.height = 120;
-  opt.auto_camera = false;
-  opt.camera_position = {0, -6, 1};
-  opt.camera_look_at = {0, 0, 1};
+  const PovOptions opt = side_view();
   write_pov_scene(path("probe.pov"), f, {}, opt);
   render_pov(path("probe.pov"), path("probe.png"), opt.width, opt.height, 1);
   const Image img = read_png(path("probe.png"));
@@ -336,12 +342,7 @@ TEST_F(PovTest, ARemovedSolidIsDrawnUntilItsTimeOnly) {
   gate.center = {0, -2, 1};
   gate.size = {3, 0.1, 3};
   gate.remove_at = 0.5;
-  PovOptions opt;
-  opt.width = 160;
-  opt.height = 120;
-  opt.auto_camera = false;
-  opt.camera_position = {0, -6, 1};
-  opt.camera_look_at = {0, 0, 1};
+  PovOptions opt = side_view();
   for (const double t : {0.4, 0.5, 0.6}) {
     opt.time = t;
     write_pov_scene(path("gate.pov"), f, {gate}, opt);
