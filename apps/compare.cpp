@@ -250,8 +250,7 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
     wall_surf += r.wall_seconds / co.seeds;
     frac_mean += simulated_fraction(r.frames, 0) / co.seeds;
     frac_half += simulated_fraction(r.frames, r.frames.size() / 2) / co.seeds;
-    frac_final += static_cast<double>(last.n_active + last.n_interface) /
-                  static_cast<double>(std::max<std::int64_t>(last.n_total, 1)) / co.seeds;
+    frac_final += simulated_fraction(r.frames, r.frames.size() - 1) / co.seeds;
     sim_mean += r.summary["n_simulated_mean"].get<double>() / co.seeds;
     sim_final += static_cast<double>(last.n_active + last.n_interface) / co.seeds;
     over_surf = std::max(over_surf, max_overlap(r));

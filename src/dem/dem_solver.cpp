@@ -367,10 +367,9 @@ void DemSolver::allowances(const Grains& grains, Real dt, std::vector<Real>& out
       speed2[i] = std::bit_cast<std::uint64_t>(own2[i]);
     }
   const std::size_t listed = pairs_.start.empty() ? 0 : pairs_.start.size() - 1;
-  // a partner faster than this would get more than a_min of its own: slower ones change nothing
-  const Real fast2 =
-      horizon > 0 ? (a_min / horizon) * (a_min / horizon) : std::numeric_limits<Real>::infinity();
   if (horizon > 0 && listed > 0) {
+    // a partner faster than this would get more than a_min of its own: slower ones change nothing
+    const Real fast2 = (a_min / horizon) * (a_min / horizon);
     std::vector<std::uint32_t> now(listed, kNoSlot);  // slot at the last rebuild -> index now
     for (std::size_t i = 0; i < n; ++i) {
       const GrainId id = grains.id[i];
