@@ -336,6 +336,11 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
     r.frames = record.at("frames").get<int>();
     r.threads = record.at("threads").get<int>();
     r.checkpoint_every = record.at("checkpoint_every").get<int>();
+    if (record.contains("run_to_frame") && record["run_to_frame"].get<int>() <= 0)
+      throw InputError(
+          fmt::format("{}: run_to_frame {} is not a frame: the record was edited or "
+                      "damaged",
+                      record_path.string(), record["run_to_frame"].dump()));
     if (r.frames < 0 || r.grains < 0 || r.threads < 0 || r.threads > 1024 || r.checkpoint_every < 0)
       throw InputError(fmt::format(
           "{}: frames {}, grains {}, threads {} or checkpoint_every {} is out of its range: the "
@@ -352,12 +357,21 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
   return r;
 }
 
+/// The last frame `sandflow run --resume DIR --frames N` set for a run (0: the run's own). It is
+/// not part of what the checkpoints' seal covers: a run's frames do not depend on how many follow.
+namespace {
+int run_to_frame(const nlohmann::json& record) {
+  return record.contains("run_to_frame") ? record["run_to_frame"].get<int>() : 0;
+}
+}  // namespace
+
 /// The scene of a recorded run, `r` and `text` as read_run_record returned them: its file's text
 /// with its options, and the surface angles it ran with (measured or cached when it started).
 SceneConfig recorded_scene(const RunOptions& r, const std::string& text,
                            const nlohmann::json& record) {
   SceneConfig scene = apply_run_options(load_scene_from_string(text, r.scene, run_overrides(r)), r);
   if (record.contains("surface_angles")) apply_surface_angles(scene, record["surface_angles"]);
+  if (const int last = run_to_frame(record); last > 0) scene.output.frames = last;
   return scene;
 }
 
@@ -479,12 +493,12 @@ int run_resumable(Started& run, RunResult& res, const std::string& resume_with,
 /// `sandflow run --resume DIR`. A finished run has nothing to resume, unless `reload_finished`
 /// (compare and table1): it is then read back from its last checkpoint.
 Started start_resumed(const RunOptions& o, bool reload_finished = false) {
-  if (!o.scene.empty() || !o.mode.empty() || o.grains > 0 || o.frames > 0 || !o.sets.empty() ||
-      !o.out.empty() || o.force || o.check || o.exports || !o.up_axis.empty())
+  if (!o.scene.empty() || !o.mode.empty() || o.grains > 0 || !o.sets.empty() || !o.out.empty() ||
+      o.force || o.check || o.exports || !o.up_axis.empty())
     throw InputError(
         "--resume DIR continues a run exactly as it was started (DIR/run.json): it takes no "
-        "scene, --mode, --grains, --frames, --set, --export, --up-axis, --out, --force or "
-        "--check; only --threads, --checkpoint-every and --profile");
+        "scene, --mode, --grains, --set, --export, --up-axis, --out, --force or --check; only "
+        "--frames (another last frame), --threads, --checkpoint-every and --profile");
   const std::string dir = o.resume;
   Started run;
   std::error_code ec;
@@ -494,17 +508,17 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
   std::string text;
   RunOptions r = read_run_record(dir, record, text);
   const bool finished = fs::exists(fs::path(dir) / "summary.json", ec);
-  if (finished && !reload_finished) {
+  if (finished && !reload_finished && o.frames == 0) {
     fmt::print(stderr, "{}: this run is finished (its summary.json is written); nothing to resume\n",
                dir);
     run.done = true;
     return run;
   }
   if (o.threads > 0) r.threads = o.threads;
+  const nlohmann::json recorded = record;  // (--checkpoint-every is for this sitting only)
   if (o.checkpoint_every >= 0) record["checkpoint_every"] = o.checkpoint_every;
   run.scene = recorded_scene(r, text, record);
   run.out = dir;
-  run.record = record;
   run.resumed = true;
   const std::string path = (fs::path(dir) / "checkpoint.bin").string();
   if (fs::exists(path, ec)) {
@@ -517,7 +531,26 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
     }
   }
   const int frame = run.checkpoint ? run.checkpoint->world.frame : 0;
-  if (finished && run.checkpoint)
+  if (o.frames > 0) {
+    // another last frame: the run goes on from its checkpoint, so not one before it. The summary
+    // goes first: a folder stopped between the two is an unfinished run of its old length
+    if (o.frames < frame)
+      throw InputError(fmt::format(
+          "{}: --frames {} is before the run's checkpoint at frame {}: a run goes on from its last "
+          "checkpoint, so it can end at frame {} or later",
+          dir, o.frames, frame, frame));
+    if (std::error_code rm; finished && (fs::remove(fs::path(dir) / "summary.json", rm), rm))
+      throw OutputError(
+          fmt::format("{}: cannot remove summary.json to run on: {}", dir, rm.message()));
+    nlohmann::json longer = recorded;
+    longer["run_to_frame"] = o.frames;
+    write_file_atomic((fs::path(dir) / "run.json").string(), longer.dump(2) + "\n");
+    record["run_to_frame"] = o.frames;
+    run.scene.output.frames = o.frames;
+    fmt::print(stderr, "{}: running on to frame {}\n", dir, o.frames);
+  }
+  run.record = record;
+  if (finished && run.checkpoint && o.frames == 0)
     fmt::print(stderr, "{} is finished: reading it back from its checkpoint at frame {}\n", dir,
                frame);
   else if (run.checkpoint)
@@ -596,11 +629,12 @@ void check_resumable(const RunOptions& o, const std::string& text) {
   std::string recorded_text;
   read_run_record(o.out, record, recorded_text);
   const nlohmann::json expected = run_record(o, text, 0);
-  if (record["start"] != expected["start"] || record["frames"] != expected["frames"])
+  if (record["start"] != expected["start"] || record["frames"] != expected["frames"] ||
+      run_to_frame(record) > 0)
     throw InputError(fmt::format(
         "{}: holds a run started otherwise (its run.json records another scene text, --set, "
-        "--grains, --frames, --export or --up-axis than now); it cannot be resumed as this one: "
-        "pass --force to run it again",
+        "--grains, --frames, --export or --up-axis than now, or it was run on to another frame); "
+        "it cannot be resumed as this one: pass --force to run it again",
         o.out));
 }
 

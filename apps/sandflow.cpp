@@ -78,7 +78,8 @@ int main(int argc, char** argv) {
   run->get_option("scene")->required(false);  // (not with --resume)
   run->add_option("--resume", ro.resume,
                   "continue the run in DIR from its last checkpoint, exactly as it was started "
-                  "(no scene; --threads and --checkpoint-every may change)");
+                  "(no scene; --threads and --checkpoint-every may change, and --frames N runs "
+                  "it on to frame N, a finished run too)");
   run->add_option("--checkpoint-every", ro.checkpoint_every,
                   "write DIR/checkpoint.bin every N frames and after the last (default 30; 0: "
                   "only on SIGINT/SIGTERM)")
@@ -88,7 +89,8 @@ int main(int argc, char** argv) {
       "SIGINT (Ctrl-C) or SIGTERM finishes the current frame, writes a checkpoint and exits;\n"
       "a second one stops at once. `sandflow run --resume DIR` continues a run that was\n"
       "interrupted, killed or stopped by an error, and ends with the same state as a run that\n"
-      "never stopped (docs/checkpoints.md).\n"
+      "never stopped (docs/checkpoints.md); `--resume DIR --frames N` runs it on to frame N\n"
+      "(more settling after a finished run), as if it had been started with --frames N.\n"
       "Exit status: 0 done, 2 bad input, 3 the simulation blew up (the message names the step,\n"
       "the grain and the command that reproduces it), 4 an output could not be written,\n"
       "130 interrupted by SIGINT, 143 by SIGTERM.");

@@ -239,6 +239,15 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   };
   EXPECT_EQ(figures(out), figures(want));
   EXPECT_EQ(figures(out)["runs"].size(), 5u);
+  // one of its runs run on to another frame is no longer the comparison's run
+  ASSERT_EQ(
+      sandflow(fmt::format("run --resume {} --frames {}", (out / "dem").string(), kFrames + 2),
+               &log),
+      0)
+      << log;
+  fs::remove(out / "compare.json");
+  EXPECT_EQ(sandflow("compare --resume " + out.string(), &log), 2);
+  EXPECT_NE(log.find("run on to another frame"), std::string::npos) << log;
 }
 
 // The exports go on where the checkpoint left them: a resumed run's ParaView series lists every
@@ -393,6 +402,35 @@ velocity = [0.0, 0.0, -5.0]
   std::string again;
   EXPECT_EQ(sandflow("run --resume " + out.string(), &again), 3);
   EXPECT_NE(again.find(stop), std::string::npos) << again;
+}
+
+// `--resume DIR --frames N` runs a run on to frame N, a finished one too: stopped on the way and
+// resumed without --frames, it still goes to N, and ends as the run started with --frames N.
+TEST(Resume, FramesRunsAFinishedRunOnToTheSameLongerRun) {
+  Sandbox box;
+  box.write("pour.toml", kPourScene);
+  const fs::path want = straight_run(box);
+  const fs::path out = box.dir / "run";
+  std::string log;
+  ASSERT_EQ(sandflow(fmt::format("run {} --frames 10 --out {}", (box.dir / "pour.toml").string(),
+                                 out.string()),
+                     &log),
+            0)
+      << log;
+  ASSERT_TRUE(fs::exists(out / "summary.json"));
+  // not to a frame before its checkpoint (the last frame, 10): refused, the run left finished
+  EXPECT_EQ(sandflow("run --resume " + out.string() + " --frames 9", &log), 2);
+  EXPECT_NE(log.find("--frames 9 is before the run's checkpoint at frame 10"), std::string::npos)
+      << log;
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  const pid_t pid =
+      spawn(fmt::format("run --resume {} --frames {}", out.string(), kFrames), box.dir / "on.log");
+  interrupt_once_written(pid, out / "frames" / "0015.ply");
+  EXPECT_EQ(wait_for(pid), 130) << read_text(box.dir / "on.log");
+  EXPECT_FALSE(fs::exists(out / "summary.json"));
+  ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  expect_same_run(want, out);
+  EXPECT_EQ(nlohmann::json::parse(read_text(out / "run.json"))["run_to_frame"], kFrames);
 }
 
 TEST(Resume, RefusesWhatItCannotContinueAndSaysWhy) {
