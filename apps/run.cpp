@@ -357,9 +357,9 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
   return r;
 }
 
+namespace {
 /// The last frame `sandflow run --resume DIR --frames N` set for a run (0: the run's own). It is
 /// not part of what the checkpoints' seal covers: a run's frames do not depend on how many follow.
-namespace {
 int run_to_frame(const nlohmann::json& record) {
   return record.contains("run_to_frame") ? record["run_to_frame"].get<int>() : 0;
 }
