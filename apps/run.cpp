@@ -515,8 +515,6 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
     return run;
   }
   if (o.threads > 0) r.threads = o.threads;
-  const nlohmann::json recorded = record;  // (--checkpoint-every is for this sitting only)
-  if (o.checkpoint_every >= 0) record["checkpoint_every"] = o.checkpoint_every;
   run.scene = recorded_scene(r, text, record);
   run.out = dir;
   run.resumed = true;
@@ -542,13 +540,13 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
     if (std::error_code rm; finished && (fs::remove(fs::path(dir) / "summary.json", rm), rm))
       throw OutputError(
           fmt::format("{}: cannot remove summary.json to run on: {}", dir, rm.message()));
-    nlohmann::json longer = recorded;
-    longer["run_to_frame"] = o.frames;
-    write_file_atomic((fs::path(dir) / "run.json").string(), longer.dump(2) + "\n");
     record["run_to_frame"] = o.frames;
+    write_file_atomic((fs::path(dir) / "run.json").string(), record.dump(2) + "\n");
     run.scene.output.frames = o.frames;
     fmt::print(stderr, "{}: running on to frame {}\n", dir, o.frames);
   }
+  // (for this sitting only: run.json keeps the run's own)
+  if (o.checkpoint_every >= 0) record["checkpoint_every"] = o.checkpoint_every;
   run.record = record;
   if (finished && run.checkpoint && o.frames == 0)
     fmt::print(stderr, "{} is finished: reading it back from its checkpoint at frame {}\n", dir,
