@@ -60,8 +60,10 @@ constexpr std::size_t kPairCheckMaxGrains = 2000;
   return work;
 }
 
-/// The first slot of grain i's row that reaches past `end` (rows are sorted by j).
-[[gnu::always_inline]] inline std::uint32_t first_reaching(const PairList& pl, std::size_t i,
+/// The first slot of grain i's row that reaches past `end` (rows are sorted by j); `pl` is the
+/// PairList or the sweep's view of its arrays.
+template <class Pairs>
+[[gnu::always_inline]] inline std::uint32_t first_reaching(const Pairs& pl, std::size_t i,
                                                            std::size_t end) {
   std::uint32_t first = pl.start[i + 1];
   while (first > pl.start[i] && pl.j[first - 1] >= end) --first;
@@ -519,11 +521,28 @@ void DemSolver::balance_ranges(const Grains& grains, std::size_t threads) {
 // 11 % of a plain-DEM run: docs/performance.md, "The sweep's inlining".)
 namespace {
 
+/// The pair list's arrays as plain pointers, held in the thread's own copy of SweepData: read
+/// through the PairList, each would be loaded again after every store of a contact's flags (a
+/// byte store, which may alias anything).
+struct Slots {
+  const std::uint32_t* start;
+  const std::uint32_t* j;
+  std::uint8_t* touch;
+  Real* delta0;
+  const Real* c_n;
+  Vec3* xi;
+  Vec3* psi;
+  Vec3* force;
+  Vec3* q;
+  Vec3* t_roll;
+};
+
 /// What the kernels share (sweep_data; each thread of a sweep builds its own copy): the law and
 /// the step, the pair list with its history, the grains as plain arrays, their accumulators.
 struct SweepData {
   const ContactParams& cp;
-  PairList& pl;
+  PairList& pl;  ///< (for the rare paths; the sweep reads the arrays below)
+  Slots slots;
   Vec3* x;
   Vec3* v;
   Vec3* w;
@@ -563,6 +582,16 @@ SweepData sweep_data(const DemParams& p, PairList& pairs, Grains& grains, std::v
                      Real dt) {
   return {.cp = p.contact,
           .pl = pairs,
+          .slots = {.start = pairs.start.data(),
+                    .j = pairs.j.data(),
+                    .touch = pairs.touch.data(),
+                    .delta0 = pairs.delta0.data(),
+                    .c_n = pairs.c_n.data(),
+                    .xi = pairs.xi.data(),
+                    .psi = pairs.psi.data(),
+                    .force = pairs.force.data(),
+                    .q = pairs.q.data(),
+                    .t_roll = pairs.t_roll.data()},
           .x = grains.x.data(),
           .v = grains.v.data(),
           .w = grains.w.data(),
@@ -593,24 +622,35 @@ SweepData sweep_data(const DemParams& p, PairList& pairs, Grains& grains, std::v
 
 /// One thread's tallies: its copies of the sweep's reduction variables.
 struct Tally {
-  std::int64_t& contacts;
-  std::int64_t& wall_contacts;
-  Real& max_ov;
-  std::int64_t& inert_fj;    ///< in the springs of contacts going inert [fJ]
-  std::int64_t& relaxed_fj;  ///< the work of preloads relaxing [fJ]
+  std::int64_t contacts = 0;
+  std::int64_t wall_contacts = 0;
+  Real max_ov = 0;
+  std::int64_t inert_fj = 0;    ///< in the springs of contacts going inert [fJ]
+  std::int64_t relaxed_fj = 0;  ///< the work of preloads relaxing [fJ]
 };
 
 // --- fixed partners: walls, boundary particles, frozen grains --------------------------------
 
+/// Grain i's state as its row of pairs reads it, loaded once for the row: the pairs' stores (to
+/// the partners' accumulators, the histories) could alias the arrays, which would make the
+/// compiler load i's state again for every pair.
+struct RowGrain {
+  Vec3 x, v, w;
+  Real r, m;
+  bool active;
+};
+
+[[gnu::always_inline]] inline RowGrain row_grain(const SweepData& d, std::size_t i) {
+  return {d.x[i], d.v[i], d.w[i], d.r[i], d.m[i], d.st[i] == GrainState::Active};
+}
+
 /// The normal damping of pair slot s: its own, or, when one grain is frozen, as against a wall.
 /// A frozen partner does not recoil: damped as against a wall, the restitution of a bounce on the
 /// interface is the material's, not that of a grain half the mass.
-[[gnu::always_inline]] inline Real pair_damping(const SweepData& d, std::size_t i, std::uint32_t j,
-                                                std::uint32_t s) {
-  const GrainState* st = d.st;
-  return st[i] == GrainState::Active && st[j] == GrainState::Active
-             ? d.pl.c_n[s]
-             : normal_damping(d.cp, d.m[st[i] == GrainState::Active ? i : j]);
+[[gnu::always_inline]] inline Real pair_damping(const SweepData& d, const RowGrain& gi,
+                                                std::uint32_t j, std::uint32_t s) {
+  const bool active_j = d.st[j] == GrainState::Active;
+  return gi.active && active_j ? d.slots.c_n[s] : normal_damping(d.cp, gi.active ? gi.m : d.m[j]);
 }
 
 /// A contact of grain i with something that never moves (a wall, a boundary particle): i alone
@@ -688,10 +728,10 @@ template <bool kRolling>
 template <bool kRolling>
 [[gnu::always_inline]] inline void end_contact(const SweepData& d, std::uint32_t s, Real rsum,
                                                Real dist2, Tally& tally) {
-  PairList& pl = d.pl;
+  const Slots& pl = d.slots;
   if (!pl.touch[s]) return;
   if (dist2 < rsum * rsum) [[unlikely]]
-    tally.inert_fj += femtojoules(inert_energy(d.cp, pl, s, rsum, dist2, kRolling));
+    tally.inert_fj += femtojoules(inert_energy(d.cp, d.pl, s, rsum, dist2, kRolling));
   pl.touch[s] = 0;
   pl.delta0[s] = 0;
   pl.xi[s] = {};
@@ -701,19 +741,17 @@ template <bool kRolling>
 /// One pair slot of grain i: the contact law (true, with the results in cf) or the end of a
 /// contact.
 template <bool kRolling>
-[[gnu::always_inline]] inline bool pair_force(const SweepData& d, std::size_t i, std::uint32_t s,
+[[gnu::always_inline]] inline bool pair_force(const SweepData& d, const RowGrain& gi,
+                                              [[maybe_unused]] std::size_t i, std::uint32_t s,
                                               ContactForce& cf, Tally& tally) {
   const ContactParams& cp = d.cp;
-  PairList& pl = d.pl;
-  const Vec3* x = d.x;
-  const Vec3* v = d.v;
-  const Vec3* w = d.w;
-  const Real* r = d.r;
+  const Slots& pl = d.slots;
   const std::uint32_t j = pl.j[s];
-  const Vec3 dx = x[i] - x[j];
+  const Vec3 dx = gi.x - d.x[j];
   const Real dist2 = norm2(dx);
-  const Real rsum = r[i] + r[j];
-  if (dist2 >= rsum * rsum || (d.st[i] != GrainState::Active && d.st[j] != GrainState::Active)) {
+  const Real r_j = d.r[j];
+  const Real rsum = gi.r + r_j;
+  if (dist2 >= rsum * rsum || (!gi.active && d.st[j] != GrainState::Active)) {
     end_contact<kRolling>(d, s, rsum, dist2, tally);
     return false;
   }
@@ -721,18 +759,19 @@ template <bool kRolling>
   ContactGeometry g;
   g.n = dx * (1.0 / dist);
   g.delta = rsum - dist;
-  g.arm_i = r[i];
-  g.arm_j = r[j];
-  g.c_n = pair_damping(d, i, j, s);
-  g.r_eff = r[i] * r[j] / rsum;
+  g.arm_i = gi.r;
+  g.arm_j = r_j;
+  g.c_n = pair_damping(d, gi, j, s);
+  g.r_eff = gi.r * r_j / rsum;
   // relative overlap; the division only when it may be a new largest one
-  const Real d_small = 2 * std::min(r[i], r[j]);
+  const Real d_small = 2 * std::min(gi.r, r_j);
   if (g.delta > tally.max_ov * d_small) tally.max_ov = g.delta / d_small;
   if (pl.touch[s] & kPreloaded) [[unlikely]]
     tally.relaxed_fj += femtojoules(relax_preload(cp.k_n, d.decay, pl.delta0[s], g.delta));
   ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
-  cf = contact_force<kRolling>(cp, g, v[i] - v[j], w[i], w[j], h, d.dt);
-  SANDFLOW_ASSERT(!(dist > 0 && tame(dx) && tame(v[i] - v[j]) && tame(w[i]) && tame(w[j]) &&
+  const Vec3 v_j = d.v[j], w_j = d.w[j];
+  cf = contact_force<kRolling>(cp, g, gi.v - v_j, gi.w, w_j, h, d.dt);
+  SANDFLOW_ASSERT(!(dist > 0 && tame(dx) && tame(gi.v - v_j) && tame(gi.w) && tame(w_j) &&
                     tame(pl.xi[s]) && (!kRolling || tame(pl.psi[s]))) ||
                       finite_result(cf, h, kRolling),
                   fmt::format("grains {} and {}: the contact law gave a non-finite force or "
@@ -761,11 +800,12 @@ template <bool kRolling>
 [[gnu::always_inline]] inline void pair_sums(const SweepData& d, std::size_t range_end,
                                              std::size_t i, Vec3& f, Vec3& q, Vec3& tr,
                                              Tally& tally) {
-  const PairList& pl = d.pl;
+  const Slots& pl = d.slots;
   const std::uint32_t split = first_reaching(pl, i, range_end);
+  const RowGrain gi = row_grain(d, i);
   for (std::uint32_t s = pl.start[i]; s < split; ++s) {
     ContactForce cf;
-    if (!pair_force<kRolling>(d, i, s, cf, tally)) continue;
+    if (!pair_force<kRolling>(d, gi, i, s, cf, tally)) continue;
     f += cf.force_i;
     q += cf.q;
     if constexpr (kRolling) tr += cf.t_roll;
@@ -811,15 +851,16 @@ template <bool kRolling>
                                                      const std::vector<std::size_t>& range,
                                                      const std::vector<std::uint32_t>& cross_rows,
                                                      Tally& tally) {
-  PairList& pl = d.pl;
+  const Slots& pl = d.slots;
 #pragma omp for schedule(dynamic, 16)
   for (std::size_t k = 0; k < cross_rows.size(); ++k) {
     const std::uint32_t i = cross_rows[k];
     const std::size_t end_of_range =
         *std::upper_bound(range.begin(), range.end(), i);  // (i's range ends there)
+    const RowGrain gi = row_grain(d, i);
     for (std::uint32_t s = first_reaching(pl, i, end_of_range); s < pl.start[i + 1]; ++s) {
       ContactForce cf;
-      if (!pair_force<kRolling>(d, i, s, cf, tally)) continue;
+      if (!pair_force<kRolling>(d, gi, i, s, cf, tally)) continue;
       pl.force[s] = cf.force_i;
       pl.q[s] = cf.q;
       if constexpr (kRolling) pl.t_roll[s] = cf.t_roll;
@@ -836,7 +877,7 @@ template <bool kRolling>
 [[gnu::always_inline]] inline void take_cross_pairs(const SweepData& d,
                                                     const std::vector<std::uint32_t>& cross_rows,
                                                     std::size_t lo, std::size_t hi) {
-  const PairList& pl = d.pl;
+  const Slots& pl = d.slots;
   for (std::size_t k = 0; k < cross_rows.size() && cross_rows[k] < lo; ++k) {
     const std::uint32_t i = cross_rows[k];
     for (std::uint32_t s = first_reaching(pl, i, lo); s < pl.start[i + 1]; ++s) {
@@ -870,7 +911,7 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
         sweep_data(params_, pairs_, grains, acc_f_, acc_q_, acc_t_, x_at_build_, allow2_, dt);
     const FixedPartners fixed{geometry, walls_, wall_params_, bounds_, boundary_, boundary_params_};
     // made inside the parallel region, so that the kernels update this thread's reduction copies
-    Tally tally{contacts, wall_contacts, max_ov, inert_fj, relaxed_fj};
+    Tally tally{.max_ov = max_ov};
 
     // 1. the threads' ranges (cut again after a rebuild), and the pairs that reach into a later
     // thread's range
@@ -893,6 +934,11 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
       if (integrate(data, i, f, torque)) moved_out = 1;
     }
     busy_[t] += omp_get_wtime() - sweep_start;
+    contacts += tally.contacts;
+    wall_contacts += tally.wall_contacts;
+    max_ov = std::max(max_ov, tally.max_ov);
+    inert_fj += tally.inert_fj;
+    relaxed_fj += tally.relaxed_fj;
   }
   counters_.contacts = contacts;
   counters_.wall_contacts = wall_contacts;
