@@ -649,7 +649,9 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   if (std::adjacent_find(ids.begin(), ids.end()) != ids.end()) fail("a grain id appears twice");
   if (!ids.empty() && ids.back() >= s.next_id)
     fail(fmt::format("grain id {} is not below the next id {}", ids.back(), s.next_id));
-  if (s.left < 0 || static_cast<std::int64_t>(ids.size()) + s.left != s.next_id)
+  // (each bound before the sum, which could overflow otherwise)
+  if (s.left < 0 || s.left > static_cast<std::int64_t>(s.next_id) ||
+      static_cast<std::int64_t>(ids.size()) + s.left != s.next_id)
     fail(fmt::format("{} grains held and {} left the domain, but {} were emitted", ids.size(),
                      s.left, s.next_id));
 
@@ -660,7 +662,8 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   std::int64_t emitted = 0;
   for (std::size_t k = 0; k < s.emitters.size(); ++k) {
     const Emitter::Progress& e = s.emitters[k];
-    if (e.emitted < 0 || e.left_out < 0 || e.emitted + e.left_out > world.emitters()[k].count() ||
+    const std::int64_t count = world.emitters()[k].count();
+    if (e.emitted < 0 || e.left_out < 0 || e.emitted > count || e.left_out > count - e.emitted ||
         e.owed < 0 || e.owed > 1e12 || e.delayed < 0)
       fail(fmt::format("emitter {}'s progress is out of range", k));
     emitted += e.emitted;

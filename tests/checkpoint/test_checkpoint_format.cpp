@@ -5,6 +5,7 @@
 #include <zlib.h>
 
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -233,6 +234,15 @@ TEST(CheckpointFormat, IndicesOutOfRangeAreRefusedBeforeTheWorldIsTouched) {
   refused([](Checkpoint& c) { c.world.grains.r[0] *= 10; }, "out of range");
   refused([](Checkpoint& c) { c.world.next_id += 1; }, "were emitted");
   refused([](Checkpoint& c) { c.world.emitters.pop_back(); }, "emitters");
+  // counts whose sums would overflow (found by fuzz_checkpoint; UBSan in the sanitizer build)
+  refused(
+      [](Checkpoint& c) {
+        c.world.emitters[0].emitted = 7022836102411059240;
+        c.world.emitters[0].left_out = 7956002802384270447;
+      },
+      "emitter 0's progress is out of range");
+  refused([](Checkpoint& c) { c.world.left = std::numeric_limits<std::int64_t>::max(); },
+          "left the domain");
   refused([](Checkpoint& c) { c.world.surface->columns.h.pop_back(); }, "height-field array");
   refused([](Checkpoint& c) { c.world.step += 1; }, "a frame has");
   refused([](Checkpoint& c) { c.frames.pop_back(); }, "statistics of 2 frames");
