@@ -7,7 +7,8 @@
 #
 # Last line of output: ratio_1=X ratio_2=Y scaling_sandflow=Z scaling_lammps=W
 # (sandflow grain-steps/s over LAMMPS's at 1 and at 2 threads/processes; each
-# engine's 2-thread/process speed over its 1-thread/process speed).
+# engine's 2-thread/process speed over its 1-thread/process speed), each the
+# median over the rounds (--rounds) of the ratio within a round.
 # Exit status: 0 ok; 3 the two engines did not simulate the same grains (bed:
 # contacts per grain more than 5% apart; pour: contacts per grain more than 10%
 # or the grains' mean height more than 2% apart; the ratio line is still
@@ -17,7 +18,7 @@ set -euo pipefail
 
 usage() {
   cat <<'EOF'
-usage: bench/compare_lammps.sh [--case bed|pour] [--grains N] [--steps N] [--build DIR] [--rebuild]
+usage: bench/compare_lammps.sh [--case bed|pour] [--grains N] [--steps N] [--rounds R] [--build DIR] [--rebuild]
 
   --case C     bed (default): a settled bed, timed after a warm-up;
                pour: a column of grains released onto the floor, timed from
@@ -27,6 +28,12 @@ usage: bench/compare_lammps.sh [--case bed|pour] [--grains N] [--steps N] [--bui
                building and settling a new bed takes minutes, once. A pour's
                column is made in a moment and not cached.
   --steps N    timed steps (default: bed 2000, pour 100000, 1 s of the pour)
+  --rounds R   rounds of the four runs (default: bed 3, about 2.5 minutes a
+               round at 100,000 grains; pour 1, about 14 minutes). Each round
+               runs sandflow and LAMMPS on 1, then on 2, back to back, so that
+               a ratio compares runs minutes apart at most: a shared machine's
+               speed drifts by a fifth within an hour. The ratios printed are
+               the medians of the rounds' ratios.
   --build DIR  CMake build directory holding bench/bench_bed (default: build,
                relative to the repository root). Configured (Release) and
                built if bench_bed is missing.
@@ -47,6 +54,7 @@ GRAINS=
 STEPS=
 BUILD=build
 REBUILD=0
+ROUNDS=
 
 while [[ $# -gt 0 ]]; do
   case "$1" in
@@ -58,20 +66,23 @@ while [[ $# -gt 0 ]]; do
     --steps=*) STEPS=${1#*=}; shift ;;
     --build) [[ $# -ge 2 ]] || die "--build needs a value"; BUILD=$2; shift 2 ;;
     --build=*) BUILD=${1#*=}; shift ;;
+    --rounds) [[ $# -ge 2 ]] || die "--rounds needs a value"; ROUNDS=$2; shift 2 ;;
+    --rounds=*) ROUNDS=${1#*=}; shift ;;
     --rebuild) REBUILD=1; shift ;;
     -h|--help) usage; exit 0 ;;
     *) usage >&2; die "unknown argument: $1" ;;
   esac
 done
 case "$CASE" in
-  bed)  GRAINS=${GRAINS:-100000}; STEPS=${STEPS:-2000}
+  bed)  GRAINS=${GRAINS:-100000}; STEPS=${STEPS:-2000}; ROUNDS=${ROUNDS:-3}
         WARM=200 ;;  # untimed LAMMPS steps before the timed run (contact history)
-  pour) GRAINS=${GRAINS:-20000}; STEPS=${STEPS:-100000}
+  pour) GRAINS=${GRAINS:-20000}; STEPS=${STEPS:-100000}; ROUNDS=${ROUNDS:-1}
         WARM=0 ;;    # timed from the release, as bench_bed times it
   *) die "--case must be bed or pour, got '$CASE'" ;;
 esac
 [[ "$GRAINS" =~ ^[1-9][0-9]*$ ]] || die "--grains must be a positive integer, got '$GRAINS'"
 [[ "$STEPS" =~ ^[1-9][0-9]*$ ]] || die "--steps must be a positive integer, got '$STEPS'"
+[[ "$ROUNDS" =~ ^[1-9][0-9]*$ ]] || die "--rounds must be a positive integer, got '$ROUNDS'"
 
 bench_paths "$BUILD"
 LMP_INPUT="$ROOT/bench/lammps/bed.in"
@@ -222,48 +233,62 @@ if [[ -r /proc/stat ]]; then
     note "WARNING: the CPUs are ${busy}% busy before the benchmark starts: other work is running, timings will be unreliable"
   fi
 fi
-note "$CASE: $GRAINS grains, d=$D m, rho=$RHO kg/m^3, kn=$KN N/m, kt=$KT N/m, e=$REST, mu=$MU, dt=$DT s; timed steps: $STEPS"
+note "$CASE: $GRAINS grains, d=$D m, rho=$RHO kg/m^3, kn=$KN N/m, kt=$KT N/m, e=$REST, mu=$MU, dt=$DT s; timed steps: $STEPS; rounds: $ROUNDS"
 [[ "$CASE" == pour || -f "$ROOT/$BED" ]] \
   || note "no cached bed $BED: bench_bed builds and settles it first (minutes)"
 
-# The first sandflow run (2 threads: fastest if the bed must be settled) also
-# writes the settled bed for LAMMPS, so the two always start from one bed.
+# The first sandflow run (2 threads: fastest if the bed must be settled) writes
+# the settled bed for LAMMPS, so the two always start from one bed; it is not
+# timed into the rounds (a bed built from scratch takes minutes).
 run_sandflow 2 --write-lammps "$DATA"
-SF2=("$SF_SECONDS" "$SF_GSS" "$SF_CPG" "$SF_Z")
 [[ -s "$ROOT/$DATA" ]] || die "bench_bed did not write $DATA"
 natoms=$(awk '$2 == "atoms" {print $1; exit}' "$ROOT/$DATA")
 [[ "$natoms" == "$GRAINS" ]] || die "$DATA has '${natoms:-?}' atoms, expected $GRAINS"
-run_sandflow 1
-SF1=("$SF_SECONDS" "$SF_GSS" "$SF_CPG" "$SF_Z")
 
-# The beta bench_bed used (a "beta=X" word on its output) is the one LAMMPS gets.
-BETA=$(grep -ohE '(^|[[:space:]])beta=[-+0-9.eE]+' "$CACHE/sandflow_${LABEL}_t1.log" \
-         | tail -n1 | sed 's/.*beta=//' || true)
-[[ -n "$BETA" ]] || die "bench_bed did not report the beta it used (beta=X)"
-BETA_FROM="as reported by bench_bed"
-lammps_damping "$BETA"
-note "sandflow beta=$BETA ($BETA_FROM), m=$MASS kg"
-note "LAMMPS damping rates [1/s]: pairs gamma_n=$GN gamma_t=$GT, walls gamma_n=$GNW gamma_t=$GTW"
-
-run_lammps 1
-LM1=("$LM_SECONDS" "$LM_GSS" "$LM_CPG" "$LM_Z")
-run_lammps 2
-LM2=("$LM_SECONDS" "$LM_GSS" "$LM_CPG" "$LM_Z")
+# Each round: sandflow and LAMMPS on 1, then on 2. ROWS gathers one line a run:
+# round engine threads seconds grain-steps/s contacts/grain mean_z.
+ROWS=()
+for ((round = 1; round <= ROUNDS; ++round)); do
+  note "round $round of $ROUNDS"
+  run_sandflow 1
+  ROWS+=("$round sandflow 1 $SF_SECONDS $SF_GSS $SF_CPG $SF_Z")
+  if [[ $round == 1 ]]; then
+    # The beta bench_bed used (a "beta=X" word on its output) is the one LAMMPS gets.
+    BETA=$(grep -ohE '(^|[[:space:]])beta=[-+0-9.eE]+' "$CACHE/sandflow_${LABEL}_t1.log" \
+             | tail -n1 | sed 's/.*beta=//' || true)
+    [[ -n "$BETA" ]] || die "bench_bed did not report the beta it used (beta=X)"
+    lammps_damping "$BETA"
+    note "sandflow beta=$BETA (as reported by bench_bed), m=$MASS kg"
+    note "LAMMPS damping rates [1/s]: pairs gamma_n=$GN gamma_t=$GT, walls gamma_n=$GNW gamma_t=$GTW"
+  fi
+  run_lammps 1
+  ROWS+=("$round LAMMPS 1 $LM_SECONDS $LM_GSS $LM_CPG $LM_Z")
+  run_sandflow 2
+  ROWS+=("$round sandflow 2 $SF_SECONDS $SF_GSS $SF_CPG $SF_Z")
+  run_lammps 2
+  ROWS+=("$round LAMMPS 2 $LM_SECONDS $LM_GSS $LM_CPG $LM_Z")
+done
 
 # ------------------------------------------------------------------- report
 echo
 if [[ "$CASE" == bed ]]; then
-  echo "settled bed: $GRAINS grains, $STEPS timed steps (dt = $DT s)"
+  echo "settled bed: $GRAINS grains, $STEPS timed steps (dt = $DT s), $ROUNDS round(s)"
 else
-  echo "pour: $GRAINS grains released onto the floor, $STEPS timed steps from the release (dt = $DT s)"
+  echo "pour: $GRAINS grains released onto the floor, $STEPS timed steps from the release (dt = $DT s), $ROUNDS round(s)"
 fi
-printf '%-9s %12s %10s %14s %15s %12s\n' engine threads/procs seconds grain-steps/s contacts/grain mean_z_m
-row() { printf '%-9s %12s %10.3f %14.4g %15.3f %12.5f\n' "$@"; }
-row sandflow 1 "${SF1[@]}"
-row sandflow 2 "${SF2[@]}"
-row LAMMPS 1 "${LM1[@]}"
-row LAMMPS 2 "${LM2[@]}"
+printf '%-6s %-9s %12s %10s %14s %15s %12s\n' round engine threads/procs seconds grain-steps/s contacts/grain mean_z_m
+for r in "${ROWS[@]}"; do
+  # shellcheck disable=SC2086  # (the row's words are its fields)
+  printf '%-6s %-9s %12s %10.3f %14.4g %15.3f %12.5f\n' $r
+done
 echo
+
+# the first round's figures for the like-for-like check (every round runs the same grains)
+pick() { printf '%s\n' "${ROWS[@]}" | awk -v e="$1" -v t="$2" '$1 == 1 && $2 == e && $3 == t {print $4, $5, $6, $7}'; }
+read -r -a SF1 <<<"$(pick sandflow 1)"
+read -r -a SF2 <<<"$(pick sandflow 2)"
+read -r -a LM1 <<<"$(pick LAMMPS 1)"
+read -r -a LM2 <<<"$(pick LAMMPS 2)"
 
 status=0
 # bed: the same grains, so the same contacts; pour: two engines' chaotic paths part within
@@ -288,6 +313,21 @@ else
   echo "compare_lammps.sh: FAIL: $what: not like for like" >&2
   status=3
 fi
-awk -v a="${SF1[1]}" -v b="${LM1[1]}" -v c="${SF2[1]}" -v d="${LM2[1]}" \
-  'BEGIN {printf "ratio_1=%.2f ratio_2=%.2f scaling_sandflow=%.2f scaling_lammps=%.2f\n", a / b, c / d, c / a, d / b}'
+# each round's ratios, then their medians
+printf '%s\n' "${ROWS[@]}" | awk -v rounds="$ROUNDS" '
+  { gss[$1, $2, $3] = $5 }
+  function median(a, n,   i, j, t) {
+    for (i = 2; i <= n; i++) for (j = i; j > 1 && a[j - 1] > a[j]; j--) { t = a[j]; a[j] = a[j - 1]; a[j - 1] = t }
+    return n % 2 ? a[(n + 1) / 2] : (a[n / 2] + a[n / 2 + 1]) / 2
+  }
+  END {
+    for (r = 1; r <= rounds; r++) {
+      r1[r] = gss[r, "sandflow", 1] / gss[r, "LAMMPS", 1]; r2[r] = gss[r, "sandflow", 2] / gss[r, "LAMMPS", 2]
+      ss[r] = gss[r, "sandflow", 2] / gss[r, "sandflow", 1]; sl[r] = gss[r, "LAMMPS", 2] / gss[r, "LAMMPS", 1]
+      if (rounds > 1)
+        printf "round %d: ratio_1=%.2f ratio_2=%.2f scaling_sandflow=%.2f scaling_lammps=%.2f\n", r, r1[r], r2[r], ss[r], sl[r]
+    }
+    printf "ratio_1=%.2f ratio_2=%.2f scaling_sandflow=%.2f scaling_lammps=%.2f\n",
+           median(r1, rounds), median(r2, rounds), median(ss, rounds), median(sl, rounds)
+  }'
 exit $status
