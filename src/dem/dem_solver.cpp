@@ -620,7 +620,8 @@ SweepData sweep_data(const DemParams& p, PairList& pairs, Grains& grains, std::v
   return static_cast<std::int64_t>(std::llround(energy * 1e15));
 }
 
-/// One thread's tallies: its copies of the sweep's reduction variables.
+/// One thread's tallies, added into the sweep's reductions at its end. (Values of the thread's
+/// own: references to the reduction variables were kept in memory across every pair's stores.)
 struct Tally {
   std::int64_t contacts = 0;
   std::int64_t wall_contacts = 0;
@@ -910,7 +911,7 @@ bool DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
     const SweepData data =
         sweep_data(params_, pairs_, grains, acc_f_, acc_q_, acc_t_, x_at_build_, allow2_, dt);
     const FixedPartners fixed{geometry, walls_, wall_params_, bounds_, boundary_, boundary_params_};
-    // made inside the parallel region, so that the kernels update this thread's reduction copies
+    // this thread's tallies, added into the reductions once its work is done
     Tally tally{.max_ov = max_ov};
 
     // 1. the threads' ranges (cut again after a rebuild), and the pairs that reach into a later
