@@ -106,6 +106,9 @@ for t in "${targets[@]}"; do
   case "$t" in
     scene | mesh) limits=(-timeout=300 -report_slow_units=300 -rss_limit_mb=4096) ;;
   esac
+  # what this run finds is what is newer than this mark (earlier runs' findings stay in the folder)
+  mark="$build/.fuzz_start_$t"
+  touch "$mark"
   set +e
   "$build/fuzz/fuzz_$t" "$corpus" "$seeds" -dict="$build/$t.dict" -max_total_time="$seconds" \
     "${limits[@]}" -print_final_stats=1 -artifact_prefix="$findings/" > "$log" 2>&1
@@ -114,13 +117,16 @@ for t in "${targets[@]}"; do
   # the scene and mesh targets' own files (libFuzzer ends a timed run without running atexit)
   rm -rf /dev/shm/sandflow_fuzz_* "${TMPDIR:-/tmp}"/sandflow_fuzz_*
   tried[$t]=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' | tail -1)
-  found=$(find "$findings" -type f | sort)
+  found=$(find "$findings" -type f -newer "$mark" | sort)
+  earlier=$(find "$findings" -type f ! -newer "$mark" | wc -l)
+  rm -f "$mark"
   if [ -n "$found" ] || [ "$rc" -ne 0 ]; then
     result[$t]="FOUND (exit $rc): ${found:-see $log}"
     status=1
   else
     result[$t]="nothing found"
   fi
+  [ "$earlier" -eq 0 ] || result[$t]+=" ($earlier file(s) of earlier runs still in $findings)"
   echo "    $t: ${tried[$t]:-?} inputs tried, ${result[$t]}"
 done
 
