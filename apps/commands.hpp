@@ -146,16 +146,19 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
 /// run.json, a checkpoint every o.checkpoint_every frames (default 30), the stop signals. With
 /// `resume` and a run.json in o.out, the run there goes on from its checkpoint (a finished one is
 /// read back from its last), provided it was started as `o` asks (InputError otherwise); without,
-/// o.out must be empty or new. `scene_text` is the scene file's text (nullptr: read o.scene);
-/// `resume_with` is the command the messages give to continue. Returns 0, or 128 + the signal
-/// when a stop signal interrupted it (its checkpoint written). `scene`: the scene it ran.
+/// o.out must be empty or new. `run_to_frame` > 0 runs it on to that frame, as `sandflow run
+/// --resume DIR --frames N` does (a new one is started to end there). `scene_text` is the scene
+/// file's text (nullptr: read o.scene); `resume_with` is the command the messages give to
+/// continue. Returns 0, or 128 + the signal when a stop signal interrupted it (its checkpoint
+/// written). `scene`: the scene it ran.
 int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
              const std::string& resume_with, const std::string& label, RunResult& res,
-             SceneConfig& scene);
+             SceneConfig& scene, int run_to_frame = 0);
 
 /// InputError when o.out holds a run (run.json) started otherwise than `o` with scene `text`
-/// would start it: run_part could not resume it as that run.
-void check_resumable(const RunOptions& o, const std::string& text);
+/// would start it, or, unless `run_on`, run on to another frame: run_part could not resume it as
+/// that run. Returns the frame it was run on to (0: none, or no run there).
+int check_resumable(const RunOptions& o, const std::string& text, bool run_on = false);
 
 /// The most seeds per mode a comparison runs.
 constexpr int kMaxSeeds = 100;
@@ -164,6 +167,7 @@ constexpr int kMaxSeeds = 100;
 struct CompareOptions {
   int seeds = 3;                 ///< runs per mode, seeds s0, s0 + 1, ... (s0: the scene's)
   bool equal_stiffness = false;  ///< and one plain-DEM run at the surface run's k_n and dt
+  int run_to_frame = 0;          ///< `compare --resume DIR --frames N`: every run on to N (0: not)
 };
 
 /// The runs of a scene in both modes and the figures compared (what compare.json holds).

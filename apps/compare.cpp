@@ -98,10 +98,9 @@ std::unique_ptr<FolderLock> prepare_compare_dir(const std::string& out, bool for
 
 /// The plan of a comparison, written when it starts so that --resume goes on with the same one.
 void write_plan(const std::string& out, const CompareOptions& co) {
-  write_file_atomic((fs::path(out) / kPlanFile).string(),
-                    nlohmann::json{{"seeds", co.seeds}, {"equal_stiffness", co.equal_stiffness}}
-                            .dump(2) +
-                        "\n");
+  nlohmann::json plan{{"seeds", co.seeds}, {"equal_stiffness", co.equal_stiffness}};
+  if (co.run_to_frame > 0) plan["run_to_frame"] = co.run_to_frame;
+  write_file_atomic((fs::path(out) / kPlanFile).string(), plan.dump(2) + "\n");
 }
 
 /// What `out` records of its plan; a comparison from before plans were kept ran one seed.
@@ -116,6 +115,7 @@ CompareOptions read_plan(const std::string& out) {
     const nlohmann::json j = nlohmann::json::parse(in);
     co.seeds = j.at("seeds").get<int>();
     co.equal_stiffness = j.at("equal_stiffness").get<bool>();
+    co.run_to_frame = j.value("run_to_frame", 0);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(fmt::format("{}: not a comparison plan sandflow can read: {}", path.string(),
                                  e.what()));
@@ -123,7 +123,19 @@ CompareOptions read_plan(const std::string& out) {
   if (co.seeds < 1 || co.seeds > kMaxSeeds)
     throw InputError(fmt::format("{}: seeds = {} is outside [1, {}]", path.string(), co.seeds,
                                  kMaxSeeds));
+  if (co.run_to_frame < 0)
+    throw InputError(
+        fmt::format("{}: run_to_frame = {} is negative", path.string(), co.run_to_frame));
   return co;
+}
+
+/// How many frames the run in `dir` has written (the rows of its stats.csv; 0 when there is none).
+int frames_written(const std::string& dir) {
+  std::ifstream in(fs::path(dir) / "stats.csv");
+  int rows = -1;  // (the header)
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty()) ++rows;
+  return std::max(rows, 0);
 }
 
 /// Mean RMS distance of the surfaces of each pair (a[i], b[j]) from `pairs`, on `grid`.
@@ -171,7 +183,8 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
       part.mode = mode;
       part.out = compare_run_dir(out, mode, k, seed);
       RunResult& res = part.mode == "surface" ? c.surface[k] : c.dem[k];
-      if (const int stopped = run_part(part, resume, &text, resume_with, tag, res, scene))
+      if (const int stopped =
+              run_part(part, resume, &text, resume_with, tag, res, scene, co.run_to_frame))
         return stopped;
       if (k == 0 && part.mode == "surface") surface_scene = scene;
     }
@@ -195,7 +208,7 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
     RunResult res;
     SceneConfig s;
     if (const int stopped = run_part(part, resume, &text, resume_with,
-                                     label + "equal stiffness: ", res, s))
+                                     label + "equal stiffness: ", res, s, co.run_to_frame))
       return stopped;
     c.dem_equal_stiffness = std::move(res);
   }
@@ -392,12 +405,12 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
   CompareOptions co = given;
   if (!o.resume.empty()) {
     // the options of the comparison are those its surface run and its plan recorded
-    if (!o.scene.empty() || o.grains > 0 || o.frames > 0 || !o.sets.empty() || !o.out.empty() ||
-        o.force || o.exports || !o.up_axis.empty())
+    if (!o.scene.empty() || o.grains > 0 || !o.sets.empty() || !o.out.empty() || o.force ||
+        o.exports || !o.up_axis.empty())
       throw InputError(
           "compare --resume DIR goes on with the comparison in DIR exactly as it was started: it "
-          "takes no scene, --grains, --frames, --set, --export, --up-axis, --out, --force, --seeds "
-          "or --equal-stiffness; only --threads");
+          "takes no scene, --grains, --set, --export, --up-axis, --out, --force, --seeds or "
+          "--equal-stiffness; only --threads, and --frames N to run all its runs on to frame N");
     out = o.resume;
     std::error_code ec;
     if (!fs::exists(fs::path(out) / "surface" / "run.json", ec))
@@ -411,6 +424,22 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
     r.mode.clear();
     if (o.threads > 0) r.threads = o.threads;
     r.checkpoint_every = -1;
+    if (o.frames > 0) {
+      // on, not back: checked before the plan records it, against the frames each run has
+      // written (at or after its checkpoint)
+      const std::int64_t seed0 = load_for_run(r).simulation.seed;
+      std::vector<std::string> dirs{compare_run_dir(out, kEqualStiffnessDir, 0, seed0)};
+      for (int k = 0; k < co.seeds; ++k)
+        for (const char* mode : {"surface", "dem"})
+          dirs.push_back(compare_run_dir(out, mode, static_cast<std::size_t>(k), seed0 + k));
+      for (const std::string& dir : dirs)
+        if (const int reached = frames_written(dir); o.frames < reached)
+          throw InputError(fmt::format(
+              "{}: --frames {} is before frame {}, which {} has reached: a comparison runs on to a "
+              "later frame, not back",
+              out, o.frames, reached, dir));
+      co.run_to_frame = o.frames;
+    }
     if (const int stopped = compare_scene(r, co, out, false, true, &text,
                                           compare_resume_command(out), "", c))
       return stopped;

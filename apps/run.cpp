@@ -620,25 +620,26 @@ Started start_new(const RunOptions& o, const std::string& text) {
 
 }  // namespace
 
-void check_resumable(const RunOptions& o, const std::string& text) {
+int check_resumable(const RunOptions& o, const std::string& text, bool run_on) {
   std::error_code ec;
-  if (!fs::exists(fs::path(o.out) / "run.json", ec)) return;
+  if (!fs::exists(fs::path(o.out) / "run.json", ec)) return 0;
   nlohmann::json record;
   std::string recorded_text;
   read_run_record(o.out, record, recorded_text);
   const nlohmann::json expected = run_record(o, text, 0);
   if (record["start"] != expected["start"] || record["frames"] != expected["frames"] ||
-      run_to_frame(record) > 0)
+      (!run_on && run_to_frame(record) > 0))
     throw InputError(fmt::format(
         "{}: holds a run started otherwise (its run.json records another scene text, --set, "
         "--grains, --frames, --export or --up-axis than now, or it was run on to another frame); "
         "it cannot be resumed as this one: pass --force to run it again",
         o.out));
+  return run_to_frame(record);
 }
 
 int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
              const std::string& resume_with, const std::string& label, RunResult& res,
-             SceneConfig& scene) {
+             SceneConfig& scene, int run_to) {
   const std::string text = scene_text ? *scene_text : read_scene_file(o.scene);
   std::error_code ec;
   Started run;
@@ -647,13 +648,20 @@ int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
     r.resume = o.out;
     r.threads = o.threads;
     r.checkpoint_every = o.checkpoint_every;
-    check_resumable(o, text);
+    // (run on only when it is set to end elsewhere: a finished run is then read back as it is)
+    if (run_to > 0 && check_resumable(o, text, true) != run_to) r.frames = run_to;
+    if (run_to == 0) check_resumable(o, text);
     run = start_resumed(r, true);
   } else {
     RunOptions n = o;
     n.force = true;  // the caller's folder, empty or left by a start that never got going
     if (n.checkpoint_every < 0) n.checkpoint_every = kDefaultCheckpointEvery;
     run = start_new(n, text);
+    if (run_to > 0) {  // as if started, then run on to run_to
+      run.record["run_to_frame"] = run_to;
+      write_file_atomic((fs::path(run.out) / "run.json").string(), run.record.dump(2) + "\n");
+      run.scene.output.frames = run_to;
+    }
   }
   const int status = run_resumable(run, res, resume_with, label);
   scene = run.scene;

@@ -140,7 +140,8 @@ int main(int argc, char** argv) {
   compare->get_option("scene")->required(false);  // (not with --resume)
   compare->add_option("--resume", co.resume,
                       "go on with the comparison in DIR, stopped or killed, from its runs' last "
-                      "checkpoints, exactly as it was started (no scene; --threads may change)");
+                      "checkpoints, exactly as it was started (no scene; --threads may change, "
+                      "and --frames N runs all its runs on to frame N)");
   CompareOptions cmp;
   compare
       ->add_option("--seeds", cmp.seeds,

@@ -214,9 +214,11 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
             std::string::npos)
       << log;
   EXPECT_FALSE(fs::exists(out / "compare.json"));
-  // options belong to the comparison as it was started
-  EXPECT_EQ(sandflow("compare --resume " + out.string() + " --frames 3", &log), 2);
+  // options belong to the comparison as it was started; --frames runs it on, never back
+  EXPECT_EQ(sandflow("compare --resume " + out.string() + " --grains 100", &log), 2);
   EXPECT_NE(log.find("takes no scene"), std::string::npos) << log;
+  EXPECT_EQ(sandflow("compare --resume " + out.string() + " --frames 3", &log), 2);
+  EXPECT_NE(log.find("--frames 3 is before frame 40"), std::string::npos) << log;
   EXPECT_EQ(sandflow("compare --resume " + (box.dir / "nothing").string(), &log), 2);
   EXPECT_NE(log.find("no comparison to resume here"), std::string::npos) << log;
 
@@ -248,6 +250,31 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   fs::remove(out / "compare.json");
   EXPECT_EQ(sandflow("compare --resume " + out.string(), &log), 2);
   EXPECT_NE(log.find("run on to another frame"), std::string::npos) << log;
+
+  // `--frames N` runs every run of the comparison on to frame N: those at 40 run on, the one
+  // already at N is read back, one that is missing starts anew to end at N
+  const int on = kFrames + 2;
+  fs::remove_all(out / "dem-equal-stiffness");
+  ASSERT_EQ(sandflow(fmt::format("compare --resume {} --frames {}", out.string(), on), &log), 0)
+      << log;
+  EXPECT_NE(log.find((out / "surface").string() + ": running on to frame 42"), std::string::npos)
+      << log;
+  EXPECT_EQ(log.find((out / "dem").string() + ": running on to frame"), std::string::npos) << log;
+  for (const char* run :
+       {"surface", "dem", "seed-2/surface", "seed-2/dem", "dem-equal-stiffness"}) {
+    EXPECT_EQ(lines(out / run / "stats.csv").size(), static_cast<std::size_t>(on) + 1) << run;
+    EXPECT_EQ(nlohmann::json::parse(read_text(out / run / "run.json"))["run_to_frame"], on) << run;
+  }
+  EXPECT_EQ(nlohmann::json::parse(read_text(out / "compare.json"))["frames"], on);
+  EXPECT_EQ(nlohmann::json::parse(read_text(out / "compare_plan.json"))["run_to_frame"], on);
+  // resumed again, the comparison reads its runs back as they are
+  fs::remove(out / "compare.json");
+  ASSERT_EQ(sandflow("compare --resume " + out.string(), &log), 0) << log;
+  EXPECT_EQ(log.find("running on to frame"), std::string::npos) << log;
+  EXPECT_TRUE(fs::exists(out / "compare.json"));
+  EXPECT_EQ(sandflow(fmt::format("compare --resume {} --frames {}", out.string(), kFrames), &log),
+            2);
+  EXPECT_NE(log.find("not back"), std::string::npos) << log;
 }
 
 // The exports go on where the checkpoint left them: a resumed run's ParaView series lists every
