@@ -649,8 +649,8 @@ int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
     r.threads = o.threads;
     r.checkpoint_every = o.checkpoint_every;
     // (run on only when it is set to end elsewhere: a finished run is then read back as it is)
-    if (run_to > 0 && check_resumable(o, text, true) != run_to) r.frames = run_to;
-    if (run_to == 0) check_resumable(o, text);
+    if (const int recorded = check_resumable(o, text, run_to > 0); run_to > 0 && recorded != run_to)
+      r.frames = run_to;
     run = start_resumed(r, true);
   } else {
     RunOptions n = o;
