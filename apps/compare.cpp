@@ -406,7 +406,7 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
   if (!o.resume.empty()) {
     // the options of the comparison are those its surface run and its plan recorded
     if (!o.scene.empty() || o.grains > 0 || !o.sets.empty() || !o.out.empty() || o.force ||
-        o.exports || !o.up_axis.empty())
+        o.exports || !o.up_axis.empty() || given.plan_given)
       throw InputError(
           "compare --resume DIR goes on with the comparison in DIR exactly as it was started: it "
           "takes no scene, --grains, --set, --export, --up-axis, --out, --force, --seeds or "

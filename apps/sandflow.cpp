@@ -281,7 +281,10 @@ int main(int argc, char** argv) {
   }
   try {
     if (*run) return run_command(ro);
-    if (*compare) return compare_command(co, cmp);
+    if (*compare) {
+      cmp.plan_given = compare->count("--seeds") > 0 || compare->count("--equal-stiffness") > 0;
+      return compare_command(co, cmp);
+    }
     if (*table1) return table1_command(to, command_line(argc, argv));
     if (*measure) return measure_command(dir);
     if (*calibrate) return calibrate_command(cao, calibration_trials, calibrate_again, rig);

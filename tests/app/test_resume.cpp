@@ -215,8 +215,10 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
       << log;
   EXPECT_FALSE(fs::exists(out / "compare.json"));
   // options belong to the comparison as it was started; --frames runs it on, never back
-  EXPECT_EQ(sandflow("compare --resume " + out.string() + " --grains 100", &log), 2);
-  EXPECT_NE(log.find("takes no scene"), std::string::npos) << log;
+  for (const char* option : {" --grains 100", " --seeds 2", " --seeds 3", " --equal-stiffness"}) {
+    EXPECT_EQ(sandflow("compare --resume " + out.string() + option, &log), 2) << option;
+    EXPECT_NE(log.find("takes no scene"), std::string::npos) << option << log;
+  }
   EXPECT_EQ(sandflow("compare --resume " + out.string() + " --frames 3", &log), 2);
   EXPECT_NE(log.find("--frames 3 is before frame 40"), std::string::npos) << log;
   EXPECT_EQ(sandflow("compare --resume " + (box.dir / "nothing").string(), &log), 2);
