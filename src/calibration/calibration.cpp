@@ -91,6 +91,11 @@ std::string calibration_key(const SceneConfig& scene, const RigSettings& rig) {
                  m.rolling_stiffness_ratio, m.rolling_damping_ratio, m.wall_friction,
                  m.wall_rolling_friction, norm(scene.simulation.gravity)})
     h.add(v);
+  // (added only when set, so that the materials cached before twisting existed keep their keys)
+  if (m.twisting_friction > 0 || m.wall_twisting_friction > 0) {
+    h.add(m.twisting_friction);
+    h.add(m.wall_twisting_friction);
+  }
   const StiffnessConfig& s = scene.stiffness;
   h.add(s.from_load);
   if (s.from_load) {

@@ -683,7 +683,7 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   };
   const std::size_t slots = d.pairs.j.size();
   check_rows(d.pairs.start, slots, "the pair list");
-  const bool rolling = world.dem().params().contact.mu_r > 0;
+  const bool rolling = world.dem().resists_turning();
   if (d.pairs.touch.size() != slots || d.pairs.delta0.size() != slots ||
       d.pairs.c_n.size() != slots || d.pairs.xi.size() != slots ||
       d.pairs.psi.size() != (rolling ? slots : 0))

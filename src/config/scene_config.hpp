@@ -28,8 +28,10 @@ struct MaterialConfig {
   Real rolling_friction = 0.1;      ///< rolling resistance mu_r (torque cap mu_r R_eff |F_n|) [-]
   Real rolling_stiffness_ratio = 1.0;  ///< k_r / k_t: stiffness of the rolling spring [-]
   Real rolling_damping_ratio = 1.0;    ///< c_r / c_t [-]
+  Real twisting_friction = 0;  ///< twisting resistance mu_tw (torque cap mu_tw R_eff |F_n|) [-]
   Real wall_friction = 0.6;         ///< Coulomb friction between grains and geometry [-]
   Real wall_rolling_friction = 0.1; ///< rolling resistance between grains and geometry [-]
+  Real wall_twisting_friction = 0;  ///< twisting resistance between grains and geometry [-]
 };
 
 /// Deriving k_n from the load a contact carries (docs/design.md §3), separately for each mode. Used

@@ -7,11 +7,18 @@
 //                plane each step), F_t = -k_t xi - c_t v_t, capped at mu F_n (xi rescaled on slip)
 //   rolling:     spring-dashpot on the accumulated rolling displacement psi ("EPSD" kind),
 //                F_r = -k_r psi - c_r v_r capped at mu_r F_n; torque R_eff n x F_r
+//   twisting:    a dashpot on the relative spin about n, T = -c_t R_eff^2 (w_i - w_j).n n,
+//                capped at mu_tw R_eff F_n. No spring: a heap holds no static twist worth the
+//                history it would cost each listed pair; the dashpot alone stops a grain spinning
+//                about its contact's normal, which without it spins for ever (a lone grain on a
+//                floor). Its stability: c_t R_eff^2 dt / I <= c_t dt / (0.4 m), as the tangential
+//                dashpot's.
 //
 // Conventions: n points from body j to body i; the results are the force and torques on i, and
 // the torque on j (the force on j is the opposite of the force on i).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/vec3.hpp"
@@ -27,6 +34,7 @@ struct ContactParams {
   Real k_r = 0;     ///< rolling stiffness [N/m]
   Real c_r_ratio = 1.0;  ///< c_r / c_t [-]
   Real mu_r = 0;    ///< rolling friction [-]
+  Real mu_tw = 0;   ///< twisting friction [-] (0: none)
 };
 
 /// beta of c_n = 2 sqrt(m_eff k_n) beta for restitution e of the *unclamped* linear dashpot,
@@ -117,9 +125,10 @@ inline Vec3 capped_spring(Vec3& s, const Vec3& rate, Real k, Real c, Real cap, R
 }
 
 /// The full law. v_rel = v_i - v_j (centres); w_i, w_j angular velocities. With kRolling = false
-/// the rolling part is skipped (a compile-time switch: without rolling resistance it costs
-/// nothing). Inlined by force: GCC 12 keeps the rolling variant out of line in the sweep, a call
-/// per contact that cost 6-12 % of a surface run of the floor (docs/performance.md).
+/// the rolling and twisting parts are skipped (a compile-time switch: without rolling or twisting
+/// resistance they cost nothing; the twisting torque rides on the rolling one, t_roll). Inlined by
+/// force: GCC 12 keeps the rolling variant out of line in the sweep, a call per contact that cost
+/// 6-12 % of a surface run of the floor (docs/performance.md).
 template <bool kRolling>
 [[gnu::always_inline]] inline ContactForce contact_force(const ContactParams& p, const ContactGeometry& g,
                                   const Vec3& v_rel, const Vec3& w_i, const Vec3& w_j,
@@ -150,6 +159,11 @@ template <bool kRolling>
     bool rolls;  // (a rolling contact at its cap rolls; it does not slip)
     const Vec3 f_r = capped_spring(h.psi, v_r, p.k_r, c_r, p.mu_r * f_n, dt, rolls);
     out.t_roll = cross(n, f_r) * g.r_eff;
+    if (p.mu_tw > 0) {
+      const Real cap = p.mu_tw * g.r_eff * f_n;
+      const Real t = c_t * g.r_eff * g.r_eff * dot(w_i - w_j, n);
+      out.t_roll -= n * std::clamp(t, -cap, cap);
+    }
   }
   return out;
 }

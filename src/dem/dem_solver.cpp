@@ -73,7 +73,7 @@ template <class Pairs>
 }  // namespace
 
 DemSolver::DemSolver(const DemParams& params)
-    : params_(params), rolling_(params.contact.mu_r > 0) {}
+    : params_(params), rolling_(params.contact.mu_r > 0 || params.contact.mu_tw > 0) {}
 
 void DemSolver::step(Grains& grains, const Geometry& geometry, Real dt, Profile& profile) {
   timed(profile, Stage::Neighbours, [&] { update_lists(grains, geometry, dt); });
@@ -110,6 +110,7 @@ void DemSolver::set_boundary(BoundaryParticles boundary) {
     ContactParams p = params_.contact;
     p.mu = boundary_.friction[k];
     p.mu_r = boundary_.rolling_friction[k];
+    p.mu_tw = boundary_.twisting_friction[k];
     boundary_params_.push_back(p);
   }
   boundary_grid_.build(boundary_.x, 2 * boundary_.radius);
@@ -213,6 +214,7 @@ void DemSolver::set_wall_params(const Geometry& geometry) {
     ContactParams w = params_.contact;
     w.mu = o.friction;
     w.mu_r = o.rolling_friction;
+    w.mu_tw = o.twisting_friction;
     wall_params_.push_back(w);
   }
 }

@@ -35,7 +35,7 @@ struct BoundaryParticles {
   std::vector<Vec3> x;                 ///< centres [m]
   std::vector<std::uint32_t> group;    ///< the mesh each belongs to
   Real radius = 0;                     ///< [m]
-  std::vector<Real> friction, rolling_friction;  ///< per group [-]
+  std::vector<Real> friction, rolling_friction, twisting_friction;  ///< per group [-]
   std::size_t size() const { return x.size(); }
 };
 
@@ -151,6 +151,9 @@ class DemSolver {
   void restore_state(DemState s, const Geometry& geometry);
 
   const DemParams& params() const { return params_; }
+  /// The grains resist rolling or twisting between themselves: the law's rolling part runs (with
+  /// the rolling history, psi), for walls too. Walls' rolling or twisting friction acts only then.
+  bool resists_turning() const { return rolling_; }
   void set_gravity(const Vec3& g) { params_.gravity = g; }
   const PairList& pairs() const { return pairs_; }
   DemCounters& counters() { return counters_; }
@@ -176,7 +179,7 @@ class DemSolver {
   void balance_ranges(const Grains& grains, std::size_t threads);
 
   DemParams params_;
-  bool rolling_;
+  bool rolling_;  ///< resists_turning()
   std::vector<ContactParams> wall_params_;
   CellGrid grid_;
   PairList pairs_, old_pairs_;

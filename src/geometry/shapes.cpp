@@ -179,8 +179,8 @@ void SolidBowl::bounds(Vec3& lo, Vec3& hi) const {
 }
 
 void Geometry::add(std::unique_ptr<Solid> solid, Real friction, Real rolling_friction,
-                   int source) {
-  obstacles_.push_back({std::move(solid), friction, rolling_friction, source});
+                   Real twisting_friction, int source) {
+  obstacles_.push_back({std::move(solid), friction, rolling_friction, twisting_friction, source});
 }
 
 void RemovedSolid::bounds(Vec3& lo, Vec3& hi) const {
@@ -208,8 +208,8 @@ Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
   for (int k = 0; k < static_cast<int>(configs.size()); ++k) {
     const GeometryConfig& c = configs[k];
     const Real mu = c.friction.value_or(material.wall_friction);
-    const Real mu_r = material.wall_rolling_friction;
-    auto add = [&](std::unique_ptr<Solid> s) { g.add(std::move(s), mu, mu_r, k); };
+    const Real mu_r = material.wall_rolling_friction, mu_tw = material.wall_twisting_friction;
+    auto add = [&](std::unique_ptr<Solid> s) { g.add(std::move(s), mu, mu_r, mu_tw, k); };
     const Mat3 rot = rotation_xyz_deg(c.rotation_deg);
     switch (c.type) {
       case GeometryType::Plane:

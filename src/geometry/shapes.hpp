@@ -112,6 +112,7 @@ struct Obstacle {
   std::unique_ptr<Solid> solid;
   Real friction = 0.6;          ///< Coulomb friction with grains [-]
   Real rolling_friction = 0.1;  ///< [-]
+  Real twisting_friction = 0;   ///< [-]
   int source = 0;               ///< index of the [[geometry]] entry it came from
 };
 
@@ -122,7 +123,7 @@ struct MeshObstacle {
   TriangleMesh mesh;
   std::unique_ptr<WindingNumber> winding;
   Real particle_radius = 0;  ///< [m]
-  Real friction = 0.6, rolling_friction = 0.1;
+  Real friction = 0.6, rolling_friction = 0.1, twisting_friction = 0;
   int source = 0;
   Real sample_count = 0;  ///< samples its sampling makes before merging
 
@@ -150,7 +151,8 @@ class Geometry {
   static Geometry from_config(const std::vector<GeometryConfig>& configs,
                               const MaterialConfig& material, const std::string& scene_path = "");
 
-  void add(std::unique_ptr<Solid> solid, Real friction, Real rolling_friction, int source);
+  void add(std::unique_ptr<Solid> solid, Real friction, Real rolling_friction,
+           Real twisting_friction, int source);
   /// Removes the solids of the [[geometry]] entry `source` (its remove_at has come): they stay in
   /// the list, so obstacle indices keep their meaning, but reach nothing from then on. Returns
   /// how many there were.

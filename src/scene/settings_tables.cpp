@@ -32,8 +32,10 @@ void read_material(TableReader r, MaterialConfig& m) {
   r.read("rolling_friction", m.rolling_friction, kNonNegative);
   r.read("rolling_stiffness_ratio", m.rolling_stiffness_ratio, kNonNegative);
   r.read("rolling_damping_ratio", m.rolling_damping_ratio, kNonNegative);
+  r.read("twisting_friction", m.twisting_friction, kNonNegative);
   r.read("wall_friction", m.wall_friction, kNonNegative);
   r.read("wall_rolling_friction", m.wall_rolling_friction, kNonNegative);
+  r.read("wall_twisting_friction", m.wall_twisting_friction, kNonNegative);
   r.finish("[material]");
 }
 

@@ -72,6 +72,7 @@ ContactParams contact_params(const MaterialConfig& m) {
   p.k_r = m.rolling_stiffness_ratio * p.k_t;
   p.c_r_ratio = m.rolling_damping_ratio;
   p.mu_r = m.rolling_friction;
+  p.mu_tw = m.twisting_friction;
   return p;
 }
 
@@ -172,6 +173,7 @@ BoundaryParticles boundary_particles(const Geometry& geometry, const std::string
     }
     b.friction.push_back(m.friction);
     b.rolling_friction.push_back(m.rolling_friction);
+    b.twisting_friction.push_back(m.twisting_friction);
   }
   return b;
 }

@@ -148,6 +148,22 @@ TEST(Restart, DemModeContinuesBitForBit) {
   EXPECT_GT(left, 0);
 }
 
+// Twisting friction without rolling friction: the law's rolling part still runs (the twisting
+// torque rides on it), with its history saved and checked on restore in both modes.
+TEST(Restart, ARunWithTwistingButNoRollingFrictionContinuesBitForBit) {
+  for (Mode mode : {Mode::Surface, Mode::Dem}) {
+    SceneConfig scene = restart_scene(mode);
+    scene.material.rolling_friction = 0;
+    scene.material.twisting_friction = 0.1;
+    scene.material.wall_twisting_friction = 0.1;
+    check_restart(scene, 10, 5, 1, 1);
+    World w(scene);
+    for (int f = 0; f < 3; ++f) w.advance_frame();
+    EXPECT_TRUE(w.dem().resists_turning());
+    EXPECT_EQ(w.dem().pairs().psi.size(), w.dem().pairs().j.size());
+  }
+}
+
 TEST(Restart, EveryFrameBoundaryOfASurfaceRunIsARestartPoint) {
   // checkpoints at successive frames each continue exactly (a state missed at one boundary, such
   // as a timer due at the next step, shows up at some k)

@@ -1,12 +1,14 @@
 // The contact law against closed forms (docs/design.md §3).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.hpp"
 #include "dem/contact.hpp"
 #include "dem/dem_solver.hpp"
 #include "sim/world.hpp"
+#include "support/test_scenes.hpp"
 
 namespace sandflow {
 namespace {
@@ -165,6 +167,65 @@ TEST(ContactLaw, RollingTorqueCapHolds) {
   EXPECT_NEAR(norm(f.torque_i(g)), cap, 1e-12 * cap);
   EXPECT_LT(f.torque_i(g).x, 0);  // opposes the spin
   EXPECT_NEAR(f.torque_j(g).x, -f.torque_i(g).x, 1e-15);
+}
+
+// Twisting: a dashpot on the relative spin about the normal, c_t R_eff^2, capped at
+// mu_tw R_eff F_n; equal and opposite on the two grains. Without twisting friction the law has no
+// torque about the normal at all (the rolling torque n x F_r lies across it).
+TEST(ContactLaw, TwistingTorqueIsADashpotOnTheSpinAboutTheNormalCappedByFriction) {
+  ContactParams p = params(0.5, 0.5, 0.2);
+  p.mu_tw = 0.1;
+  const ContactGeometry g = pair_geometry(1e-4);
+  const Real c_t = p.c_t_ratio * g.c_n;
+  for (const Real spin : {1e-3, -2e-3, 40.0, -40.0}) {
+    ContactHistory h;
+    const auto f = contact_force<true>(p, g, {}, {0, 0, spin}, {0, 0, -spin}, h, 1e-5);
+    const Real cap = 0.1 * g.r_eff * f.f_n;
+    const Real dashpot = c_t * g.r_eff * g.r_eff * 2 * spin;
+    ASSERT_TRUE(std::abs(dashpot) < cap || std::abs(spin) > 1) << "a slow spin stays below the cap";
+    EXPECT_NEAR(f.torque_i(g).z, -std::clamp(dashpot, -cap, cap), 1e-12 * cap) << spin;
+    EXPECT_NEAR(f.torque_j(g).z, -f.torque_i(g).z, 1e-15) << spin;
+    EXPECT_EQ(f.torque_i(g).x, 0.0);
+    EXPECT_EQ(f.torque_i(g).y, 0.0);
+  }
+  p.mu_tw = 0;
+  ContactHistory h;
+  const auto f = contact_force<true>(p, g, {}, {0, 0, 40}, {0, 0, -40}, h, 1e-5);
+  EXPECT_EQ(f.torque_i(g).z, 0.0);
+}
+
+// A grain resting on the floor and spinning about the vertical: rolling resistance does not
+// touch that spin, so without twisting friction it spins for ever. With it, the capped torque
+// mu_tw r m g slows it at 2.5 mu_tw g / r (I = 0.4 m r^2) until the dashpot takes over near 0.
+TEST(ContactLaw, AGrainSpinningOnTheFloorStopsAsTwistingFrictionSays) {
+  auto spin_after = [](Real mu_tw, Real t) {
+    MaterialConfig mat;
+    mat.k_n = 1e4;
+    mat.restitution = 0.3;
+    mat.rolling_friction = 0.3;
+    mat.wall_rolling_friction = 0.3;
+    mat.twisting_friction = mu_tw;
+    mat.wall_twisting_friction = mu_tw;
+    DemParams p;
+    p.contact = contact_params(mat);
+    p.gravity = {0, 0, -9.81};
+    const Real r = 0.005, m = mat.density * 4.0 / 3.0 * kPi * r * r * r;
+    const Real dt = 0.02 * contact_time(m, mat.k_n);
+    Grains g;
+    g.add(0, {0, 0, r - m * 9.81 / mat.k_n}, {}, r, mat.density);  // at rest on its overlap
+    g.w[0] = {0, 0, 50};
+    const Geometry floor = Geometry::from_config({test::floor_plane()}, mat);
+    DemSolver dem(p);
+    Profile prof;
+    for (int s = 0; s < static_cast<int>(std::lround(t / dt)); ++s) dem.step(g, floor, dt, prof);
+    EXPECT_LT(std::abs(g.v[0].z), 1e-3);  // it stayed at rest on the floor
+    return g.w[0].z;
+  };
+  EXPECT_NEAR(spin_after(0.0, 0.2), 50.0, 1e-9);
+  const Real mu_tw = 0.1, slowing = 2.5 * mu_tw * 9.81 / 0.005;  // 490.5 rad/s^2
+  // (within the 3.6e-3 rad/s one step of 7.3 us makes: t is rounded to whole steps)
+  EXPECT_NEAR(spin_after(mu_tw, 0.05), 50 - slowing * 0.05, 0.01);
+  EXPECT_LT(std::abs(spin_after(mu_tw, 0.15)), 1e-3);  // stopped after 50 / 490.5 = 0.102 s
 }
 
 TEST(ContactLaw, HistoryRotatesIntoTheTangentPlaneKeepingItsLength) {

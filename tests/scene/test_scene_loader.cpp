@@ -62,6 +62,8 @@ TEST(SceneLoader, FullSceneReadsEveryTable) {
       "diameter = 0.004\n"
       "restitution = 0.5\n"
       "friction = 0.7\n"
+      "twisting_friction = 0.05\n"
+      "wall_twisting_friction = 0.08\n"
       "[simulation]\n"
       "mode = \"dem\"\n"
       "gravity = [0, 0, -10]\n"
@@ -98,6 +100,9 @@ TEST(SceneLoader, FullSceneReadsEveryTable) {
   EXPECT_EQ(c.material.diameter, 0.004);
   EXPECT_EQ(c.material.friction, 0.7);
   EXPECT_EQ(c.material.k_n, MaterialConfig{}.k_n);
+  EXPECT_EQ(c.material.twisting_friction, 0.05);
+  EXPECT_EQ(c.material.wall_twisting_friction, 0.08);
+  EXPECT_EQ(MaterialConfig{}.twisting_friction, 0.0);  // none unless asked for
   EXPECT_EQ(c.simulation.mode, Mode::Dem);
   EXPECT_EQ(c.simulation.gravity, Vec3(0, 0, -10));
   ASSERT_TRUE(c.simulation.dt.has_value());
@@ -140,6 +145,8 @@ TEST(SceneLoader, OutOfRangeValueGivesTheDocumentedMessage) {
 TEST(SceneLoader, OneSidedRangesSayWhatIsExpected) {
   expect_error("[material]\ndensity = -1\n" + std::string(kMinimal),
                {"t.toml:2:1: material.density = -1 is not > 0"});
+  expect_error("[material]\ntwisting_friction = -0.1\n" + std::string(kMinimal),
+               {"t.toml:2:1: material.twisting_friction = -0.1 is not >= 0"});
   expect_error("[simulation]\ndt_fraction = 0.5\n" + std::string(kMinimal),
                {"t.toml:2:1: simulation.dt_fraction = 0.5 is outside (0, 0.2]"});
   expect_error("[[emitter]]\ncount = 100\njitter = 1.5\n",
