@@ -73,7 +73,9 @@ template <class Pairs>
 }  // namespace
 
 DemSolver::DemSolver(const DemParams& params)
-    : params_(params), rolling_(params.contact.mu_r > 0 || params.contact.mu_tw > 0) {}
+    : params_(params),
+      rolling_(params.contact.mu_r > 0 || params.contact.mu_tw > 0 || params.walls_resist_turning) {
+}
 
 void DemSolver::step(Grains& grains, const Geometry& geometry, Real dt, Profile& profile) {
   timed(profile, Stage::Neighbours, [&] { update_lists(grains, geometry, dt); });

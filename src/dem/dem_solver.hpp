@@ -16,6 +16,8 @@ namespace sandflow {
 
 struct DemParams {
   ContactParams contact;  ///< grain-grain law (walls use it with their own friction)
+  /// Some wall or mesh resists rolling or twisting (its own mu_r or mu_tw), whatever the grains do.
+  bool walls_resist_turning = false;
   Real skin = 0.002;      ///< Verlet skin [m]: each grain may move skin / 2 between rebuilds
   /// A grain faster than skin / (2 dt skin_steps) may move |v| dt skin_steps, up to skin_max, so
   /// that a few fast grains do not force a rebuild every few steps (0: skin / 2 for all).
@@ -151,8 +153,8 @@ class DemSolver {
   void restore_state(DemState s, const Geometry& geometry);
 
   const DemParams& params() const { return params_; }
-  /// The grains resist rolling or twisting between themselves: the law's rolling part runs (with
-  /// the rolling history, psi), for walls too. Walls' rolling or twisting friction acts only then.
+  /// The grains or the walls resist rolling or twisting: the law's rolling part runs, with the
+  /// rolling history (psi), for every contact.
   bool resists_turning() const { return rolling_; }
   void set_gravity(const Vec3& g) { params_.gravity = g; }
   const PairList& pairs() const { return pairs_; }

@@ -148,6 +148,8 @@ DemParams dem_params(const SceneConfig& scene, const TimeStep& ts) {
   // five contact times: slow against the dashpot, which damps a contact within about one
   p.preload_relax_time = 5 * ts.t_c;
   p.contact = contact_params(scene.material);
+  p.walls_resist_turning =
+      scene.material.wall_rolling_friction > 0 || scene.material.wall_twisting_friction > 0;
   p.skin = scene.simulation.skin * scene.material.diameter;
   p.skin_steps = scene.simulation.skin_steps;
   p.skin_max = scene.simulation.skin_max * scene.material.diameter;

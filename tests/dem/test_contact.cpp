@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "core/error.hpp"
 #include "dem/contact.hpp"
@@ -198,16 +199,18 @@ TEST(ContactLaw, TwistingTorqueIsADashpotOnTheSpinAboutTheNormalCappedByFriction
 // touch that spin, so without twisting friction it spins for ever. With it, the capped torque
 // mu_tw r m g slows it at 2.5 mu_tw g / r (I = 0.4 m r^2) until the dashpot takes over near 0.
 TEST(ContactLaw, AGrainSpinningOnTheFloorStopsAsTwistingFrictionSays) {
-  auto spin_after = [](Real mu_tw, Real t) {
+  // (walls_only: the grains resist neither rolling nor twisting between themselves)
+  auto spin_after = [](Real mu_tw, Real t, bool walls_only = false) {
     MaterialConfig mat;
     mat.k_n = 1e4;
     mat.restitution = 0.3;
-    mat.rolling_friction = 0.3;
+    mat.rolling_friction = walls_only ? 0 : 0.3;
     mat.wall_rolling_friction = 0.3;
-    mat.twisting_friction = mu_tw;
+    mat.twisting_friction = walls_only ? 0 : mu_tw;
     mat.wall_twisting_friction = mu_tw;
     DemParams p;
     p.contact = contact_params(mat);
+    p.walls_resist_turning = true;
     p.gravity = {0, 0, -9.81};
     const Real r = 0.005, m = mat.density * 4.0 / 3.0 * kPi * r * r * r;
     const Real dt = 0.02 * contact_time(m, mat.k_n);
@@ -226,6 +229,22 @@ TEST(ContactLaw, AGrainSpinningOnTheFloorStopsAsTwistingFrictionSays) {
   // (within the 3.6e-3 rad/s one step of 7.3 us makes: t is rounded to whole steps)
   EXPECT_NEAR(spin_after(mu_tw, 0.05), 50 - slowing * 0.05, 0.01);
   EXPECT_LT(std::abs(spin_after(mu_tw, 0.15)), 1e-3);  // stopped after 50 / 490.5 = 0.102 s
+  EXPECT_NEAR(spin_after(mu_tw, 0.05, true), 50 - slowing * 0.05, 0.01);
+}
+
+// The walls' rolling and twisting resistance act whatever the grains' own: the scene's walls
+// make the sweep run the law's rolling part (it ran only for the grains' before).
+TEST(ContactLaw, WallsResistTurningWhenOnlyTheyHaveRollingOrTwistingFriction) {
+  for (const auto& [wall_mu_r, wall_mu_tw, resists] :
+       {std::tuple{0.3, 0.0, true}, std::tuple{0.0, 0.1, true}, std::tuple{0.0, 0.0, false}}) {
+    SceneConfig s = test::grains_on_floor("walls", Mode::Dem, 0.01);
+    s.material.rolling_friction = 0;
+    s.material.wall_rolling_friction = wall_mu_r;
+    s.material.wall_twisting_friction = wall_mu_tw;
+    s.emitters = {test::disk_pour({0, 0, 0.05}, 0.02, 50, 1, {0, 0, -1})};
+    const World w(s);
+    EXPECT_EQ(w.dem().resists_turning(), resists) << wall_mu_r << " " << wall_mu_tw;
+  }
 }
 
 TEST(ContactLaw, HistoryRotatesIntoTheTangentPlaneKeepingItsLength) {
