@@ -152,13 +152,15 @@ template <bool kRolling>
   out.force_i = n * f_n + f_t;
   out.q = cross(n, f_t);
   if constexpr (kRolling) {
-    // rolling: relative rolling velocity of the surfaces, spring-dashpot capped at mu_r R F_n
-    const Vec3 v_r = cross(w_i - w_j, n) * g.r_eff;
-    h.psi = rotate_into_plane(h.psi, n);
-    const Real c_r = p.c_r_ratio * c_t;
-    bool rolls;  // (a rolling contact at its cap rolls; it does not slip)
-    const Vec3 f_r = capped_spring(h.psi, v_r, p.k_r, c_r, p.mu_r * f_n, dt, rolls);
-    out.t_roll = cross(n, f_r) * g.r_eff;
+    if (p.mu_r > 0) {  // (a contact without it, beside others with it, keeps psi at 0)
+      // rolling: relative rolling velocity of the surfaces, spring-dashpot capped at mu_r R F_n
+      const Vec3 v_r = cross(w_i - w_j, n) * g.r_eff;
+      h.psi = rotate_into_plane(h.psi, n);
+      const Real c_r = p.c_r_ratio * c_t;
+      bool rolls;  // (a rolling contact at its cap rolls; it does not slip)
+      const Vec3 f_r = capped_spring(h.psi, v_r, p.k_r, c_r, p.mu_r * f_n, dt, rolls);
+      out.t_roll = cross(n, f_r) * g.r_eff;
+    }
     if (p.mu_tw > 0) {
       const Real cap = p.mu_tw * g.r_eff * f_n;
       const Real t = c_t * g.r_eff * g.r_eff * dot(w_i - w_j, n);

@@ -193,6 +193,14 @@ TEST(ContactLaw, TwistingTorqueIsADashpotOnTheSpinAboutTheNormalCappedByFriction
   ContactHistory h;
   const auto f = contact_force<true>(p, g, {}, {0, 0, 40}, {0, 0, -40}, h, 1e-5);
   EXPECT_EQ(f.torque_i(g).z, 0.0);
+  // twisting without rolling friction: rolling across the normal gives no torque and no history
+  p.mu_r = 0;
+  p.mu_tw = 0.1;
+  const auto t = contact_force<true>(p, g, {}, {25, 0, 3}, {-25, 0, 0}, h, 1e-5);
+  EXPECT_EQ(h.psi, Vec3{});
+  EXPECT_EQ(t.t_roll.x, 0.0);
+  EXPECT_EQ(t.t_roll.y, 0.0);
+  EXPECT_LT(t.t_roll.z, 0.0);
 }
 
 // A grain resting on the floor and spinning about the vertical: rolling resistance does not
