@@ -75,9 +75,22 @@ struct Calibration {
   RigSettings rig;  ///< the rig it was measured with
 };
 
+/// Frames (at the rig's 30 fps) the fingerprint's probe runs.
+constexpr int kFingerprintFrames = 6;
+
+/// The state hash of a small DEM probe of the scene's material (a block of 40 grains thrown onto
+/// a small base, kFingerprintFrames frames, a few milliseconds): any change of the code that
+/// changes the DEM's results changes it, so a cached calibration never outlives the code that
+/// measured it (and no one has to remember to bump a version).
+std::uint64_t dem_fingerprint(const SceneConfig& scene);
+
 /// The hex hash of what the angles depend on: the material (sizes, density, contact law,
-/// friction with the walls), gravity's magnitude, the stiffness rule, the rig and its version.
+/// friction with the walls), gravity's magnitude, the stiffness rule, the rig and its version,
+/// and the DEM's fingerprint (the code that measures them).
 std::string calibration_key(const SceneConfig& scene, const RigSettings& rig = {});
+/// The same with the fingerprint given.
+std::string calibration_key(const SceneConfig& scene, const RigSettings& rig,
+                            std::uint64_t fingerprint);
 
 /// The rig of one trial for `scene`'s material, with seed `seed`, in plain DEM.
 SceneConfig calibration_rig(const SceneConfig& scene, std::uint64_t seed,

@@ -76,6 +76,36 @@ TEST(Calibration, TheKeyFollowsTheMaterialNotTheScene) {
   EXPECT_NE(calibration_key(a), calibration_key(e));
 }
 
+TEST(Calibration, TheKeyHoldsTheDemFingerprintSoNoCacheOutlivesTheCode) {
+  const SceneConfig a = sand();
+  const std::uint64_t f = dem_fingerprint(a);
+  EXPECT_EQ(dem_fingerprint(a), f);  // deterministic
+  EXPECT_EQ(calibration_key(a), calibration_key(a, {}, f));
+  // code that computes other results measures other angles: another key
+  EXPECT_NE(calibration_key(a, {}, f), calibration_key(a, {}, f + 1));
+}
+
+TEST(Calibration, TheFingerprintsProbeExercisesEveryPartOfTheLaw) {
+  // each part of the contact law that the calibration's heap depends on acts in the probe, so a
+  // change of the code in any of them changes the fingerprint
+  const std::uint64_t f = dem_fingerprint(sand());
+  const auto changed = [&](auto set) {
+    SceneConfig s = sand();
+    set(s.material);
+    return dem_fingerprint(s) != f;
+  };
+  EXPECT_TRUE(changed([](MaterialConfig& m) { m.friction = 0.59; }));
+  EXPECT_TRUE(changed([](MaterialConfig& m) { m.rolling_friction = 0.29; }));
+  EXPECT_TRUE(changed([](MaterialConfig& m) { m.wall_friction = 0.59; }));
+  EXPECT_TRUE(changed([](MaterialConfig& m) { m.wall_rolling_friction = 0.29; }));
+  EXPECT_TRUE(changed([](MaterialConfig& m) { m.restitution *= 0.99; }));
+  EXPECT_TRUE(changed([](MaterialConfig& m) { m.tangential_damping_ratio *= 0.99; }));
+  EXPECT_TRUE(changed([](MaterialConfig& m) { m.rolling_stiffness_ratio *= 0.99; }));
+  EXPECT_TRUE(changed([](MaterialConfig& m) { m.twisting_friction = 0.05; }));
+  EXPECT_TRUE(changed([](MaterialConfig& m) { m.wall_twisting_friction = 0.05; }));
+  EXPECT_TRUE(changed([](MaterialConfig& m) { m.diameter_spread = 0.12; }));
+}
+
 TEST(Calibration, NoGravityIsRefused) {
   SceneConfig s = sand();
   s.simulation.gravity = {0, 0, 0};
