@@ -133,20 +133,24 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   // centre the whole columns on the extent
   hf.x0 = 0.5 * (x0 + x1) - 0.5 * hf.nx * hf.cell;
   hf.y0 = 0.5 * (y0 + y1) - 0.5 * hf.ny * hf.cell;
-  // ... or put a column edge on a bed's low edges, so that a container's walls there (and at
-  // the high edges, for a footprint a whole number of cells wide) run between columns: a column
-  // whose centre lay on a wall would have the wall's top as its level and leave the bed's grains
-  // beside the wall simulated (docs/known-issues.md)
+  // ... or centre a bed's footprint on whole columns, so that every column holding its grains
+  // has its centre inside the footprint, and a container's walls there run between columns (a
+  // footprint a whole number of cells wide) or through the outermost columns, their centres
+  // inside: a column whose centre lay on a wall would have the wall's top as its level and leave
+  // the bed's grains beside the wall simulated
   for (const EmitterConfig& e : scene.emitters) {
     if (e.type != EmitterType::Bed || sc.extent) continue;
-    auto align = [&](Real& origin, int& n, Real edge) {
+    auto align = [&](Real& origin, int& n, Real low_side, Real width) {
+      // the columns' edge below the footprint: half of what a whole number of columns has over
+      const Real cols = width / hf.cell, whole = std::ceil(cols - 1e-6);
+      const Real edge = low_side - (whole > cols ? 0.5 * (whole - cols) * hf.cell : 0.0);
       const Real shift = edge - origin - std::floor((edge - origin) / hf.cell) * hf.cell;
       if (shift == 0 || !std::isfinite(shift)) return;
       origin += shift - hf.cell;  // (one column more keeps the extent covered)
       ++n;
     };
-    align(hf.x0, hf.nx, e.center.x - e.size.x / 2);
-    align(hf.y0, hf.ny, e.center.y - e.size.y / 2);
+    align(hf.x0, hf.nx, e.center.x - e.size.x / 2, e.size.x);
+    align(hf.y0, hf.ny, e.center.y - e.size.y / 2, e.size.y);
     break;
   }
   p.z_top = z_top + 1;
