@@ -85,19 +85,23 @@ ConeFit cone_fit(const OnBase& b, Real d, Real base_radius, Real tilt, bool wedg
 }  // namespace
 
 std::uint64_t dem_fingerprint(const SceneConfig& scene) {
-  // A small rig: a block of grains thrown sideways onto a base three diameters wide, so that
-  // they collide, slide, roll, spin and leave over its rim, for a fifth of a second. Its state
-  // after that is as sensitive to the code that computed it as the calibration is.
+  // A small rig: a block of grains thrown sideways onto a base of radius 3 d, so that they
+  // collide, slide, roll, spin and leave over its rim, for kFingerprintFrames times the grain's
+  // time scale sqrt(d / g) (0.19 s for 1 cm grains); speeds and times follow the grain's size, so
+  // the probe costs alike at any size. Its state after that is as sensitive to the code
+  // that computed it as the calibration is.
   SceneConfig probe = calibration_rig(scene, 1, RigSettings{.base_diameters = 3});
   probe.simulation.threads = 1;
+  const Real d = scene.material.diameter, g = norm(scene.simulation.gravity);
+  probe.output.fps = std::sqrt(g / d);  // a frame: sqrt(d / g)
   EmitterConfig block;
   block.type = EmitterType::Block;
   block.name = "fingerprint block";
   block.count = 40;
-  const Real pitch = 1.05 * scene.material.diameter * (1 + scene.material.diameter_spread);
+  const Real pitch = 1.05 * d * (1 + scene.material.diameter_spread);
   block.center = {0, 0, 3 * pitch};
   block.size = {5.5 * pitch, 5.5 * pitch, 2.5 * pitch};  // 5 x 5 x 2 sites
-  block.velocity = {0.2, 0.1, -0.3};
+  block.velocity = Vec3{0.64, 0.32, -0.96} * std::sqrt(g * d);  // (0.2, 0.1, -0.3) m/s at 1 cm
   block.jitter = 0.5;
   probe.emitters = {block};
   World w(probe);

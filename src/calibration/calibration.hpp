@@ -75,13 +75,13 @@ struct Calibration {
   RigSettings rig;  ///< the rig it was measured with
 };
 
-/// Frames (at the rig's 30 fps) the fingerprint's probe runs.
+/// How long the fingerprint's probe runs, in the grain's time scale sqrt(d / g).
 constexpr int kFingerprintFrames = 6;
 
 /// The state hash of a small DEM probe of the scene's material (a block of 40 grains thrown onto
-/// a small base, kFingerprintFrames frames, a few milliseconds): any change of the code that
-/// changes the DEM's results changes it, so a cached calibration never outlives the code that
-/// measured it (and no one has to remember to bump a version).
+/// a small base for kFingerprintFrames times sqrt(d / g), a few milliseconds): any change of the
+/// code that changes the DEM's results changes it, so a cached calibration never outlives the code
+/// that measured it (and no one has to remember to bump a version).
 std::uint64_t dem_fingerprint(const SceneConfig& scene);
 
 /// The hex hash of what the angles depend on: the material (sizes, density, contact law,
