@@ -98,7 +98,7 @@ std::uint64_t dem_fingerprint(const SceneConfig& scene) {
   block.type = EmitterType::Block;
   block.name = "fingerprint block";
   block.count = 40;
-  const Real pitch = 1.05 * d * (1 + scene.material.diameter_spread);
+  const Real pitch = block.spacing * scene.material.largest_diameter();  // the block's lattice
   block.center = {0, 0, 3 * pitch};
   block.size = {5.5 * pitch, 5.5 * pitch, 2.5 * pitch};  // 5 x 5 x 2 sites
   block.velocity = Vec3{0.64, 0.32, -0.96} * std::sqrt(g * d);  // (0.2, 0.1, -0.3) m/s at 1 cm
@@ -122,11 +122,8 @@ std::string calibration_key(const SceneConfig& scene, const RigSettings& rig,
                  m.rolling_stiffness_ratio, m.rolling_damping_ratio, m.wall_friction,
                  m.wall_rolling_friction, norm(scene.simulation.gravity)})
     h.add(v);
-  // (added only when set, so that the materials cached before twisting existed keep their keys)
-  if (m.twisting_friction > 0 || m.wall_twisting_friction > 0) {
-    h.add(m.twisting_friction);
-    h.add(m.wall_twisting_friction);
-  }
+  h.add(m.twisting_friction);
+  h.add(m.wall_twisting_friction);
   const StiffnessConfig& s = scene.stiffness;
   h.add(s.from_load);
   if (s.from_load) {
@@ -146,7 +143,7 @@ std::string calibration_key(const SceneConfig& scene, const RigSettings& rig,
 SceneConfig calibration_rig(const SceneConfig& scene, std::uint64_t seed,
                             const RigSettings& settings) {
   const Real d = scene.material.diameter;
-  const Real d_max = d * (1 + scene.material.diameter_spread);
+  const Real d_max = scene.material.largest_diameter();
   const Real g = norm(scene.simulation.gravity);
   if (!(g > 0))
     throw InputError(

@@ -32,6 +32,9 @@ struct MaterialConfig {
   Real wall_friction = 0.6;         ///< Coulomb friction between grains and geometry [-]
   Real wall_rolling_friction = 0.1; ///< rolling resistance between grains and geometry [-]
   Real wall_twisting_friction = 0;  ///< twisting resistance between grains and geometry [-]
+
+  /// The largest grain's diameter [m].
+  Real largest_diameter() const { return diameter * (1 + diameter_spread); }
 };
 
 /// Deriving k_n from the load a contact carries (docs/design.md §3), separately for each mode. Used

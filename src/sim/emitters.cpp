@@ -16,8 +16,6 @@ namespace sandflow {
 
 namespace {
 
-Real largest_diameter(const MaterialConfig& m) { return m.diameter * (1 + m.diameter_spread); }
-
 // Half extents of the area a pour places grains over (x, y) or of a block's box.
 Vec3 half_extent(const EmitterConfig& e) {
   if (e.type == EmitterType::Bed) return {e.size.x / 2, e.size.y / 2, 0};
@@ -83,7 +81,7 @@ class Occupancy {
 Real pour_slots(const EmitterConfig& e, const MaterialConfig& m) {
   if (e.type != EmitterType::Pour) return 0;
   // the pattern's rows and columns over the area's bounding rectangle
-  const Real d = largest_diameter(m);
+  const Real d = m.largest_diameter();
   const Real s = e.spacing * d;
   const Vec3 half = half_extent(e);
   const Real row = s * std::sqrt(3.0) / 2;
@@ -125,7 +123,7 @@ BoxLattice box_lattice(const EmitterConfig& e, Real d_max) {
 
 Real box_slots(const EmitterConfig& e, const MaterialConfig& m) {
   if (e.type == EmitterType::Pour || e.type == EmitterType::Bed) return 0;
-  const BoxLattice L = box_lattice(e, largest_diameter(m));
+  const BoxLattice L = box_lattice(e, m.largest_diameter());
   Real n = 0;
   for (int b = 0; b < L.basis; ++b)
     n += static_cast<Real>(L.rows[b][0]) * static_cast<Real>(L.rows[b][1]) *
@@ -134,7 +132,7 @@ Real box_slots(const EmitterConfig& e, const MaterialConfig& m) {
 }
 
 std::optional<EmitterProblem> emitter_problem(const EmitterConfig& e, const MaterialConfig& m) {
-  const Real d = largest_diameter(m);
+  const Real d = m.largest_diameter();
   const Real s = e.spacing * d;
   const Vec3 half = half_extent(e);
   const char* size_key = e.type == EmitterType::Pour && e.shape == PourShape::Disk ? "radius" : "size";
@@ -195,7 +193,7 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
     : config_(config), material_(material) {
   if (const auto problem = emitter_problem(config, material))
     throw InputError(fmt::format("{}.{} {}", where, problem->key, problem->what));
-  d_max_ = largest_diameter(material);
+  d_max_ = material.largest_diameter();
   spacing_ = config.spacing * d_max_;
   const Real s = spacing_;
   // a new grain's surface reaches its slot plus the jitter plus its radius
@@ -292,7 +290,7 @@ std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const Mat
                                                const Geometry& geometry, std::uint64_t seed,
                                                BedPacking& out, Real max_grains, int threads) {
   if (auto problem = emitter_problem(e, m)) return problem;
-  const Real d = largest_diameter(m);
+  const Real d = m.largest_diameter();
   const Real top = e.height;
   // The floor: the highest solid top under (x, y) below the bed's top (a mesh by its crossings,
   // grown by its boundary particles), searched down to a metre (or 1000 grains) under the lowest
