@@ -65,8 +65,8 @@ struct LayerTops {
   Real h_x, h_y, L_x, L_y;  ///< gradients [-]
 };
 
-// False outside the grid's rectangle and across a step of the terrain (a wall, a bowl's rim, as in
-// HeightField::static_top_at), where interpolation would lay sand up the wall.
+// False outside the grid's rectangle and across a step of the terrain or a wall (a bowl's rim, a
+// container's side: HeightField::smooth_square), where interpolation would lay sand up the wall.
 bool smooth_tops(const HeightField& hf, Real x, Real y, LayerTops& out) {
   const HeightFieldParams& p = hf.params();
   if (x < p.x0 || x > p.x0 + p.nx * p.cell || y < p.y0 || y > p.y0 + p.ny * p.cell) return false;
@@ -78,10 +78,7 @@ bool smooth_tops(const HeightField& hf, Real x, Real y, LayerTops& out) {
   const int i = std::min(static_cast<int>(u), std::max(p.nx - 2, 0));
   const int j = std::min(static_cast<int>(v), std::max(p.ny - 2, 0));
   const int i1 = std::min(i + 1, p.nx - 1), j1 = std::min(j + 1, p.ny - 1);
-  const Real l00 = L[idx(i, j)];
-  if (std::max({std::abs(L[idx(i1, j)] - l00), std::abs(L[idx(i, j1)] - l00),
-                std::abs(L[idx(i1, j1)] - l00)}) > p.cell)
-    return false;
+  if (!hf.smooth_square(i, j)) return false;
   const Real a = u - i, b = v - j;
   const auto lerp = [&](const std::vector<Real>& z, Real& z_x, Real& z_y) {
     const Real z00 = z[idx(i, j)], z10 = z[idx(i1, j)], z01 = z[idx(i, j1)], z11 = z[idx(i1, j1)];

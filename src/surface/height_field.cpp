@@ -19,13 +19,29 @@ TerrainColumns TerrainColumns::single(const std::vector<Real>& L) {
   return t;
 }
 
-void TerrainColumns::add_column(const std::vector<std::pair<Real, Real>>& intervals) {
+void TerrainColumns::add_column(const std::vector<std::pair<Real, Real>>& intervals,
+                                const std::vector<Wall>& edge_walls) {
   for (const auto& [b, t] : intervals) {
     bottom.push_back(b);
     top.push_back(t);
   }
   start.push_back(static_cast<std::uint32_t>(top.size()));
+  walls.insert(walls.end(), edge_walls.begin(), edge_walls.end());
+  wall_start.push_back(static_cast<std::uint32_t>(walls.size()));
 }
+
+namespace {
+
+// The checks both constructors and set_solids make.
+void check_terrain(const TerrainColumns& t, std::size_t columns) {
+  if (t.columns() != columns || t.wall_start.size() != columns + 1)
+    throw InputError("height field: the terrain must give one height per column");
+  for (std::size_t c = 0; c < columns; ++c)
+    if (t.start[c + 1] == t.start[c])
+      throw InputError("height field: every column needs a solid below it");
+}
+
+}  // namespace
 
 HeightField::HeightField(const HeightFieldParams& p, std::vector<Real> terrain)
     : HeightField(p, TerrainColumns::single(terrain)) {}
@@ -34,17 +50,13 @@ HeightField::HeightField(const HeightFieldParams& p, TerrainColumns terrain)
     : p_(p), solids_(std::move(terrain)) {
   if (p_.nx < 1 || p_.ny < 1 || !(p_.cell > 0))
     throw InputError("height field: the grid needs at least one column of positive width");
-  if (solids_.columns() != columns())
-    throw InputError("height field: the terrain must give one height per column");
+  check_terrain(solids_, columns());
   Hasher tops;
   for (Real t : solids_.top) tops.add(t);
   initial_terrain_hash_ = tops.value();
   L_.resize(columns());
-  for (std::size_t c = 0; c < columns(); ++c) {
-    if (solids_.start[c + 1] == solids_.start[c])
-      throw InputError("height field: every column needs a solid below it");
+  for (std::size_t c = 0; c < columns(); ++c)
     L_[c] = solids_.top[solids_.start[c + 1] - 1];  // the highest top, until sand says otherwise
-  }
   H_ = L_;
   h_ = L_;
   R_.assign(columns(), 0);
@@ -80,11 +92,7 @@ void HeightField::take_moved(std::vector<std::uint32_t>& out, bool& all) {
 }
 
 void HeightField::set_solids(TerrainColumns terrain) {
-  if (terrain.columns() != columns())
-    throw InputError("height field: the terrain must give one height per column");
-  for (std::size_t c = 0; c < columns(); ++c)
-    if (terrain.start[c + 1] == terrain.start[c])
-      throw InputError("height field: every column needs a solid below it");
+  check_terrain(terrain, columns());
   solids_ = std::move(terrain);
   for (std::size_t c = 0; c < columns(); ++c) {
     const std::uint32_t k0 = solids_.start[c], k1 = solids_.start[c + 1];
@@ -118,17 +126,43 @@ Real HeightField::static_top_at(Real x, Real y) const {
   const int i1 = std::min(i + 1, p_.nx - 1), j1 = std::min(j + 1, p_.ny - 1);
   const Real a = u - i, b = v - j;
   auto idx = [&](int ii, int jj) { return static_cast<std::size_t>(jj) * p_.nx + ii; };
-  // across a step of the terrain (a wall, the rim of a bowl) interpolation would put the static
-  // top halfway up the wall: there the grain's own column decides
-  const Real l00 = L_[idx(i, j)];
-  const Real step = std::max({std::abs(L_[idx(i1, j)] - l00), std::abs(L_[idx(i, j1)] - l00),
-                              std::abs(L_[idx(i1, j1)] - l00)});
-  if (step > p_.cell) {
+  // across a step of the terrain or a wall, interpolation would put the static top halfway up
+  // the wall, or carry one side's sand over to the other: there the grain's own column decides
+  if (!smooth_square(i, j)) {
     const std::int64_t c = column_of(x, y);
     return c >= 0 ? h_[static_cast<std::size_t>(c)] : h_[idx(i, j)];
   }
   auto at = [&](int ii, int jj) { return h_[idx(ii, jj)]; };
   return (1 - b) * ((1 - a) * at(i, j) + a * at(i1, j)) + b * ((1 - a) * at(i, j1) + a * at(i1, j1));
+}
+
+bool HeightField::smooth_square(int i, int j) const {
+  const int i1 = std::min(i + 1, p_.nx - 1), j1 = std::min(j + 1, p_.ny - 1);
+  auto idx = [&](int ii, int jj) { return static_cast<std::size_t>(jj) * p_.nx + ii; };
+  const std::size_t c00 = idx(i, j), c10 = idx(i1, j), c01 = idx(i, j1), c11 = idx(i1, j1);
+  const Real l00 = L_[c00];
+  const Real step =
+      std::max({std::abs(L_[c10] - l00), std::abs(L_[c01] - l00), std::abs(L_[c11] - l00)});
+  if (step > p_.cell) return false;
+  constexpr Real kNone = -std::numeric_limits<Real>::infinity();
+  auto wall = [&](std::size_t a, std::size_t b) { return a != b && wall_top(a, b) > kNone; };
+  return !(wall(c00, c10) || wall(c00, c01) || wall(c10, c11) || wall(c01, c11));
+}
+
+bool HeightField::walled_off(int i0, int j0, int i1, int j1, Real z) const {
+  auto at = [&](int i, int j) { return static_cast<std::size_t>(j) * p_.nx + i; };
+  // each way steps from column to column; it is closed where an edge's wall stands above z
+  auto closed_way = [&](bool x_first) {
+    int i = i0, j = j0;
+    while (i != i1 || j != j1) {
+      const bool along_x = i != i1 && (x_first || j == j1);
+      const int ni = along_x ? i + (i1 > i ? 1 : -1) : i, nj = along_x ? j : j + (j1 > j ? 1 : -1);
+      if (wall_top(at(i, j), at(ni, nj)) > z) return true;
+      i = ni, j = nj;
+    }
+    return false;
+  };
+  return closed_way(true) && closed_way(false);
 }
 
 void HeightField::measure(const Grains& hot, const std::vector<Real>& static_top,
@@ -285,13 +319,10 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
   everything_ = false;
   const std::vector<std::uint32_t>& todo = evaluate_.list();
   evaluated_ = todo.size();
-  // slope of the static top h on the edges (MAC): s_x between (i, j) and (i+1, j), etc.
-  auto sx = [&](int i, int j) {
-    return (h_[static_cast<std::size_t>(j) * nx + i + 1] - h_[static_cast<std::size_t>(j) * nx + i]) / dx;
-  };
-  auto sy = [&](int i, int j) {
-    return (h_[static_cast<std::size_t>(j + 1) * nx + i] - h_[static_cast<std::size_t>(j) * nx + i]) / dx;
-  };
+  // the fall of the static top h over the edge from column c to its neighbour n (MAC), where a
+  // wall between stands in for a lower neighbour
+  auto fall = [&](std::size_t c, std::size_t n) { return (h_[c] - static_top_across(c, n)) / dx; };
+  const std::size_t row = static_cast<std::size_t>(nx);
   h_new_.resize(todo.size());
   for (std::size_t w = 0; w < todo.size(); ++w) {
     const std::size_t c = todo[w];
@@ -301,10 +332,10 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
     // sees none and fills, so no checkerboard can hide from the exchange as it would from a
     // central difference; on a plane it is the exact gradient.
     Real gx = 0, gy = 0;
-    if (i > 0) gx = std::max(gx, sx(i - 1, j));    // h falls towards i - 1
-    if (i + 1 < nx) gx = std::max(gx, -sx(i, j));  // h falls towards i + 1
-    if (j > 0) gy = std::max(gy, sy(i, j - 1));
-    if (j + 1 < ny) gy = std::max(gy, -sy(i, j));
+    if (i > 0) gx = std::max(gx, fall(c, c - 1));
+    if (i + 1 < nx) gx = std::max(gx, fall(c, c + 1));
+    if (j > 0) gy = std::max(gy, fall(c, c - row));
+    if (j + 1 < ny) gy = std::max(gy, fall(c, c + row));
     const Real tan_theta = std::sqrt(gx * gx + gy * gy);
     const Real theta = std::atan(tan_theta);
     theta_[c] = theta;
@@ -373,8 +404,10 @@ Real HeightField::max_slope_top(std::size_t c, const std::vector<Real>& z) const
   constexpr Real kNone = std::numeric_limits<Real>::infinity();
   const int i = static_cast<int>(c % p_.nx), j = static_cast<int>(c / p_.nx);
   // the lower neighbour on each axis: the exchange's upwind slope is measured towards it
-  const Real a = std::min(i > 0 ? z[c - 1] : kNone, i + 1 < p_.nx ? z[c + 1] : kNone);
-  const Real b = std::min(j > 0 ? z[c - p_.nx] : kNone, j + 1 < p_.ny ? z[c + p_.nx] : kNone);
+  auto across = [&](std::size_t n) { return std::max(z[n], wall_top(c, n)); };
+  const Real a = std::min(i > 0 ? across(c - 1) : kNone, i + 1 < p_.nx ? across(c + 1) : kNone);
+  const Real b =
+      std::min(j > 0 ? across(c - p_.nx) : kNone, j + 1 < p_.ny ? across(c + p_.nx) : kNone);
   const Real s = p_.cell * std::tan(p_.theta_max);
   // the h at which (h - a)^2 + (h - b)^2 = s^2 (each term only where h is above it)
   if (std::abs(a - b) >= s || !std::isfinite(a) || !std::isfinite(b)) return std::min(a, b) + s;

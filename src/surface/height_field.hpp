@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "core/vec3.hpp"
@@ -56,15 +57,29 @@ struct HeightFieldParams {
 
 /// The solid intervals [bottom, top] crossed by the vertical line through each column centre,
 /// ascending and disjoint, in compressed rows (columns row-major, x fastest).
+///
+/// And the walls between column centres: a solid standing on an edge between two neighbouring
+/// columns higher than either column's own solids there (a container's wall thinner than a
+/// column, a ridge), which a column's centre line misses. Sand does not cross an edge below its
+/// wall's top (docs/design.md §4, "Walls between columns").
 struct TerrainColumns {
   std::vector<std::uint32_t> start{0};  ///< columns+1 offsets
   std::vector<Real> bottom, top;        ///< per interval [m]; the lowest may start at -infinity
 
+  /// A solid [bottom, top] on the edge from a column to its neighbour at +x (axis 0) or +y (1).
+  struct Wall {
+    std::uint8_t axis;
+    Real bottom, top;
+  };
+  std::vector<std::uint32_t> wall_start{0};  ///< columns+1 offsets into walls, by lower column
+  std::vector<Wall> walls;
+
   std::size_t columns() const { return start.size() - 1; }
-  /// One solid per column, from -infinity up to L[c].
+  /// One solid per column, from -infinity up to L[c], and no walls.
   static TerrainColumns single(const std::vector<Real>& L);
-  /// Appends a column (intervals ascending, disjoint).
-  void add_column(const std::vector<std::pair<Real, Real>>& intervals);
+  /// Appends a column (intervals ascending, disjoint) and the walls on its +x and +y edges.
+  void add_column(const std::vector<std::pair<Real, Real>>& intervals,
+                  const std::vector<Wall>& edge_walls = {});
 };
 
 class HeightField {
@@ -86,8 +101,35 @@ class HeightField {
   }
   /// Column holding (x, y), or -1 outside the grid.
   std::int64_t column_of(Real x, Real y) const;
-  /// h interpolated bilinearly between column centres (clamped at the border).
+  /// h interpolated bilinearly between column centres (clamped at the border); across a step of
+  /// the terrain or a wall, h of the column holding (x, y).
   Real static_top_at(Real x, Real y) const;
+  /// Whether h and L may be interpolated over the square between the centres of columns (i, j)
+  /// and (i + 1, j + 1): no step of the terrain higher than a column and no wall on its edges.
+  bool smooth_square(int i, int j) const;
+  /// The top of the wall on the edge between neighbouring columns c and n where it stands above
+  /// both their levels [m]; -infinity where none does.
+  Real wall_top(std::size_t c, std::size_t n) const {
+    const std::size_t lo = std::min(c, n), hi = std::max(c, n);
+    const std::uint32_t k0 = solids_.wall_start[lo], k1 = solids_.wall_start[lo + 1];
+    Real top = -std::numeric_limits<Real>::infinity();
+    if (k0 == k1) return top;  // (nearly every edge)
+    const std::uint8_t axis = hi - lo == static_cast<std::size_t>(p_.nx) ? 1 : 0;
+    const Real level = std::max(L_[c], L_[n]);
+    for (std::uint32_t k = k0; k < k1; ++k) {
+      const TerrainColumns::Wall& w = solids_.walls[k];
+      if (w.axis == axis && w.bottom <= level && level < w.top) top = w.top;
+    }
+    return top;
+  }
+  /// Whether walls higher than z stand between columns (i0, j0) and (i1, j1) on both of the
+  /// shortest ways from one to the other along the grid (x first, or y first).
+  bool walled_off(int i0, int j0, int i1, int j1, Real z) const;
+  /// The height of neighbour n's static top as column c's sand sees it: a wall between them
+  /// stands in for it up to its top.
+  Real static_top_across(std::size_t c, std::size_t n) const {
+    return std::max(h_[n], wall_top(c, n));
+  }
 
   // ---- one update ----
   /// Step 1: H from vertical thick rays (radius cell/2) against the pile. `static_top` per column
@@ -136,6 +178,8 @@ class HeightField {
   void restore(State s);
 
   /// Contributions of one sphere to the columns its thick ray touches: f(column, bottom, top).
+  /// Not to a column behind a wall (wall_top) higher than the sphere's centre, as seen from the
+  /// column holding it: a grain on one side of a thin wall is not sand on the other.
   template <class F>
   void for_each_ray_hit(const Vec3& x, Real r, F&& f) const;
 
@@ -197,8 +241,9 @@ class HeightField {
   /// among `seeds` and their neighbours) fails with the wedge behind it: h falls to the theta_max
   /// slope from the face's foot (docs/physics.md, step 3 of the update).
   void hold_max_slope(const std::vector<std::uint32_t>& seeds);
-  /// The highest top column c may have with its neighbours' heights z: its upwind slope (as the
-  /// exchange measures it) at theta_max; +infinity with no neighbour.
+  /// The highest top column c may have with its neighbours' heights z (a wall between standing
+  /// in for a lower one): its upwind slope (as the exchange measures it) at theta_max; +infinity
+  /// with no neighbour.
   Real max_slope_top(std::size_t c, const std::vector<Real>& z) const;
   /// Every column may have changed: the next update evaluates them all.
   void everything_changed();
@@ -247,12 +292,17 @@ void HeightField::for_each_ray_hit(const Vec3& x, Real r, F&& f) const {
   const int i1 = static_cast<int>(std::floor((x.x + reach - p_.x0) / p_.cell));
   const int j0 = static_cast<int>(std::floor((x.y - reach - p_.y0) / p_.cell));
   const int j1 = static_cast<int>(std::floor((x.y + reach - p_.y0) / p_.cell));
+  // the column holding the centre, when there are walls to look across
+  const Real fi = std::floor((x.x - p_.x0) / p_.cell), fj = std::floor((x.y - p_.y0) / p_.cell);
+  const bool walls = !solids_.walls.empty() && fi >= 0 && fi < p_.nx && fj >= 0 && fj < p_.ny;
+  const int own_i = walls ? static_cast<int>(fi) : 0, own_j = walls ? static_cast<int>(fj) : 0;
   for (int j = std::max(j0, 0); j <= std::min(j1, p_.ny - 1); ++j)
     for (int i = std::max(i0, 0); i <= std::min(i1, p_.nx - 1); ++i) {
       const Real dx = x.x - (p_.x0 + (i + 0.5) * p_.cell);
       const Real dy = x.y - (p_.y0 + (j + 0.5) * p_.cell);
       const Real rho = std::sqrt(dx * dx + dy * dy);
       if (rho >= reach) continue;
+      if (walls && (i != own_i || j != own_j) && walled_off(own_i, own_j, i, j, x.z)) continue;
       const Real e = rho - w;  // horizontal distance from the ray's rim
       const Real half = e <= 0 ? r : std::sqrt(r * r - e * e);
       f(static_cast<std::size_t>(j) * p_.nx + i, x.z - half, x.z + half);

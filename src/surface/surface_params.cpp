@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -133,13 +134,20 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   // centre the whole columns on the extent
   hf.x0 = 0.5 * (x0 + x1) - 0.5 * hf.nx * hf.cell;
   hf.y0 = 0.5 * (y0 + y1) - 0.5 * hf.ny * hf.cell;
-  // ... or centre a bed's footprint on whole columns, so that every column holding its grains
-  // has its centre inside the footprint, and a container's walls there run between columns (a
-  // footprint a whole number of cells wide) or through the outermost columns, their centres
-  // inside: a column whose centre lay on a wall would have the wall's top as its level and leave
-  // the bed's grains beside the wall simulated
-  for (const EmitterConfig& e : scene.emitters) {
-    if (e.type != EmitterType::Bed || sc.extent) continue;
+  // ... or centre a bed's footprint (or else the inside of the first box container standing
+  // square to the axes) on whole columns, so that every column holding its grains has its centre
+  // inside, and the container's walls there run between columns (a footprint a whole number of
+  // cells wide) or through the outermost columns, their centres inside: a column whose centre
+  // lay on a wall would have the wall's top as its level and leave the grains beside the wall
+  // simulated
+  std::optional<std::pair<Vec3, Vec3>> footprint;  // centre, size
+  for (const EmitterConfig& e : scene.emitters)
+    if (e.type == EmitterType::Bed && !footprint) footprint = {e.center, e.size};
+  for (const GeometryConfig& box : scene.geometry)
+    if (box.type == GeometryType::Box && box.container && box.rotation_deg == Vec3{0, 0, 0} &&
+        !footprint)
+      footprint = {box.center, box.size};
+  if (footprint && !sc.extent) {
     auto align = [&](Real& origin, int& n, Real low_side, Real width) {
       // the columns' edge below the footprint: half of what a whole number of columns has over
       const Real cols = width / hf.cell, whole = std::ceil(cols - 1e-6);
@@ -149,44 +157,163 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
       origin += shift - hf.cell;  // (one column more keeps the extent covered)
       ++n;
     };
-    align(hf.x0, hf.nx, e.center.x - e.size.x / 2, e.size.x);
-    align(hf.y0, hf.ny, e.center.y - e.size.y / 2, e.size.y);
-    break;
+    const auto& [centre, size] = *footprint;
+    align(hf.x0, hf.nx, centre.x - size.x / 2, size.x);
+    align(hf.y0, hf.ny, centre.y - size.y / 2, size.y);
   }
   p.z_top = z_top + 1;
   p.z_floor = z_floor - 1;
   return p;
 }
 
-TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry,
-                               std::uint64_t budget) {
-  const HeightFieldParams& grid = p.grid;
-  TerrainColumns t;
-  // rows traced in parallel (each column asks every solid, so this is the slow part of building
-  // a large field), added in order; the queries are counted row by row, in order, so the refusal
-  // does not depend on the threads
-  std::vector<std::vector<std::pair<Real, Real>>> row(static_cast<std::size_t>(grid.nx));
-  std::uint64_t queries = 0;
-  std::atomic<bool> over{false};
+namespace {
+
+using Intervals = std::vector<std::pair<Real, Real>>;
+
+// Where a wall may stand between two column centres: the columns under a finite solid's
+// footprint, and one column around it (the edges from them). A single half-space's top is a plane,
+// which never rises between two centres above both: with at most one infinite solid, the other
+// edges need no tracing. Two or more may meet in a ridge: then every edge is traced.
+std::vector<std::uint8_t> wall_candidates(const HeightFieldParams& grid, const Geometry& geometry) {
+  const std::size_t columns = static_cast<std::size_t>(grid.nx) * grid.ny;
+  std::vector<std::uint8_t> near(columns, 0);
+  int infinite = 0;
+  auto mark = [&](const Vec3& lo, const Vec3& hi) {
+    if (!(lo.x <= hi.x && lo.y <= hi.y)) return;  // (a removed solid)
+    if (!std::isfinite(lo.x) || !std::isfinite(lo.y) || !std::isfinite(hi.x) ||
+        !std::isfinite(hi.y)) {
+      ++infinite;
+      return;
+    }
+    auto first = [&](Real v, Real origin, int n) {
+      return std::clamp(static_cast<int>(std::floor((v - origin) / grid.cell)) - 1, 0, n - 1);
+    };
+    for (int j = first(lo.y, grid.y0, grid.ny);
+         j <= first(hi.y, grid.y0, grid.ny) + 1 && j < grid.ny; ++j)
+      for (int i = first(lo.x, grid.x0, grid.nx);
+           i <= first(hi.x, grid.x0, grid.nx) + 1 && i < grid.nx; ++i)
+        near[static_cast<std::size_t>(j) * grid.nx + i] = 1;
+  };
+  for (const Obstacle& o : geometry.obstacles()) {
+    Vec3 lo, hi;
+    o.solid->bounds(lo, hi);
+    mark(lo, hi);
+  }
+  for (const MeshObstacle& m : geometry.meshes()) {
+    const Aabb box = mesh_bounds(m.mesh);
+    const Vec3 pad{m.particle_radius, m.particle_radius, m.particle_radius};
+    if (!box.empty()) mark(box.lo - pad, box.hi + pad);
+  }
+  if (infinite > 1) std::fill(near.begin(), near.end(), 1);
+  return near;
+}
+
+// The grid's rows traced in parallel by trace(j, row, asked) (filling row, one entry a column,
+// adding its distance queries to asked; it may stop early once `over` is set) and handed to
+// keep(row) in order. The queries are counted row by row, in order, so the refusal past `budget`
+// does not depend on the threads.
+template <class Entry, class Trace, class Keep>
+void trace_rows(const HeightFieldParams& grid, std::uint64_t budget, std::uint64_t& queries,
+                std::atomic<bool>& over, Trace&& trace, Keep&& keep) {
+  std::vector<Entry> row(static_cast<std::size_t>(grid.nx));
 #pragma omp parallel for ordered schedule(static, 1) firstprivate(row)
   for (int j = 0; j < grid.ny; ++j) {
     std::uint64_t asked = 0;
-    for (int i = 0; i < grid.nx && !over.load(std::memory_order_relaxed); ++i) {
-      auto& solids = row[static_cast<std::size_t>(i)];
-      solids =
-          geometry.solid_intervals(grid.x0 + (i + 0.5) * grid.cell, grid.y0 + (j + 0.5) * grid.cell,
-                                   p.z_top, p.z_floor, &asked);
-      if (solids.empty()) solids.push_back({-std::numeric_limits<Real>::infinity(), p.z_floor});
-    }
+    trace(j, row, asked);
 #pragma omp ordered
     if (!over) {
       queries += asked;
       if (queries > budget)
         over = true;
       else
-        for (const auto& solids : row) t.add_column(solids);
+        keep(row);
     }
   }
+}
+
+// Whether column c of t has a solid whose top lies within `margin` below `top`, reaching up to
+// it: a solid on the edge no higher than that is the column's own.
+bool holds_up_to(const TerrainColumns& t, std::size_t c, Real top, Real margin) {
+  for (std::uint32_t k = t.start[c]; k < t.start[c + 1]; ++k)
+    if (t.bottom[k] <= top && t.top[k] >= top - margin) return true;
+  return false;
+}
+
+// The walls on each column's +x and +y edges (TerrainColumns): the solids met by vertical lines at
+// a quarter, a half and three quarters of the way to the neighbour's centre, where they stand
+// higher than both columns' own solids there by more than a quarter of a column (less is a bump
+// the columns' own tops already give, to a quarter column). A wall thinner than a quarter column
+// may fall between the lines.
+void add_walls(const SurfaceParams& p, const Geometry& geometry, std::uint64_t budget,
+               std::uint64_t& queries, TerrainColumns& t, std::atomic<bool>& over) {
+  constexpr Real kWallLines[] = {0.25, 0.5, 0.75};  // of the way to the neighbour's centre
+  const HeightFieldParams& grid = p.grid;
+  const Real margin = 0.25 * grid.cell;
+  const std::vector<std::uint8_t> near = wall_candidates(grid, geometry);
+  std::vector<std::uint32_t> wall_start{0};
+  std::vector<TerrainColumns::Wall> walls;
+  using Found = std::vector<TerrainColumns::Wall>;
+  auto trace = [&](int j, std::vector<Found>& row, std::uint64_t& asked) {
+    Intervals met;
+    for (int i = 0; i < grid.nx && !over.load(std::memory_order_relaxed); ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * grid.nx + i;
+      Found& found = row[static_cast<std::size_t>(i)];
+      found.clear();
+      if (!near[c]) continue;
+      const Real x = grid.x0 + (i + 0.5) * grid.cell, y = grid.y0 + (j + 0.5) * grid.cell;
+      for (std::uint8_t axis = 0; axis < 2; ++axis) {
+        if (axis == 0 ? i + 1 == grid.nx : j + 1 == grid.ny) continue;
+        const std::size_t n = axis == 0 ? c + 1 : c + static_cast<std::size_t>(grid.nx);
+        met.clear();
+        for (const Real f : kWallLines) {
+          const Intervals s = geometry.solid_intervals(x + (axis == 0 ? f * grid.cell : 0),
+                                                       y + (axis == 1 ? f * grid.cell : 0), p.z_top,
+                                                       p.z_floor, &asked);
+          met.insert(met.end(), s.begin(), s.end());
+        }
+        std::sort(met.begin(), met.end());
+        for (std::size_t k = 0; k < met.size();) {
+          // the union of what the lines met: one solid on the edge
+          Real bottom = met[k].first, top = met[k].second;
+          for (++k; k < met.size() && met[k].first <= top; ++k) top = std::max(top, met[k].second);
+          if (!holds_up_to(t, c, top, margin) && !holds_up_to(t, n, top, margin))
+            found.push_back({axis, bottom, top});
+        }
+      }
+    }
+  };
+  trace_rows<Found>(grid, budget, queries, over, trace, [&](const std::vector<Found>& row) {
+    for (const Found& w : row) {
+      walls.insert(walls.end(), w.begin(), w.end());
+      wall_start.push_back(static_cast<std::uint32_t>(walls.size()));
+    }
+  });
+  t.wall_start = std::move(wall_start);
+  t.walls = std::move(walls);
+}
+
+}  // namespace
+
+TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry,
+                               std::uint64_t budget) {
+  const HeightFieldParams& grid = p.grid;
+  TerrainColumns t;
+  // each column asks every solid, so this is the slow part of building a large field
+  std::uint64_t queries = 0;
+  std::atomic<bool> over{false};
+  auto trace = [&](int j, std::vector<Intervals>& row, std::uint64_t& asked) {
+    for (int i = 0; i < grid.nx && !over.load(std::memory_order_relaxed); ++i) {
+      Intervals& solids = row[static_cast<std::size_t>(i)];
+      solids =
+          geometry.solid_intervals(grid.x0 + (i + 0.5) * grid.cell, grid.y0 + (j + 0.5) * grid.cell,
+                                   p.z_top, p.z_floor, &asked);
+      if (solids.empty()) solids.push_back({-std::numeric_limits<Real>::infinity(), p.z_floor});
+    }
+  };
+  trace_rows<Intervals>(grid, budget, queries, over, trace, [&](const std::vector<Intervals>& row) {
+    for (const Intervals& solids : row) t.add_column(solids);
+  });
+  if (!over) add_walls(p, geometry, budget, queries, t, over);
   if (over)
     throw InputError(fmt::format(
         "tracing the height field's {} x {} columns of {:.4g} m down through the scene's {} "

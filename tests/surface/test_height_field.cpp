@@ -284,6 +284,49 @@ TEST(Exchange, StaticSandButtressedByMovingSandDoesNotFail) {
       EXPECT_GT(hf.static_top()[static_cast<std::size_t>(j) * p.nx + i], 0.19) << i << " " << j;
 }
 
+// Six columns in a row on a floor, sand at rest 5 cm deep in the first three (static, H = h), the
+// others empty; a wall of height `wall` on the edge between columns 2 and 3 (none: no wall).
+HeightField walled_bed(Real wall) {
+  HeightFieldParams p = ramp_params();
+  p.nx = 6;
+  p.ny = 1;
+  TerrainColumns t;
+  for (int c = 0; c < p.nx; ++c) {
+    std::vector<TerrainColumns::Wall> walls;
+    if (c == 2 && std::isfinite(wall))
+      walls.push_back({0, -std::numeric_limits<Real>::infinity(), wall});
+    t.add_column({{-std::numeric_limits<Real>::infinity(), 0.0}}, walls);
+  }
+  HeightField hf(p, std::move(t));
+  const std::vector<Real> sand{0.05, 0.05, 0.05, 0, 0, 0};
+  hf.set_surface(sand);
+  hf.set_static_top(sand);
+  return hf;
+}
+
+TEST(Exchange, AWallBetweenColumnsHoldsTheStaticLayerBehindIt) {
+  constexpr Real kNone = -std::numeric_limits<Real>::infinity();
+  // no wall: the bed's edge is a free face; it fails and erodes towards the empty columns
+  HeightField open = walled_bed(kNone);
+  // a wall higher than the sand: nothing erodes, whatever the time
+  HeightField held = walled_bed(0.06);
+  // a wall lower than the sand: the sand above it may go, what the wall holds stays
+  HeightField low = walled_bed(0.03);
+  for (int k = 0; k < 100; ++k)
+    for (HeightField* hf : {&open, &held, &low}) hf->exchange(0.003);
+  EXPECT_LT(open.static_top()[2], 0.04);
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(held.static_top()[c], 0.05) << c;
+  EXPECT_LT(low.static_top()[2], 0.05);
+  EXPECT_GE(low.static_top()[2], 0.03);
+  // a grain beside the wall on the empty side finds no static sand under it (interpolation would
+  // carry the bed's over the wall)
+  EXPECT_EQ(held.static_top_at(3.2 * kCell, 0.5 * kCell), 0.0);
+  EXPECT_GT(walled_bed(kNone).static_top_at(3.2 * kCell, 0.5 * kCell), 0.01);
+  EXPECT_EQ(held.wall_top(2, 3), 0.06);
+  EXPECT_EQ(held.wall_top(3, 2), 0.06);
+  EXPECT_EQ(held.wall_top(1, 2), kNone);
+}
+
 TEST(Exchange, StableForLongUpdateSteps) {
   // the exact integration with the no-overshoot cap: however long the step, h stays between L
   // and H and no checkerboard grows (an unstable update makes the total variation of h along
@@ -366,6 +409,23 @@ TEST(Measure, ThickRayFindsTheTopBetweenGrains) {
   hf.measure(g, hf.terrain());
   // the ray's rim (5 mm) is 2 mm from the grain's centre: height sqrt(r^2 - 2mm^2) above it
   EXPECT_NEAR(hf.surface()[4], 0.005 + std::sqrt(0.005 * 0.005 - 0.002 * 0.002), 1e-12);
+}
+
+TEST(Measure, AGrainBehindAWallIsNotSandBeyondIt) {
+  // a grain on the floor in column 2, 1 mm from the edge to column 3: column 3's thick ray reaches
+  // it, but a wall on that edge higher than the grain's centre stands between
+  Grains g;
+  g.add(0, {2.9 * kCell, 0.5 * kCell, 0.005}, {}, 0.005, 2600);
+  for (const Real wall : {-std::numeric_limits<Real>::infinity(), 0.003, 0.06}) {
+    HeightField hf = walled_bed(wall);
+    hf.set_static_top(std::vector<Real>(6, 0.0));
+    hf.measure(g, hf.terrain());
+    EXPECT_NEAR(hf.surface()[2], 0.01, 1e-12) << wall;
+    if (wall > 0.005)
+      EXPECT_EQ(hf.surface()[3], 0.0);  // behind the wall
+    else
+      EXPECT_GT(hf.surface()[3], 0.009) << wall;  // no wall, or one below the grain's centre
+  }
 }
 
 }  // namespace

@@ -113,6 +113,65 @@ TEST(TerrainIntervals, TracingStopsAtItsBudgetWhateverTheThreads) {
   EXPECT_GE(least[0], 2u * 2u * 40u * 30u);
 }
 
+TEST(TerrainIntervals, AWallBetweenColumnCentresIsFoundAndAFloorMakesNone) {
+  // columns of 2 cm along x, centres at 1, 3, 5, 7 cm; a wall 6 mm thick and 5 cm high between the
+  // centres of columns 1 and 2, at several places along the way
+  SurfaceParams p;
+  p.grid.nx = 4;
+  p.grid.ny = 2;
+  p.grid.cell = 0.02;
+  p.z_top = 1;
+  p.z_floor = -1;
+  const TerrainColumns bare =
+      terrain_columns(p, Geometry::from_config({floor_plane(0)}, MaterialConfig{}));
+  EXPECT_TRUE(bare.walls.empty());
+  for (const Real at : {0.036, 0.04, 0.044}) {
+    const Geometry geo = Geometry::from_config(
+        {floor_plane(0), box_entry({at, 0.02, 0.025}, {0.006, 0.04, 0.05})}, MaterialConfig{});
+    const TerrainColumns t = terrain_columns(p, geo);
+    ASSERT_EQ(t.wall_start.size(), 9u) << at;
+    // on the +x edge of column 1 in both rows, nowhere else
+    for (std::size_t c = 0; c < 8; ++c) {
+      const std::size_t walls = t.wall_start[c + 1] - t.wall_start[c];
+      ASSERT_EQ(walls, c % 4 == 1 ? 1u : 0u) << at << " column " << c;
+      if (walls == 0) continue;
+      const TerrainColumns::Wall& w = t.walls[t.wall_start[c]];
+      EXPECT_EQ(w.axis, 0);
+      EXPECT_EQ(w.bottom, -kInf);  // standing on the floor, which goes on down
+      EXPECT_NEAR(w.top, 0.05, kTraceTol);
+    }
+  }
+}
+
+TEST(TerrainIntervals, ABoxContainersInsideIsCentredOnWholeColumns) {
+  // a pour off the centre of a box 15.3, 15.5 and 15.8 columns wide inside: every column
+  // holding part of the inside has its centre inside, so none takes a wall's top as its level
+  // under the grains beside the wall
+  for (const Real inside : {0.153, 0.155, 0.158}) {
+    SceneConfig s = test::grains_on_floor("bin", Mode::Surface, 0.01);
+    GeometryConfig box = box_entry({0.0123, -0.0071, 0.06}, {inside, inside, 0.12});
+    box.container = true;
+    box.wall_thickness = 0.01;
+    s.geometry.push_back(box);
+    s.emitters = {test::disk_pour({0.0337, 0.0191, 0.3}, 0.03, 1000, 500, {0, 0, -1})};
+    const Geometry geo = Geometry::from_config(s.geometry, s.material);
+    const HeightFieldParams g = surface_params(s, geo, 1e-4).grid;
+    auto check = [&](Real origin, int n, Real low) {
+      const Real high = low + inside;
+      for (int i = 0; i < n; ++i) {
+        const Real a = origin + i * g.cell, b = a + g.cell, centre = a + 0.5 * g.cell;
+        if (b > low && a < high) {
+          EXPECT_TRUE(centre > low && centre < high) << inside << " column " << i;
+        }
+      }
+      EXPECT_LE(origin, low - 0.01);  // the walls are on the grid
+      EXPECT_GE(origin + n * g.cell, high + 0.01);
+    };
+    check(g.x0, g.nx, 0.0123 - inside / 2);
+    check(g.y0, g.ny, -0.0071 - inside / 2);
+  }
+}
+
 TEST(TerrainLevels, EmptyColumnRestsOnTheHighestSolid) {
   HeightField hf = shelf_column();
   hf.measure(Grains{}, kNoStatic);
