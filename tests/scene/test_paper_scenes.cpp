@@ -1,7 +1,8 @@
-// The paper's five scenes (and the column of docs/physics.md, and the pyramid read from an STL
-// file), from their files, shrunk to a few hundred grains and a few frames: each runs in both
-// modes, loses no grain, and puts none inside the geometry. (Without the fetched meshes, the
-// dragon and the armadillo run with their fallback boxes; the pyramid's STL is committed.)
+// The paper's five scenes (and the column of docs/physics.md, the pyramid read from an STL file
+// and the thin-walled bin), from their files, shrunk to a few hundred grains and a few frames: each
+// runs in both modes, loses no grain, and puts none inside the geometry. (Without the fetched
+// meshes, the dragon and the armadillo run with their fallback boxes; the pyramid's STL is
+// committed.)
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -51,6 +52,24 @@ TEST_P(PaperScene, TinyVersionRunsInBothModesWithNoGrainInsideGeometry) {
 INSTANTIATE_TEST_SUITE_P(Scenes, PaperScene,
                          ::testing::Values("floor", "terrain", "bowl", "dragon", "armadillo"));
 INSTANTIATE_TEST_SUITE_P(StlObstacle, PaperScene, ::testing::Values("pyramid"));
+INSTANTIATE_TEST_SUITE_P(ThinWalls, PaperScene, ::testing::Values("bin"));
+
+TEST(BinScene, ThePourIntoTheThinWalledBinComesToRestInTheStaticLayer) {
+  // scenes/bin.toml as shipped (2,000 grains, walls 0.3 d, 85 frames). At rest, what stays
+  // simulated is the surface's R_min of a grain over about 230 columns, the interface band under
+  // it and what the corners keep (docs/known-issues.md): 1,525 grains end static. Without the
+  // walls between columns the height field eroded the sand through the walls: 497 did.
+  SceneConfig s = load_scene(std::string(SANDFLOW_SOURCE_DIR) + "/scenes/bin.toml", {});
+  World w(s);
+  FrameStats last;
+  for (int f = 0; f < w.planned_frames(); ++f) last = w.advance_frame();
+  EXPECT_EQ(last.n_total, 2000);
+  EXPECT_GE(last.n_static, 1200);
+  std::vector<Vec3> x;
+  std::vector<Real> r;
+  w.all_grains(x, r);
+  EXPECT_EQ(w.geometry().count_inside(x), 0u);
+}
 
 // The pyramid is the STL file's, in metres as written, set down on the floor: no stand-in box
 TEST(PyramidScene, ItsObstacleIsTheStlFile) {
