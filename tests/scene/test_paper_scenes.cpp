@@ -55,10 +55,11 @@ INSTANTIATE_TEST_SUITE_P(StlObstacle, PaperScene, ::testing::Values("pyramid"));
 INSTANTIATE_TEST_SUITE_P(ThinWalls, PaperScene, ::testing::Values("bin"));
 
 TEST(BinScene, ThePourIntoTheThinWalledBinComesToRestInTheStaticLayer) {
-  // scenes/bin.toml as shipped (2,000 grains, walls 0.3 d, 85 frames). At rest, what stays
-  // simulated is the surface's R_min of a grain over about 230 columns, the interface band under
-  // it and what the corners keep (docs/known-issues.md): 1,525 grains end static. Without the
-  // walls between columns the height field eroded the sand through the walls: 497 did.
+  // scenes/bin.toml as shipped (2,000 grains, walls 0.3 d, 85 frames, 1.5 s after the pour).
+  // What stays simulated is the surface's R_min of a grain over about 230 columns, the interface
+  // band under it and grains at rest that no seat holds (trapped when their columns close, 2 s
+  // after the pour): 1,525 grains end static. Without the walls between columns the height field
+  // eroded the sand through the walls: 497 did.
   SceneConfig s = load_scene(std::string(SANDFLOW_SOURCE_DIR) + "/scenes/bin.toml", {});
   World w(s);
   FrameStats last;
