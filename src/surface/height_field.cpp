@@ -182,7 +182,8 @@ void HeightField::measure(const Grains& hot, const std::vector<Real>& static_top
     for (std::size_t i = 0; i < n; ++i)
       if (!skip(i))
         for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real bottom, Real top) {
-          mine.push_back({static_cast<std::uint32_t>(c), bottom, top});
+          mine.push_back({static_cast<std::uint32_t>(c), bottom, top,
+                          !counts.empty() && counts[i] == kHeldOnPile});
         });
   }
   // 2. filed by column (a counting sort over the columns hit, not the grid)
@@ -202,7 +203,8 @@ void HeightField::measure(const Grains& hot, const std::vector<Real>& static_top
   hits_.resize(hit_start_.back());
   hit_fill_.assign(hit_start_.begin(), hit_start_.end() - 1);
   for (const std::vector<ColumnHit>& list : thread_hits_)
-    for (const ColumnHit& e : list) hits_[hit_fill_[hit_slot_[e.column]]++] = {e.bottom, e.top};
+    for (const ColumnHit& e : list)
+      hits_[hit_fill_[hit_slot_[e.column]]++] = {e.bottom, e.top, e.held};
 
   // 3. H where it can change: columns hit now or at the last measure, or whose static top changed
   // (added to those measured since the last exchange)
@@ -260,7 +262,8 @@ Real HeightField::walk_up(std::size_t c, std::size_t k, Real static_top, std::ui
   if (static_top >= ceiling) top = solids_.top[k];  // static grains of a higher level
   for (std::uint32_t q = q0; q < q1; ++q) {
     // hits below the solid's top are grains of a lower level: they raise nothing
-    if (hits_[q].bottom > top + p_.gap || hits_[q].bottom >= ceiling) break;  // in flight
+    if (hits_[q].bottom >= ceiling) break;
+    if (hits_[q].bottom > top + p_.gap && !hits_[q].held) continue;  // in flight
     top = std::max(top, hits_[q].top);
   }
   return std::min(top, ceiling);

@@ -135,10 +135,13 @@ class HeightField {
   /// Step 1: H from vertical thick rays (radius cell/2) against the pile. `static_top` per column
   /// is the highest point the STATIC grains reach there (or anything not above L). Hot grains
   /// count only where `counts` is nonzero (empty: all count), and from the bottom up only while
-  /// no gap separates them from what lies below: grains in flight never lift the surface. Also
+  /// no gap separates them from what lies below: grains in flight never lift the surface. Those
+  /// whose `counts` is kHeldOnPile (frozen, or at rest on the pile) count across a gap too: it is
+  /// a void under grains bridged across it, as along a container's wall. Also
   /// picks each column's level; where it changes, h starts afresh at the new L.
   /// `changed_tops` lists the columns whose static top changed since the last measure (null: any
   /// may have).
+  static constexpr std::uint8_t kHeldOnPile = 2;
   void measure(const Grains& hot, const std::vector<Real>& static_top,
                const std::vector<std::uint8_t>& counts = {},
                const std::vector<std::uint32_t>* changed_tops = nullptr);
@@ -270,6 +273,7 @@ class HeightField {
   struct ColumnHit {
     std::uint32_t column;
     Real bottom, top;
+    bool held;  ///< the grain is held on the pile (kHeldOnPile)
   };
   std::vector<std::vector<ColumnHit>> thread_hits_;  ///< per thread, its grains' hits in order
   static constexpr std::uint32_t kNoSlot = 0xffffffffu;
@@ -279,7 +283,10 @@ class HeightField {
   std::vector<std::uint32_t> hit_start_;    ///< per column hit (+1): offsets into hits_
   std::vector<std::uint32_t> hit_fill_;
   std::vector<std::uint8_t> relevelled_;  ///< per measured column: its level changed
-  struct Hit { Real bottom, top; };
+  struct Hit {
+    Real bottom, top;
+    bool held;
+  };
   std::vector<Hit> hits_;
 };
 

@@ -17,15 +17,20 @@ bool SurfaceFlow::below_level(const Vec3& x) const {
 
 void SurfaceFlow::update_height_field(const Grains& hot, const StaticStore& st,
                                       const DemSolver& dem, const Geometry& geometry, Real dt) {
-  // a grain in flight touches nothing: only grains of the pile (and the interface) make H
+  // a grain in flight touches nothing: only grains of the pile (and the interface) make H, and
+  // those frozen or at rest on it even above a void
   dem.contacts_of(hot, geometry, contacts_);
   counts_.resize(hot.size());
   for (std::size_t i = 0; i < hot.size(); ++i)
-    counts_[i] = hot.state[i] != GrainState::Active || (contacts_[i] & DemSolver::kTouches);
+    counts_[i] =
+        hot.state[i] != GrainState::Active || at_rest(p_.interface.seat, hot, i, contacts_[i])
+            ? HeightField::kHeldOnPile
+            : (contacts_[i] & DemSolver::kTouches) != 0;
   // (a bed's ACTIVE grains, seated before the DEM has seen their contacts, are part of the pile)
   if (!seated_.empty()) {
     for (std::size_t i = 0; i < hot.size(); ++i)
-      counts_[i] |= std::binary_search(seated_.begin(), seated_.end(), hot.id[i]);
+      if (std::binary_search(seated_.begin(), seated_.end(), hot.id[i]))
+        counts_[i] = HeightField::kHeldOnPile;
     seated_.clear();
   }
   const std::vector<Real>& tops = interface_.static_tops(hf_, st);

@@ -383,7 +383,8 @@ TEST(Measure, GrainsInFlightDoNotLiftTheSurface) {
 TEST(Measure, GrainHeldUpBesideTheRayStillCounts) {
   // In a random packing a resting grain is often held up by neighbours outside a column's ray, a
   // few millimetres above the grain below it in the ray. A gap of d/4 cut H there and made pits
-  // that pinned h (see docs/physics.md); only a gap of a whole diameter means flight.
+  // that pinned h (see docs/physics.md); only a gap of a whole diameter means flight, and only
+  // for a grain that moves.
   HeightFieldParams p = ramp_params();
   p.nx = p.ny = 5;
   p.gap = 0.01;
@@ -397,6 +398,13 @@ TEST(Measure, GrainHeldUpBesideTheRayStillCounts) {
   g.x[1].z = 0.0265;  // 11.5 mm above: in flight
   hf.measure(g, hf.terrain());
   EXPECT_NEAR(hf.surface()[c], 0.010, 1e-12);
+  // ... unless it is at rest on the pile (kHeldOnPile), held by grains beside the ray across a
+  // void under it (as along a container's wall): the void is part of the pile
+  g.x[1].z = 0.035;
+  hf.measure(g, hf.terrain(), {HeightField::kHeldOnPile, 1});
+  EXPECT_NEAR(hf.surface()[c], 0.010, 1e-12);
+  hf.measure(g, hf.terrain(), {HeightField::kHeldOnPile, HeightField::kHeldOnPile});
+  EXPECT_NEAR(hf.surface()[c], 0.040, 1e-12);
 }
 
 TEST(Measure, ThickRayFindsTheTopBetweenGrains) {
