@@ -132,6 +132,8 @@ class HeightField {
   }
 
   // ---- one update ----
+  /// A grain's `counts` in measure(): frozen, or at rest on the pile (it counts across a gap).
+  static constexpr std::uint8_t kHeldOnPile = 2;
   /// Step 1: H from vertical thick rays (radius cell/2) against the pile. `static_top` per column
   /// is the highest point the STATIC grains reach there (or anything not above L). Hot grains
   /// count only where `counts` is nonzero (empty: all count), and from the bottom up only while
@@ -141,7 +143,6 @@ class HeightField {
   /// picks each column's level; where it changes, h starts afresh at the new L.
   /// `changed_tops` lists the columns whose static top changed since the last measure (null: any
   /// may have).
-  static constexpr std::uint8_t kHeldOnPile = 2;
   void measure(const Grains& hot, const std::vector<Real>& static_top,
                const std::vector<std::uint8_t>& counts = {},
                const std::vector<std::uint32_t>* changed_tops = nullptr);
