@@ -1,14 +1,13 @@
 // Mesh obstacles in a scene: found, placed, sampled into boundary particles that hold grains up,
 // seen by the terrain and by the inside count; a missing file is an error or its fallback box.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
 
 #include "core/error.hpp"
 #include "geometry/shapes.hpp"
 #include "sim/world.hpp"
+#include "support/scratch.hpp"
 #include "support/test_scenes.hpp"
 
 namespace sandflow {
@@ -16,15 +15,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A 0.2 m cube as an OBJ file in a fresh folder; returns the folder.
-fs::path cube_folder() {
-  const fs::path dir = fs::temp_directory_path() /
-                       ("sandflow_mesh_obstacle_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  std::ofstream obj(dir / "cube.obj");
-  obj << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nv 0 0 2\nv 2 0 2\nv 2 2 2\nv 0 2 2\n"
-         "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
-  return dir;
+// A 0.2 m cube as an OBJ file in the test's scratch folder (removed when the test ends); returns
+// the folder.
+fs::path cube_folder(const test::ScratchFolder& scratch) {
+  scratch.write("cube.obj",
+                "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nv 0 0 2\nv 2 0 2\nv 2 2 2\nv 0 2 2\n"
+                "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n");
+  return scratch.dir();
 }
 
 GeometryConfig cube_entry() {
@@ -38,7 +35,8 @@ GeometryConfig cube_entry() {
 }
 
 TEST(MeshObstacle, IsScaledAndSetDownOnItsPosition) {
-  const fs::path dir = cube_folder();
+  const test::ScratchFolder scratch;
+  const fs::path dir = cube_folder(scratch);
   MaterialConfig mat;
   mat.diameter = 0.02;
   const Geometry geo =
@@ -60,7 +58,8 @@ TEST(MeshObstacle, IsScaledAndSetDownOnItsPosition) {
 }
 
 TEST(MeshObstacle, MissingFileIsAnErrorOrItsFallbackBox) {
-  const fs::path dir = cube_folder();
+  const test::ScratchFolder scratch;
+  const fs::path dir = cube_folder(scratch);
   GeometryConfig g = cube_entry();
   g.mesh_file = "no_such_mesh.ply";
   try {
@@ -83,7 +82,8 @@ TEST(MeshObstacle, MissingFileIsAnErrorOrItsFallbackBox) {
 // Grains poured onto the cube in plain DEM: its boundary particles must hold a heap on its top,
 // and none may get inside it or through the floor.
 TEST(MeshObstacle, BoundaryParticlesHoldAPourAndNoGrainGetsIn) {
-  const fs::path dir = cube_folder();
+  const test::ScratchFolder scratch;
+  const fs::path dir = cube_folder(scratch);
   SceneConfig s = test::grains_on_floor("cube", Mode::Dem, 0.02);
   s.path = (dir / "scene.toml").string();  // the mesh file is looked for beside it
   s.material.rolling_friction = 0.3;
