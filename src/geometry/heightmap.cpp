@@ -188,6 +188,10 @@ SurfacePoint SolidHeightmap::closest(const Vec3& p) const {
   return best;
 }
 
+void SolidHeightmap::vertical_stretches(Real x, Real y, Stretches& out) const {
+  if (x >= x0_ && x <= x1_ && y >= y0_ && y <= y1_) out.push_back({bottom_, height(x, y)});
+}
+
 void SolidHeightmap::bounds(Vec3& lo, Vec3& hi) const {
   lo = {x0_, y0_, bottom_};
   hi = {x1_, y1_, top_};

@@ -67,6 +67,8 @@ class SolidHeightmap final : public Solid {
 
   SurfacePoint closest(const Vec3& p) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
+  /// [bottom, f(x, y)] inside the rectangle (its edges included), nothing beside it.
+  void vertical_stretches(Real x, Real y, Stretches& out) const override;
 
   /// f(x, y), bilinear between samples; outside the extent, f at its nearest point.
   Real height(Real x, Real y) const { return surface_at(x, y).f; }

@@ -24,12 +24,91 @@ void oriented_bounds(const Vec3& c, const Vec3& half, const Mat3& rot, Vec3& lo,
   lo = c - ext;
   hi = c + ext;
 }
+
+// The vertical lines in a solid's frame: the line at (x, y) is q0 + t d there, at world height
+// centre.z + t (d = rot_t (0, 0, 1), a unit vector).
+struct LocalLine {
+  Vec3 q0, d;
+};
+LocalLine local_line(Real x, Real y, const Vec3& centre, const Mat3& rot_t) {
+  return {rot_t * Vec3{x - centre.x, y - centre.y, 0}, rot_t * Vec3{0, 0, 1}};
+}
+
+// Narrows [t0, t1] to the t with lo <= q + t d <= hi; false when nothing is left.
+bool clip_slab(Real q, Real d, Real lo, Real hi, Real& t0, Real& t1) {
+  if (d == 0) return q >= lo && q <= hi;
+  Real a = (lo - q) / d, b = (hi - q) / d;
+  if (a > b) std::swap(a, b);
+  t0 = std::max(t0, a);
+  t1 = std::min(t1, b);
+  return t0 <= t1;
+}
+
+// The t with A t^2 + 2 B t + C <= 0 (A >= 0), one interval [t0, t1]; false when there are none.
+// (With A = 0 the quadratic is a constant C: all t or none; A = 0 with B != 0 does not occur for
+// the distances it is used for, B^2 <= A |q0|^2.)
+bool within_quadric(Real a, Real b, Real c, Real& t0, Real& t1) {
+  if (a <= 0) {
+    t0 = -kInf;
+    t1 = kInf;
+    return c <= 0;
+  }
+  const Real disc = b * b - a * c;
+  if (disc < 0) return false;
+  const Real s = std::sqrt(disc);
+  t0 = (-b - s) / a;
+  t1 = (-b + s) / a;
+  return true;
+}
+
+// The t of the line within the radial shell inner <= |q_axes| <= outer, where q_axes is q's part
+// along the first `axes` (2: the distance from the z axis, 3: from the origin): one or two
+// intervals, ascending, appended to ts.
+void within_shell(const LocalLine& l, int axes, Real inner, Real outer,
+                  std::vector<std::pair<Real, Real>>& ts) {
+  Real a = 0, b = 0, c = 0;
+  for (int k = 0; k < axes; ++k) {
+    a += l.d[k] * l.d[k];
+    b += l.q0[k] * l.d[k];
+    c += l.q0[k] * l.q0[k];
+  }
+  Real o0, o1;
+  if (!within_quadric(a, b, c - outer * outer, o0, o1)) return;
+  Real i0, i1;  // the hole: inside the inner radius (its boundary belongs to the solid)
+  if (inner <= 0 || !within_quadric(a, b, c - inner * inner, i0, i1) || i0 >= i1) {
+    ts.push_back({o0, o1});
+    return;
+  }
+  // (a hole of infinite ends is a line along the axis inside the inner radius: nothing is left)
+  if (i0 > -kInf && o0 <= i0) ts.push_back({o0, std::min(o1, i0)});
+  if (i1 < kInf && i1 <= o1) ts.push_back({std::max(o0, i1), o1});
+}
+
+// The intervals ts of a line, cut to lo <= q_z + t d_z <= hi, appended to `out` as world heights.
+void append_cut(const LocalLine& l, Real centre_z, Real lo, Real hi,
+                const std::vector<std::pair<Real, Real>>& ts, Stretches& out) {
+  for (auto [t0, t1] : ts)
+    if (clip_slab(l.q0.z, l.d.z, lo, hi, t0, t1)) out.push_back({centre_z + t0, centre_z + t1});
+}
 }  // namespace
 
 void HalfSpace::bounds(Vec3& lo, Vec3& hi) const {
   lo = {-kInf, -kInf, -kInf};
   hi = {kInf, kInf, kInf};
 }
+
+void HalfSpace::vertical_stretches(Real x, Real y, Stretches& out) const {
+  // dot(p - point, n) <= 0 with p = (x, y, z): z on one side of a height, or all or nothing
+  const Real h = (x - point_.x) * normal_.x + (y - point_.y) * normal_.y;
+  if (normal_.z == 0) {
+    if (h <= 0) out.push_back({-kInf, kInf});
+    return;
+  }
+  const Real z = point_.z - h / normal_.z;
+  out.push_back(normal_.z > 0 ? std::pair{-kInf, z} : std::pair{z, kInf});
+}
+
+void RemovedSolid::vertical_stretches(Real, Real, Stretches&) const {}
 
 SolidBox::SolidBox(const Vec3& center, const Vec3& half, const Mat3& rotation)
     : center_(center), half_(half), rot_(rotation), rot_t_(rotation.transposed()) {}
@@ -57,6 +136,14 @@ SurfacePoint SolidBox::closest(const Vec3& p) const {
 
 void SolidBox::bounds(Vec3& lo, Vec3& hi) const { oriented_bounds(center_, half_, rot_, lo, hi); }
 
+void SolidBox::vertical_stretches(Real x, Real y, Stretches& out) const {
+  const LocalLine l = local_line(x, y, center_, rot_t_);
+  Real t0 = -kInf, t1 = kInf;
+  for (int k = 0; k < 3; ++k)
+    if (!clip_slab(l.q0[k], l.d[k], -half_[k], half_[k], t0, t1)) return;
+  out.push_back({center_.z + t0, center_.z + t1});
+}
+
 SurfacePoint SolidSphere::closest(const Vec3& p) const {
   const Vec3 d = p - center_;
   const Real len = norm(d);
@@ -67,6 +154,14 @@ SurfacePoint SolidSphere::closest(const Vec3& p) const {
 void SolidSphere::bounds(Vec3& lo, Vec3& hi) const {
   lo = center_ - Vec3{radius_, radius_, radius_};
   hi = center_ + Vec3{radius_, radius_, radius_};
+}
+
+void SolidSphere::vertical_stretches(Real x, Real y, Stretches& out) const {
+  const Real ex = x - center_.x, ey = y - center_.y;
+  const Real left = radius_ * radius_ - (ex * ex + ey * ey);
+  if (left < 0) return;
+  const Real s = std::sqrt(left);
+  out.push_back({center_.z - s, center_.z + s});
 }
 
 SolidCylinder::SolidCylinder(const Vec3& center, Real radius, Real inner_radius, Real height,
@@ -112,6 +207,13 @@ SurfacePoint SolidCylinder::closest(const Vec3& p) const {
 
 void SolidCylinder::bounds(Vec3& lo, Vec3& hi) const {
   oriented_bounds(center_, {radius_, radius_, half_height_}, rot_, lo, hi);
+}
+
+void SolidCylinder::vertical_stretches(Real x, Real y, Stretches& out) const {
+  const LocalLine l = local_line(x, y, center_, rot_t_);
+  std::vector<std::pair<Real, Real>> ts;
+  within_shell(l, 2, inner_radius_, radius_, ts);
+  append_cut(l, center_.z, -half_height_, half_height_, ts, out);
 }
 
 SolidBowl::SolidBowl(const Vec3& center, Real radius, Real thickness, Real depth,
@@ -176,6 +278,13 @@ void SolidBowl::bounds(Vec3& lo, Vec3& hi) const {
   const Real z_lo = -outer_, z_hi = rim_z_;
   oriented_bounds(center_ + rot_ * Vec3{0, 0, (z_lo + z_hi) / 2}, {reach, reach, (z_hi - z_lo) / 2},
                   rot_, lo, hi);
+}
+
+void SolidBowl::vertical_stretches(Real x, Real y, Stretches& out) const {
+  const LocalLine l = local_line(x, y, center_, rot_t_);
+  std::vector<std::pair<Real, Real>> ts;
+  within_shell(l, 3, inner_, outer_, ts);
+  append_cut(l, center_.z, -kInf, rim_z_, ts, out);
 }
 
 void Geometry::add(std::unique_ptr<Solid> solid, Real friction, Real rolling_friction,
@@ -298,72 +407,45 @@ std::size_t Geometry::count_inside(const std::vector<Vec3>& x) const {
 }
 
 Real Geometry::top_below(Real x, Real y, Real z_from, Real z_floor) const {
-  // sphere tracing down the vertical line: each step is the distance to the nearest solid, which
-  // never crosses a surface; a hit is closer than a micrometre. Steps of at least 0.1 mm keep a
-  // line grazing a vertical wall from crawling (a top may then be found up to 0.1 mm low).
-  constexpr Real kHit = 1e-6, kMinStep = 1e-4;
-  Vec3 p{x, y, z_from};
-  for (int it = 0; it < 1000000 && p.z > z_floor; ++it) {
-    Real d = std::numeric_limits<Real>::infinity();
-    for (const Obstacle& o : obstacles_) d = std::min(d, o.solid->closest(p).distance);
-    if (d < kHit) return p.z;
-    p.z -= std::max(d, kMinStep);
+  Stretches line;
+  for (const Obstacle& o : obstacles_) o.solid->vertical_stretches(x, y, line);
+  Real top = z_floor;
+  for (const auto& [bottom, t] : line) {
+    if (bottom > z_from || t <= top) continue;
+    top = std::min(t, z_from);  // (z_from itself when it starts inside)
   }
-  return z_floor;
+  return top;
 }
 
 std::vector<std::pair<Real, Real>> Geometry::solid_intervals(Real x, Real y, Real z_from,
                                                              Real z_floor,
                                                              std::uint64_t* queries) const {
-  // sphere tracing down the line, as top_below does, on through each solid: inside the union, the
-  // most negative distance is still no more than the way out (every solid it is in must be left).
-  // Where two solids meet it is near 0 though the union goes on: only a point found outside ends
-  // the interval, at most one least step below the true bottom.
-  constexpr Real kHit = 1e-6, kMinStep = 1e-4;
-  std::vector<std::pair<Real, Real>> down;  // found top first
-  Vec3 p{x, y, z_from};
-  std::uint64_t asked = meshes_.size();
-  auto distance = [&] {
-    asked += obstacles_.size();
-    Real d = std::numeric_limits<Real>::infinity();
-    for (const Obstacle& o : obstacles_) d = std::min(d, o.solid->closest(p).distance);
-    return d;
-  };
-  bool inside = distance() < kHit;
-  if (inside) down.push_back({0, z_from});
-  Real last_step = 0;
-  for (int it = 0; it < 1000000 && p.z > z_floor; ++it) {
-    const Real d = distance();
-    if (!inside && d < kHit) {
-      inside = true;
-      down.push_back({0, p.z});
-    } else if (inside && d > kHit) {
-      inside = false;
-      down.back().first = p.z + std::min(d, last_step);  // the bottom lies in between
-    }
-    last_step = std::max(std::abs(d), kMinStep);
-    p.z -= last_step;
-  }
-  if (inside) down.back().first = -std::numeric_limits<Real>::infinity();
-  if (queries) *queries += asked;
-  std::vector<std::pair<Real, Real>> up(down.rbegin(), down.rend());
-  if (meshes_.empty()) return up;
+  Stretches up;
+  for (const Obstacle& o : obstacles_) o.solid->vertical_stretches(x, y, up);
   // meshes: the stretches between crossings whose midpoint is inside, grown by the boundary
-  // particles' radius (the grains rest on the particles); then the union with the solids
+  // particles' radius (the grains rest on the particles)
   for (const MeshObstacle& m : meshes_) {
     const std::vector<Real> z = m.winding->vertical_crossings(x, y);
     for (std::size_t k = 0; k + 1 < z.size(); ++k)
       if (m.winding->inside({x, y, 0.5 * (z[k] + z[k + 1])}))
         up.push_back({z[k] - m.particle_radius, z[k + 1] + m.particle_radius});
   }
+  if (queries) *queries += obstacles_.size() + meshes_.size();
+  // their union, between z_floor and z_from; solids that touch (a container's wall standing on
+  // its floor slab) meet within rounding, so a seam thinner than a nanometre is no gap
+  constexpr Real kSeam = 1e-9;
   std::sort(up.begin(), up.end());
   std::vector<std::pair<Real, Real>> merged;
   for (const auto& iv : up) {
     if (iv.second < z_floor || iv.first > z_from) continue;
-    if (!merged.empty() && iv.first <= merged.back().second)
+    if (!merged.empty() && iv.first <= merged.back().second + kSeam)
       merged.back().second = std::max(merged.back().second, iv.second);
     else
       merged.push_back(iv);
+  }
+  for (auto& [bottom, top] : merged) {
+    if (bottom <= z_floor) bottom = -kInf;
+    top = std::min(top, z_from);
   }
   return merged;
 }

@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "config/scene_config.hpp"
@@ -21,6 +22,9 @@ struct SurfacePoint {
   Vec3 normal;    ///< outward unit normal of the solid at the closest point
 };
 
+/// Stretches [bottom, top] of a vertical line, ascending.
+using Stretches = std::vector<std::pair<Real, Real>>;
+
 /// A solid primitive.
 class Solid {
  public:
@@ -28,6 +32,9 @@ class Solid {
   virtual SurfacePoint closest(const Vec3& p) const = 0;
   /// Axis-aligned bounds of the solid (infinite for a half-space).
   virtual void bounds(Vec3& lo, Vec3& hi) const = 0;
+  /// The stretches of the vertical line at (x, y) inside the solid (its boundary included),
+  /// ascending, appended to `out`, in closed form; an end is infinite where the solid goes on.
+  virtual void vertical_stretches(Real x, Real y, Stretches& out) const = 0;
 };
 
 class HalfSpace final : public Solid {
@@ -35,6 +42,7 @@ class HalfSpace final : public Solid {
   HalfSpace(const Vec3& point, const Vec3& normal) : point_(point), normal_(normal) {}
   SurfacePoint closest(const Vec3& p) const override { return {dot(p - point_, normal_), normal_}; }
   void bounds(Vec3& lo, Vec3& hi) const override;
+  void vertical_stretches(Real x, Real y, Stretches& out) const override;
 
  private:
   Vec3 point_, normal_;
@@ -47,6 +55,7 @@ class RemovedSolid final : public Solid {
     return {std::numeric_limits<Real>::infinity(), {0, 0, 1}};
   }
   void bounds(Vec3& lo, Vec3& hi) const override;  ///< empty: lo = +inf, hi = -inf
+  void vertical_stretches(Real x, Real y, Stretches& out) const override;
 };
 
 /// An oriented solid box.
@@ -55,6 +64,7 @@ class SolidBox final : public Solid {
   SolidBox(const Vec3& center, const Vec3& half, const Mat3& rotation);
   SurfacePoint closest(const Vec3& p) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
+  void vertical_stretches(Real x, Real y, Stretches& out) const override;
 
  private:
   Vec3 center_, half_;
@@ -66,6 +76,7 @@ class SolidSphere final : public Solid {
   SolidSphere(const Vec3& center, Real radius) : center_(center), radius_(radius) {}
   SurfacePoint closest(const Vec3& p) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
+  void vertical_stretches(Real x, Real y, Stretches& out) const override;
 
  private:
   Vec3 center_;
@@ -79,6 +90,7 @@ class SolidCylinder final : public Solid {
                 const Mat3& rotation);
   SurfacePoint closest(const Vec3& p) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
+  void vertical_stretches(Real x, Real y, Stretches& out) const override;
 
  private:
   Vec3 center_;
@@ -98,6 +110,7 @@ class SolidBowl final : public Solid {
   /// by a line, whose boundary is two arcs and the flat rim.
   SurfacePoint closest(const Vec3& p) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
+  void vertical_stretches(Real x, Real y, Stretches& out) const override;
 
  private:
   Vec3 center_;
@@ -165,9 +178,9 @@ class Geometry {
   /// (z_from itself when it starts inside a solid), or z_floor when there is none above it.
   Real top_below(Real x, Real y, Real z_from, Real z_floor) const;
   /// The solid intervals [bottom, top] along the vertical line at (x, y) between z_floor and
-  /// z_from, ascending (a bottom at or below z_floor is -infinity: the solid goes on down).
-  /// Tops and bottoms are found to 0.1 mm. `queries`, when given, is increased by the distance
-  /// queries it made (one per solid per step, one per mesh): what the tracing cost.
+  /// z_from, ascending (a bottom at or below z_floor is -infinity: the solid goes on down), the
+  /// union of the solids' stretches (Solid::vertical_stretches) and the meshes'. `queries`, when
+  /// given, is increased by the solids and meshes it asked: what the tracing cost.
   std::vector<std::pair<Real, Real>> solid_intervals(Real x, Real y, Real z_from, Real z_floor,
                                                      std::uint64_t* queries = nullptr) const;
   /// Union of the bounds of the finite solids; false when every solid is infinite (or none).

@@ -171,20 +171,18 @@ namespace {
 using Intervals = std::vector<std::pair<Real, Real>>;
 
 // Where a wall may stand between two column centres: the columns under a finite solid's
-// footprint, and one column around it (the edges from them). A single half-space's top is a plane,
-// which never rises between two centres above both: with at most one infinite solid, the other
-// edges need no tracing. Two or more may meet in a ridge: then every edge is traced.
+// footprint, and one column around it (the edges from them). The infinite solids, half-spaces,
+// make none: where they hold up the sand, their union's top is the highest of planes (or the
+// whole line, under a vertical or downward-facing one), and along an edge that highest is a convex
+// function, never above both ends; a half-plane holding the whole line holds an end too.
 std::vector<std::uint8_t> wall_candidates(const HeightFieldParams& grid, const Geometry& geometry) {
   const std::size_t columns = static_cast<std::size_t>(grid.nx) * grid.ny;
   std::vector<std::uint8_t> near(columns, 0);
-  int infinite = 0;
   auto mark = [&](const Vec3& lo, const Vec3& hi) {
     if (!(lo.x <= hi.x && lo.y <= hi.y)) return;  // (a removed solid)
     if (!std::isfinite(lo.x) || !std::isfinite(lo.y) || !std::isfinite(hi.x) ||
-        !std::isfinite(hi.y)) {
-      ++infinite;
+        !std::isfinite(hi.y))
       return;
-    }
     auto first = [&](Real v, Real origin, int n) {
       return std::clamp(static_cast<int>(std::floor((v - origin) / grid.cell)) - 1, 0, n - 1);
     };
@@ -204,12 +202,11 @@ std::vector<std::uint8_t> wall_candidates(const HeightFieldParams& grid, const G
     const Vec3 pad{m.particle_radius, m.particle_radius, m.particle_radius};
     if (!box.empty()) mark(box.lo - pad, box.hi + pad);
   }
-  if (infinite > 1) std::fill(near.begin(), near.end(), 1);
   return near;
 }
 
 // The grid's rows traced in parallel by trace(j, row, asked) (filling row, one entry a column,
-// adding its distance queries to asked; it may stop early once `over` is set) and handed to
+// adding the solids it asked to asked; it may stop early once `over` is set) and handed to
 // keep(row) in order. The queries are counted row by row, in order, so the refusal past `budget`
 // does not depend on the threads.
 template <class Entry, class Trace, class Keep>
@@ -317,7 +314,7 @@ TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry,
   if (over)
     throw InputError(fmt::format(
         "tracing the height field's {} x {} columns of {:.4g} m down through the scene's {} "
-        "solids took more than {} distance queries: set a larger "
+        "solids asked them more than {} times: set a larger "
         "surface.cell_size or a smaller surface.extent, or use fewer or fewer layered solids",
         grid.nx, grid.ny, grid.cell, geometry.obstacles().size() + geometry.meshes().size(),
         budget));

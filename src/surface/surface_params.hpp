@@ -12,7 +12,7 @@
 
 namespace sandflow {
 
-/// The most columns a height field may have (16 M: 128 MB per field); the scene loader refuses a
+/// The most columns a height field may have (16 M: 1.7 GiB per field); the scene loader refuses a
 /// surface.extent that needs more, surface_params() a domain from the geometry that does.
 constexpr std::size_t kMaxHeightFieldColumns = 16u << 20;
 
@@ -43,14 +43,14 @@ HeapSize largest_heap(const SceneConfig& scene);
 /// Every parameter, resolved for a run with time step dt.
 SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry, Real dt);
 
-/// Most distance queries tracing a height field's columns through the solids may make: 2^33,
-/// reached in 15 s by 64 planes over the largest field (16.8 million columns, each crossing all of
-/// them) and in 55 s by 31 stacked container boxes (186 slabs); that field over one floor makes
-/// 2.8e8 in 3.2 s. More means many layered solids under a fine, wide field.
+/// Most questions (a solid's stretches along a line) tracing a height field's columns may ask:
+/// 2^33, reached in 35 s by 31 stacked container boxes (186 slabs) over the largest field (16.8
+/// million columns); 64 planes over it ask 1.1e9 in 7 s, one floor 1.7e7. More means many solids
+/// under a fine, wide field.
 constexpr std::uint64_t kMaxTerrainQueries = std::uint64_t{1} << 33;
 
-/// The solids under each column centre (a solid at z_floor where there is none). InputError when
-/// tracing them takes more than `budget` distance queries.
+/// The solids under each column centre (a solid at z_floor where there is none), and the walls
+/// between columns. InputError when tracing them asks the solids more than `budget` times.
 TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry,
                                std::uint64_t budget = kMaxTerrainQueries);
 
