@@ -38,6 +38,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "geometry/shapes.hpp"
@@ -69,6 +70,7 @@ class SolidHeightmap final : public Solid {
   void bounds(Vec3& lo, Vec3& hi) const override;
   /// [bottom, f(x, y)] inside the rectangle (its edges included), nothing beside it.
   void vertical_stretches(Real x, Real y, Stretches& out) const override;
+  Real least_width() const override { return std::numeric_limits<Real>::infinity(); }
 
   /// f(x, y), bilinear between samples; outside the extent, f at its nearest point.
   Real height(Real x, Real y) const { return surface_at(x, y).f; }

@@ -209,6 +209,11 @@ void SolidCylinder::bounds(Vec3& lo, Vec3& hi) const {
   oriented_bounds(center_, {radius_, radius_, half_height_}, rot_, lo, hi);
 }
 
+Real SolidCylinder::least_width() const {
+  const Real across = inner_radius_ > 0 ? radius_ - inner_radius_ : 2 * radius_;
+  return std::min(across, 2 * half_height_);
+}
+
 void SolidCylinder::vertical_stretches(Real x, Real y, Stretches& out) const {
   const LocalLine l = local_line(x, y, center_, rot_t_);
   std::vector<std::pair<Real, Real>> ts;

@@ -3,6 +3,7 @@
 // A container (a box or a cylinder that holds grains) is made of solid wall slabs.
 #pragma once
 
+#include <algorithm>
 #include <limits>
 #include <memory>
 #include <string>
@@ -35,6 +36,10 @@ class Solid {
   /// The stretches of the vertical line at (x, y) inside the solid (its boundary included),
   /// ascending, appended to `out`, in closed form; an end is infinite where the solid goes on.
   virtual void vertical_stretches(Real x, Real y, Stretches& out) const = 0;
+  /// The least width across the solid (a container wall's thickness): vertical lines closer
+  /// together than that cannot pass it by. Infinite for a half-space and a heightmap, whose
+  /// relief is the columns' own.
+  virtual Real least_width() const = 0;
 };
 
 class HalfSpace final : public Solid {
@@ -43,6 +48,7 @@ class HalfSpace final : public Solid {
   SurfacePoint closest(const Vec3& p) const override { return {dot(p - point_, normal_), normal_}; }
   void bounds(Vec3& lo, Vec3& hi) const override;
   void vertical_stretches(Real x, Real y, Stretches& out) const override;
+  Real least_width() const override { return std::numeric_limits<Real>::infinity(); }
 
  private:
   Vec3 point_, normal_;
@@ -56,6 +62,7 @@ class RemovedSolid final : public Solid {
   }
   void bounds(Vec3& lo, Vec3& hi) const override;  ///< empty: lo = +inf, hi = -inf
   void vertical_stretches(Real x, Real y, Stretches& out) const override;
+  Real least_width() const override { return std::numeric_limits<Real>::infinity(); }
 };
 
 /// An oriented solid box.
@@ -65,6 +72,7 @@ class SolidBox final : public Solid {
   SurfacePoint closest(const Vec3& p) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
   void vertical_stretches(Real x, Real y, Stretches& out) const override;
+  Real least_width() const override { return 2 * std::min({half_.x, half_.y, half_.z}); }
 
  private:
   Vec3 center_, half_;
@@ -77,6 +85,7 @@ class SolidSphere final : public Solid {
   SurfacePoint closest(const Vec3& p) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
   void vertical_stretches(Real x, Real y, Stretches& out) const override;
+  Real least_width() const override { return 2 * radius_; }
 
  private:
   Vec3 center_;
@@ -91,6 +100,7 @@ class SolidCylinder final : public Solid {
   SurfacePoint closest(const Vec3& p) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
   void vertical_stretches(Real x, Real y, Stretches& out) const override;
+  Real least_width() const override;
 
  private:
   Vec3 center_;
@@ -111,6 +121,7 @@ class SolidBowl final : public Solid {
   SurfacePoint closest(const Vec3& p) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
   void vertical_stretches(Real x, Real y, Stretches& out) const override;
+  Real least_width() const override { return outer_ - inner_; }
 
  private:
   Vec3 center_;

@@ -236,15 +236,31 @@ bool holds_up_to(const TerrainColumns& t, std::size_t c, Real top, Real margin) 
   return false;
 }
 
-// The walls on each column's +x and +y edges (TerrainColumns): the solids met by vertical lines at
-// a quarter, a half and three quarters of the way to the neighbour's centre, where they stand
-// higher than both columns' own solids there by more than a quarter of a column (less is a bump
-// the columns' own tops already give, to a quarter column). A wall thinner than a quarter column
-// may fall between the lines.
+// The lines on an edge between two column centres, as fractions of the way: evenly spaced, at
+// most half the thinnest finite solid's width apart (so that one of them lies well inside it, not
+// on a face where rounding decides: a container's inner face lies on a column edge) and at least
+// three; at most kMaxWallLines.
+std::vector<Real> wall_lines(const HeightFieldParams& grid, const Geometry& geometry) {
+  Real thinnest = std::numeric_limits<Real>::infinity();
+  for (const Obstacle& o : geometry.obstacles())
+    thinnest = std::min(thinnest, o.solid->least_width());
+  for (const MeshObstacle& m : geometry.meshes())  // (its grains rest on particles of this radius)
+    thinnest = std::min(thinnest, 2 * m.particle_radius);
+  const Real wanted = std::ceil(2 * grid.cell / thinnest) - 1;
+  const int n = wanted > kMaxWallLines ? kMaxWallLines : std::max(3, static_cast<int>(wanted));
+  std::vector<Real> f;
+  for (int k = 1; k <= n; ++k) f.push_back(static_cast<Real>(k) / (n + 1));
+  return f;
+}
+
+// The walls on each column's +x and +y edges (TerrainColumns): the solids met by the vertical
+// lines of wall_lines() between it and the neighbour's centre, where they stand higher than both
+// columns' own solids there by more than a quarter of a column (less is a bump the columns' own
+// tops already give, to a quarter column).
 void add_walls(const SurfaceParams& p, const Geometry& geometry, std::uint64_t budget,
                std::uint64_t& queries, TerrainColumns& t, std::atomic<bool>& over) {
-  constexpr Real kWallLines[] = {0.25, 0.5, 0.75};  // of the way to the neighbour's centre
   const HeightFieldParams& grid = p.grid;
+  const std::vector<Real> lines = wall_lines(grid, geometry);
   const Real margin = 0.25 * grid.cell;
   const std::vector<std::uint8_t> near = wall_candidates(grid, geometry);
   std::vector<std::uint32_t> wall_start{0};
@@ -262,7 +278,7 @@ void add_walls(const SurfaceParams& p, const Geometry& geometry, std::uint64_t b
         if (axis == 0 ? i + 1 == grid.nx : j + 1 == grid.ny) continue;
         const std::size_t n = axis == 0 ? c + 1 : c + static_cast<std::size_t>(grid.nx);
         met.clear();
-        for (const Real f : kWallLines) {
+        for (const Real f : lines) {
           const Intervals s = geometry.solid_intervals(x + (axis == 0 ? f * grid.cell : 0),
                                                        y + (axis == 1 ? f * grid.cell : 0), p.z_top,
                                                        p.z_floor, &asked);

@@ -49,6 +49,11 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
 /// under a fine, wide field.
 constexpr std::uint64_t kMaxTerrainQueries = std::uint64_t{1} << 33;
 
+/// Most vertical lines looked down on an edge between two column centres for a wall standing
+/// between them (a container wall thinner than a column): a solid thinner than 1/32 of a column
+/// may fall between them.
+constexpr int kMaxWallLines = 63;
+
 /// The solids under each column centre (a solid at z_floor where there is none), and the walls
 /// between columns. InputError when tracing them asks the solids more than `budget` times.
 TerrainColumns terrain_columns(const SurfaceParams& p, const Geometry& geometry,
