@@ -117,6 +117,19 @@ TEST(Shapes, VerticalStretchesAreWhereTheDistanceIsNegative) {
   }
 }
 
+// The least width across each shape: what the lines looking for walls between columns must not
+// pass by (surface_params.cpp, wall_lines).
+TEST(Shapes, LeastWidthIsTheThinnestWayAcross) {
+  const Mat3 tilted = rotation_xyz_deg({35, -20, 10});
+  EXPECT_DOUBLE_EQ(SolidBox({0, 0, 0}, {0.3, 0.0015, 0.2}, tilted).least_width(), 0.003);
+  EXPECT_DOUBLE_EQ(SolidSphere({0, 0, 0}, 0.2).least_width(), 0.4);
+  EXPECT_DOUBLE_EQ(SolidCylinder({0, 0, 0}, 0.3, 0.0, 0.4, Mat3{}).least_width(), 0.4);
+  EXPECT_DOUBLE_EQ(SolidCylinder({0, 0, 0}, 0.3, 0.28, 0.4, Mat3{}).least_width(), 0.3 - 0.28);
+  EXPECT_DOUBLE_EQ(SolidCylinder({0, 0, 0}, 0.3, 0.0, 0.01, Mat3{}).least_width(), 0.01);
+  EXPECT_DOUBLE_EQ(SolidBowl({0, 0, 0}, 0.3, 0.004, 0.3, tilted).least_width(), 0.004);
+  EXPECT_TRUE(std::isinf(HalfSpace({0, 0, 0}, {0, 0, 1}).least_width()));
+}
+
 // Grains dropped into an open box container and a cylindrical bucket stay inside them: none in a
 // wall, none outside.
 TEST(Shapes, ContainersHoldGrains) {
