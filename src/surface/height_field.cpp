@@ -324,7 +324,7 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
   evaluated_ = todo.size();
   // the fall of the static top h over the edge from column c to its neighbour n (MAC), where a
   // wall between stands in for a lower neighbour
-  auto fall = [&](std::size_t c, std::size_t n) { return (h_[c] - static_top_across(c, n)) / dx; };
+  auto fall = [&](std::size_t c, std::size_t n) { return (h_[c] - top_across(c, n, h_)) / dx; };
   const std::size_t row = static_cast<std::size_t>(nx);
   h_new_.resize(todo.size());
   for (std::size_t w = 0; w < todo.size(); ++w) {
@@ -407,7 +407,7 @@ Real HeightField::max_slope_top(std::size_t c, const std::vector<Real>& z) const
   constexpr Real kNone = std::numeric_limits<Real>::infinity();
   const int i = static_cast<int>(c % p_.nx), j = static_cast<int>(c / p_.nx);
   // the lower neighbour on each axis: the exchange's upwind slope is measured towards it
-  auto across = [&](std::size_t n) { return std::max(z[n], wall_top(c, n)); };
+  auto across = [&](std::size_t n) { return top_across(c, n, z); };
   const Real a = std::min(i > 0 ? across(c - 1) : kNone, i + 1 < p_.nx ? across(c + 1) : kNone);
   const Real b =
       std::min(j > 0 ? across(c - p_.nx) : kNone, j + 1 < p_.ny ? across(c + p_.nx) : kNone);

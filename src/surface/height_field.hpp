@@ -125,10 +125,10 @@ class HeightField {
   /// Whether walls higher than z stand between columns (i0, j0) and (i1, j1) on both of the
   /// shortest ways from one to the other along the grid (x first, or y first).
   bool walled_off(int i0, int j0, int i1, int j1, Real z) const;
-  /// The height of neighbour n's static top as column c's sand sees it: a wall between them
-  /// stands in for it up to its top.
-  Real static_top_across(std::size_t c, std::size_t n) const {
-    return std::max(h_[n], wall_top(c, n));
+  /// Neighbour n's height in z (its static top, or a trial one) as column c's sand sees it: a
+  /// wall between them stands in for it up to its top.
+  Real top_across(std::size_t c, std::size_t n, const std::vector<Real>& z) const {
+    return std::max(z[n], wall_top(c, n));
   }
 
   // ---- one update ----
