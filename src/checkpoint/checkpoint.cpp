@@ -633,8 +633,8 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   };
   // radii as the emitters draw them, masses and inertias as Grains::add makes them
   const MaterialConfig& mat = world.scene().material;
-  const Real r_lo = 0.5 * mat.diameter * (1 - mat.diameter_spread) * (1 - 1e-12);
-  const Real r_hi = 0.5 * mat.diameter * (1 + mat.diameter_spread) * (1 + 1e-12);
+  const Real r_lo = 0.5 * mat.smallest_diameter() * (1 - 1e-12);
+  const Real r_hi = 0.5 * mat.largest_diameter() * (1 + 1e-12);
   auto near = [](Real a, Real b) { return std::abs(a - b) <= 1e-9 * std::abs(b); };
   for (std::size_t i = 0; i < n; ++i) {
     const Real r = g.r[i], m = mat.density * (4.0 / 3.0) * kPi * r * r * r;

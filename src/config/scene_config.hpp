@@ -35,6 +35,8 @@ struct MaterialConfig {
 
   /// The largest grain's diameter [m].
   Real largest_diameter() const { return diameter * (1 + diameter_spread); }
+  /// The smallest grain's diameter [m].
+  Real smallest_diameter() const { return diameter * (1 - diameter_spread); }
 };
 
 /// Deriving k_n from the load a contact carries (docs/design.md §3), separately for each mode. Used

@@ -56,7 +56,7 @@ MeshObstacle place_mesh(const GeometryConfig& c, const MaterialConfig& material,
   o.friction = c.friction.value_or(material.wall_friction);
   o.rolling_friction = material.wall_rolling_friction;
   o.twisting_friction = material.wall_twisting_friction;
-  const Real d_min = material.diameter * (1 - material.diameter_spread);
+  const Real d_min = material.smallest_diameter();
   o.particle_radius = c.particle_radius.value_or(0.5 * d_min);
 
   std::string found;

@@ -47,7 +47,7 @@ HeightRange run_height_range(const World& world) {
   Real lo = kInf, hi = -kInf;
   for (const Real t : hf.solids().top)
     if (std::isfinite(t)) lo = std::min(lo, t), hi = std::max(hi, t);
-  const Real d = scene.material.diameter * (1 + scene.material.diameter_spread);
+  const Real d = scene.material.largest_diameter();
   for (const EmitterConfig& e : scene.emitters) {
     const EmitterBox b = emitter_box(e, d);
     hi = std::max(hi, b.centre.z + b.half.z);
@@ -62,7 +62,7 @@ PovOptions fixed_pov_camera(const World& world) {
   const SceneConfig& scene = world.scene();
   const Geometry& geometry = world.geometry();
   const HeapSize heap = largest_heap(scene);
-  const Real d = scene.material.diameter * (1 + scene.material.diameter_spread);
+  const Real d = scene.material.largest_diameter();
   Vec3 lo, hi;
   bool have = geometry.finite_bounds(lo, hi);
   const auto grow = [&](const Vec3& a, const Vec3& b) {

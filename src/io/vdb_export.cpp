@@ -290,7 +290,7 @@ Real vdb_points_voxel(const MaterialConfig& m) {
 
 Real vdb_surface_voxel(const SceneConfig& scene) {
   if (scene.output.vdb_voxel_size) return *scene.output.vdb_voxel_size;
-  return scene.material.diameter * (1 - scene.material.diameter_spread) / 3;
+  return scene.material.smallest_diameter() / 3;
 }
 
 void write_vdb(const std::string& path, const FrameData& f, const HeightField* static_layer,

@@ -308,7 +308,7 @@ std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const Mat
   region.y1 = e.center.y + e.size.y / 2;
   // (looked for half a grain inside the footprint's edge: a container's wall, whose inner face is
   // the edge, is not the floor)
-  const Real inset = 0.25 * m.diameter * (1 - m.diameter_spread);
+  const Real inset = 0.25 * m.smallest_diameter();
   region.floor = [&](Real x, Real y) {
     x = std::clamp(x, region.x0 + inset, region.x1 - inset);
     y = std::clamp(y, region.y0 + inset, region.y1 - inset);
@@ -342,8 +342,8 @@ std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const Mat
       if (mesh.winding->inside(c)) return true;
     return false;
   };
-  region.r_lo = 0.5 * m.diameter * (1 - m.diameter_spread);
-  region.r_hi = 0.5 * m.diameter * (1 + m.diameter_spread);
+  region.r_lo = 0.5 * m.smallest_diameter();
+  region.r_hi = 0.5 * m.largest_diameter();
   region.seed = seed;
   region.max_grains = max_grains;
   region.threads = threads > 0 ? threads : omp_get_num_procs();

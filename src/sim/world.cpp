@@ -17,7 +17,7 @@ namespace sandflow {
 
 TimeStep choose_time_step(const SceneConfig& scene) {
   const MaterialConfig& mat = scene.material;
-  const Real r_min = 0.5 * mat.diameter * (1 - mat.diameter_spread);
+  const Real r_min = 0.5 * mat.smallest_diameter();
   const Real m_min = mat.density * (4.0 / 3.0) * kPi * r_min * r_min * r_min;
   TimeStep ts;
   ts.t_c = contact_time(m_min / 2, mat.k_n);
@@ -29,7 +29,7 @@ TimeStep choose_time_step(const SceneConfig& scene) {
         scene.path, mat.density, mat.diameter, mat.k_n, m_min, ts.t_c));
   // A grain resting on the floor sinks m g / k_n into it; past the guard's overlap the run would
   // stop as soon as the heaviest grain lands (k_n = 1e-300 N/m, or a density of 1e300 kg/m^3).
-  const Real r_max = 0.5 * mat.diameter * (1 + mat.diameter_spread);
+  const Real r_max = 0.5 * mat.largest_diameter();
   const Real m_max = mat.density * (4.0 / 3.0) * kPi * r_max * r_max * r_max;
   const Real sink = m_max * norm(scene.simulation.gravity) / mat.k_n;
   const Real guard = scene.simulation.max_overlap_stop * 2 * r_max;
@@ -129,7 +129,7 @@ void scale_grain_count(SceneConfig& scene, std::int64_t total) {
     // the same box shape, from the same bottom; a box at least one spacing on every side holds a
     // grain, and growing it by 1 % a time reaches the count in a few dozen tries
     const Real bottom = e.center.z - e.size.z / 2;
-    const Real spacing = e.spacing * scene.material.diameter * (1 + scene.material.diameter_spread);
+    const Real spacing = e.spacing * scene.material.largest_diameter();
     const Vec3 shape = e.size;
     Real scale = std::cbrt(ratio);
     for (int tries = 0;; ++tries) {
@@ -230,15 +230,14 @@ void scene_domain(const SceneConfig& scene, const Geometry& geometry, Vec3& lo, 
 StaticFrame static_store_frame(const SceneConfig& scene, const HeightField& hf, Real lo, Real hi) {
   const MaterialConfig& mat = scene.material;
   const Real height = hi - lo;
-  const StaticFrame f =
-      static_frame(hf, lo - height, hi + height, 0.5 * mat.diameter * (1 - mat.diameter_spread),
-                   0.5 * mat.diameter * (1 + mat.diameter_spread));
+  const StaticFrame f = static_frame(hf, lo - height, hi + height, 0.5 * mat.smallest_diameter(),
+                                     0.5 * mat.largest_diameter());
   if (const std::string e = f.error(); !e.empty())
     throw InputError(
         fmt::format("{}: the static layer cannot be stored: {} (simulation.domain, "
                     "surface, material.diameter)",
                     scene.path, e));
-  const Real bound = 1e-3 * mat.diameter * (1 - mat.diameter_spread);
+  const Real bound = 1e-3 * mat.smallest_diameter();
   if (!(f.position_error() <= bound && f.radius_error() <= bound))
     throw InputError(fmt::format(
         "{}: the static layer would store a grain's centre within {:.3g} m and its radius within "
