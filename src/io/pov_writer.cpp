@@ -56,6 +56,23 @@ void put(std::string& s, const Vec3& v) {
   s += '>';
 }
 
+// A point written to the shortest text that reads back as the same double: the camera, whose
+// direction seven digits of its two points may not tell.
+struct Exact {
+  Vec3 v;
+};
+
+void put(std::string& s, Exact e) {
+  char buf[32];
+  s += '<';
+  for (int a = 0; a < 3; ++a) {
+    const double c = std::isfinite(e.v[a]) ? e.v[a] : 0;
+    const auto r = std::to_chars(buf, buf + sizeof buf, c);
+    s.append(buf, r.ptr);
+    s += a < 2 ? ',' : '>';
+  }
+}
+
 template <class... Args>
 void line(std::string& s, const Args&... args) {
   (put(s, args), ...);
@@ -127,6 +144,15 @@ struct Camera {
   Vec3 location, look_at, sky{0, 0, 1};
 };
 
+// Only the direction of look_at counts for a perspective camera, but POV-Ray refuses one that
+// lies within about 1e-10 of the location: a point that near is moved out along the view.
+Vec3 pov_look_at(const Camera& cam) {
+  const Vec3 view = cam.look_at - cam.location;
+  const Real length = norm(view);
+  if (!(length > 0) || length >= 1e-3 * std::max<Real>(1, norm(cam.location))) return cam.look_at;
+  return cam.location + view / length * std::max<Real>(1, norm(cam.location));
+}
+
 void write_header(std::string& s, const Camera& cam, const ViewBounds& b, const PovOptions& opt,
                   std::size_t grains) {
   const double aspect = static_cast<double>(opt.width) / std::max(opt.height, 1);
@@ -139,12 +165,12 @@ void write_header(std::string& s, const Camera& cam, const ViewBounds& b, const 
   line(s, "");
   line(s, "camera {");
   line(s, "  perspective");
-  line(s, "  location ", cam.location);
+  line(s, "  location ", Exact{cam.location});
   line(s, "  right -x*", aspect, "  // negated: right-handed world, picture not mirrored");
   line(s, "  up y");
   line(s, "  sky ", cam.sky);
   line(s, "  angle ", opt.fov_deg);
-  line(s, "  look_at ", cam.look_at);
+  line(s, "  look_at ", Exact{pov_look_at(cam)});
   line(s, "}");
   line(s, "");
   // Key light high on the camera's left, soft; fill light on its right, without shadows.
@@ -647,6 +673,13 @@ std::string find_povray() {
 
 namespace {
 
+bool ascii_without_spaces(const std::string& name) {
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return u > 0x20 && u < 0x7f;
+  });
+}
+
 // Runs `args` with run_logged (core/process.hpp) into the file `partial`, which becomes
 // `out_path` only when the program succeeded and wrote something: no half-made picture or movie is
 // ever left under its name. Throws OutputError with the end of the log (`nothing`: the message
@@ -688,9 +721,19 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
   const std::string partial = fs::absolute(png_path + ".partial.png", ec).string();
   fs::remove(partial, ec);
 
+  // POV-Ray splits its options at spaces and cannot open non-ASCII paths: it runs in the scene's
+  // folder (its default I/O policy allows that folder) and is given names relative to it, which
+  // sandflow makes ASCII (frame numbers); the folder's own name never reaches it
+  const fs::path work_dir = pov_abs.parent_path();
+  const fs::path partial_rel = fs::path(partial).lexically_relative(work_dir);
+  if (partial_rel.empty() || !ascii_without_spaces(partial_rel.string()) ||
+      !ascii_without_spaces(pov_abs.filename().string()))
+    throw OutputError(png_path + ": cannot render: POV-Ray cannot be given the name " +
+                      partial_rel.string() + " or " + pov_abs.filename().string() +
+                      " (spaces or non-ASCII characters); write the picture beside the scene file");
   std::vector<std::string> args = {exe,
-                                   "+I" + pov_abs.string(),
-                                   "+O" + partial,
+                                   "+I" + pov_abs.filename().string(),
+                                   "+O" + partial_rel.string(),
                                    "+W" + std::to_string(width),
                                    "+H" + std::to_string(height),
                                    antialias ? "+A0.3" : "-A",
@@ -699,8 +742,7 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
                                    "-P",
                                    "Output_Alpha=off"};
   if (threads > 0) args.push_back("+WT" + std::to_string(threads));
-  // POV-Ray's default I/O policy allows the working directory: run it in the scene's folder.
-  run_into_file(args, pov_abs.parent_path().string(), log_path, "povray", partial, png_path,
+  run_into_file(args, work_dir.string(), log_path, "povray", partial, png_path,
                 "povray wrote no image");
 }
 

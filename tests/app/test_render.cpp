@@ -141,6 +141,29 @@ TEST_F(Render, LastFrameByDefaultAndNoLeftovers) {
   EXPECT_EQ(names, std::vector<std::string>{"0002.png"});
 }
 
+// POV-Ray splits its options at spaces and cannot open non-ASCII paths: a run folder whose path
+// has both renders all the same; a look_at a hair from the location is still a direction.
+TEST_F(Render, AFolderWithSpacesAndNonAsciiNamesRenders) {
+  const auto scene = box.write("tiny.toml", kTinyScene);
+  const fs::path run = box.dir / "run dir" / "sable fin \u00fc";
+  std::string log;
+  ASSERT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 1 --out '" + run.string() + "'",
+                     &log),
+            0)
+      << log;
+  ASSERT_EQ(sandflow("render '" + run.string() +
+                         "' --width 32 --height 24 --quality draft --keep-pov --set "
+                         "'camera.position=[0.3,-0.3,1]' --set "
+                         "'camera.look_at=[0.3,-0.3,0.9999999999]'",
+                     &log),
+            0)
+      << log;
+  EXPECT_GT(read_rgb_png(run / "render" / "0001.png").width, 0);
+  const std::string pov = read_text(run / "render" / "0001.pov");
+  // (moved out along the view by |location| = 1.086 m: POV-Ray's own limit is about 1e-10 m)
+  EXPECT_NE(pov.find("look_at <0.3,-0.3,-0.086278"), std::string::npos) << pov.substr(0, 600);
+}
+
 TEST_F(Render, BadFramesAreRefusedNamingTheOption) {
   const fs::path run = tiny_run(3);
   const std::string base = "render " + run.string() + " --width 32 --height 24 --quality draft ";
