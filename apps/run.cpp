@@ -32,6 +32,7 @@
 #include "progress.hpp"
 #include "scene/scene_loader.hpp"
 #include "sim/emitters.hpp"
+#include "sim/world.hpp"
 
 namespace fs = std::filesystem;
 
@@ -322,6 +323,19 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
         "it again with: sandflow run SCENE --out {} --force",
         dir, shell_quote(dir)));
   RunOptions r;
+  // a count the record holds: an integer in [lo, hi], never a float cast out of range
+  auto whole = [&](const nlohmann::json& v, const char* name, std::int64_t lo,
+                   std::int64_t hi) -> std::int64_t {
+    const bool integer = v.is_number_integer() &&
+                         (v.is_number_unsigned() ? v.get<std::uint64_t>() <= std::uint64_t(hi)
+                                                 : v.get<std::int64_t>() <= hi);
+    if (!integer || v.get<std::int64_t>() < lo)
+      throw InputError(
+          fmt::format("{}: {} {} is not a whole number from {} to {}: the record was "
+                      "edited or damaged",
+                      record_path.string(), name, v.dump(), lo, hi));
+    return v.get<std::int64_t>();
+  };
   try {
     std::ifstream in(record_path);
     record = nlohmann::json::parse(in);
@@ -329,23 +343,17 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
     r.scene = record.at("scene_file").get<std::string>();
     r.sets = record.at("start").at("sets").get<std::vector<std::string>>();
     r.mode = record.at("start").at("mode").get<std::string>();
-    r.grains = record.at("start").at("grains").get<std::int64_t>();
+    r.grains = whole(record.at("start").at("grains"), "grains", 0, 2'000'000'000);
     if (const auto& e = record.at("start").at("exports"); !e.is_null())
       r.exports = e.get<std::string>();
     r.up_axis = record.at("start").at("up_axis").get<std::string>();
-    r.frames = record.at("frames").get<int>();
-    r.threads = record.at("threads").get<int>();
-    r.checkpoint_every = record.at("checkpoint_every").get<int>();
-    if (record.contains("run_to_frame") && record["run_to_frame"].get<int>() <= 0)
-      throw InputError(
-          fmt::format("{}: run_to_frame {} is not a frame: the record was edited or "
-                      "damaged",
-                      record_path.string(), record["run_to_frame"].dump()));
-    if (r.frames < 0 || r.grains < 0 || r.threads < 0 || r.threads > 1024 || r.checkpoint_every < 0)
-      throw InputError(fmt::format(
-          "{}: frames {}, grains {}, threads {} or checkpoint_every {} is out of its range: the "
-          "record was edited or damaged",
-          record_path.string(), r.frames, r.grains, r.threads, r.checkpoint_every));
+    const auto max_frames = static_cast<std::int64_t>(kMaxFrames);
+    r.frames = static_cast<int>(whole(record.at("frames"), "frames", 0, max_frames));
+    r.threads = static_cast<int>(whole(record.at("threads"), "threads", 0, 1024));
+    r.checkpoint_every =
+        static_cast<int>(whole(record.at("checkpoint_every"), "checkpoint_every", 0, max_frames));
+    if (record.contains("run_to_frame"))
+      whole(record["run_to_frame"], "run_to_frame", 1, max_frames);
     const std::string wd = record.at("working_directory").get<std::string>();
     // a relative scene path names a file from the folder the run was started in
     if (fs::path(r.scene).is_relative() && fs::current_path(ec) != fs::path(wd))

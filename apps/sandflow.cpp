@@ -12,6 +12,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "sim/world.hpp"
 
 using namespace sandflow;
 
@@ -32,13 +33,16 @@ std::string command_line(int argc, char** argv) {
   return s;
 }
 
+// frame counts and numbers: 1 to the most frames a run may have (sim/world.hpp)
+const CLI::Range kFrameRange(1, static_cast<int>(kMaxFrames));
+
 /// The options of the commands that run a scene: the file, where to write, and how to scale it.
 void add_scene_options(CLI::App* cmd, RunOptions& o, const std::string& out_help,
                        const std::string& set_help) {
   cmd->add_option("scene", o.scene, "scene file (TOML)")->required();
   cmd->add_option("--out", o.out, out_help);
   cmd->add_option("--frames", o.frames, "number of frames (default: from the scene)")
-      ->check(CLI::PositiveNumber);
+      ->check(kFrameRange);
   cmd->add_option("--grains", o.grains, "scale the emitters to N grains in total")
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{2000000000}));
   cmd->add_option("--threads", o.threads, "OpenMP threads (default: all cores)")
@@ -83,7 +87,7 @@ int main(int argc, char** argv) {
   run->add_option("--checkpoint-every", ro.checkpoint_every,
                   "write DIR/checkpoint.bin every N frames and after the last (default 30; 0: "
                   "only on SIGINT/SIGTERM)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, static_cast<int>(kMaxFrames)));
   run->footer(
       "A run writes DIR/run.json (how it was started) and, every N frames, DIR/checkpoint.bin.\n"
       "SIGINT (Ctrl-C) or SIGTERM finishes the current frame, writes a checkpoint and exits;\n"
@@ -168,7 +172,7 @@ int main(int argc, char** argv) {
   table1->add_option("--scale", to.scale,
                      "grains per scene: round(F x the paper's count), F in (0, 100] (default 1)");
   table1->add_option("--frames", to.frames, "number of frames per run (default: each scene's)")
-      ->check(CLI::PositiveNumber);
+      ->check(kFrameRange);
   table1->add_option("--out", to.out, "output folder (default out/table1)");
   table1
       ->add_option("--scenes", to.scenes,
@@ -210,8 +214,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(16, 16384));
   render->add_option("--height", rdo.height, "image height [pixels] (default 720)")
       ->check(CLI::Range(16, 16384));
-  auto* frame_opt = render->add_option("--frame", rdo.frame, "one frame (default: the last)")
-                        ->check(CLI::PositiveNumber);
+  auto* frame_opt =
+      render->add_option("--frame", rdo.frame, "one frame (default: the last)")->check(kFrameRange);
   render
       ->add_option("--frames", rdo.frames,
                    "frames to render, from 1: N, A:B (inclusive), A:, :B, or all (default: the "

@@ -26,13 +26,18 @@ Real clamped_restitution(Real beta) {
 Real damping_beta(Real restitution) {
   if (restitution >= 1) return 0;
   // clamped_restitution falls monotonically from 1 (beta = 0) towards 0: bisect
-  Real lo = 0, hi = 50;
+  Real lo = 0, hi = kMaxDampingBeta;
   for (int it = 0; it < 40; ++it) {
     const Real mid = 0.5 * (lo + hi);
     if (clamped_restitution(mid) > restitution) lo = mid;
     else hi = mid;
   }
   return 0.5 * (lo + hi);
+}
+
+Real smallest_restitution() {
+  static const Real e = clamped_restitution(kMaxDampingBeta);
+  return e;
 }
 
 }  // namespace sandflow

@@ -50,8 +50,14 @@ inline Real damping_beta_unclamped(Real restitution) {
 /// delta'' = -(delta + 2 beta delta') (while positive) with RK4 until the force vanishes.
 Real clamped_restitution(Real beta);
 
-/// beta such that a head-on collision under the clamped law has restitution e in (0, 1].
+/// The largest damping factor damping_beta gives: restitutions below what it reaches
+/// (smallest_restitution()) are refused by the scene loader.
+constexpr Real kMaxDampingBeta = 50;
+/// beta such that a head-on collision under the clamped law has restitution e in
+/// [smallest_restitution(), 1].
 Real damping_beta(Real restitution);
+/// The restitution of the clamped law at kMaxDampingBeta.
+Real smallest_restitution();
 
 /// Contact duration of a linear spring-dashpot (undamped): t_c = pi sqrt(m_eff / k_n) [s].
 inline Real contact_time(Real m_eff, Real k_n) { return kPi * std::sqrt(m_eff / k_n); }

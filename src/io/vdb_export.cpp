@@ -216,8 +216,11 @@ vdb::FloatGrid::Ptr sand_level_set(const FrameData& f, const HeightField* static
     vdb::tools::ParticlesToLevelSet<vdb::FloatGrid> raster(*ls);
     // OpenVDB leaves out spheres under 1.5 voxels (its Nyquist limit): with a coarse voxel the
     // small grains are drawn coarsely instead, never dropped from the surface
-    const Real r_min = *std::min_element(f.radius.begin(), f.radius.end());
-    raster.setRmin(std::min(1.5, r_min / vs));
+    const auto [r_min, r_max] = std::minmax_element(f.radius.begin(), f.radius.end());
+    raster.setRmin(std::min(1.5, *r_min / vs));
+    // and above 100 voxels (its default cap) it drops them too: never, here (the scene's voxel is
+    // at least d / 200, scene_tables.hpp)
+    raster.setRmax(std::max(100.0, *r_max / vs));
     raster.rasterizeSpheres(GrainSpheres(f, info.up));
     raster.finalize(/*prune=*/true);
   }

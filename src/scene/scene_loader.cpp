@@ -49,7 +49,8 @@ void read_settings(TableReader& doc, const Places& places, SceneConfig& c) {
     read_stiffness({places, *t, "stiffness"}, c.stiffness);
   if (const auto* t = doc.table("surface"))
     read_surface({places, *t, "surface"}, c.surface, c.material.diameter);
-  if (const auto* t = doc.table("output")) read_output({places, *t, "output"}, c.output);
+  if (const auto* t = doc.table("output"))
+    read_output({places, *t, "output"}, c.output, c.material);
   if (const auto* t = doc.table("camera")) read_camera({places, *t, "camera"}, c.camera);
 }
 

@@ -26,7 +26,9 @@ void read_simulation(TableReader r, SimulationConfig& s);
 void read_stiffness(TableReader r, StiffnessConfig& k);
 /// Angles are written in degrees and stored in radians. `diameter` is the default cell size.
 void read_surface(TableReader r, SurfaceConfig& s, Real diameter);
-void read_output(TableReader r, OutputConfig& o);
+/// The finest `output.vdb_voxel_size`: this many voxels across the largest grain.
+constexpr double kVdbGrainVoxelsMax = 200;
+void read_output(TableReader r, OutputConfig& o, const MaterialConfig& m);
 /// The render camera: a fixed one (position and look_at together, up optional) or only a field
 /// of view for the automatic one.
 void read_camera(TableReader r, CameraConfig& c);

@@ -7,6 +7,9 @@
 #include <string_view>
 #include <vector>
 
+#include <fmt/format.h>
+
+#include "dem/contact.hpp"
 #include "io/export_formats.hpp"
 #include "scene/scene_tables.hpp"
 #include "surface/surface_params.hpp"
@@ -27,6 +30,13 @@ void read_material(TableReader r, MaterialConfig& m) {
   r.read("k_n", m.k_n, kPositive);
   r.read("k_t_ratio", m.k_t_ratio, closed(0, 1));
   r.read("restitution", m.restitution, open_closed(0, 1));
+  if (m.restitution < smallest_restitution())
+    r.fail_at(
+        "restitution",
+        fmt::format("{} = {:.3g} is below {:.3g}, the least a grain of this contact law keeps "
+                    "of its speed (its dashpot at the strongest damping it is given); use a "
+                    "value at least that",
+                    r.name("restitution"), m.restitution, smallest_restitution()));
   r.read("tangential_damping_ratio", m.tangential_damping_ratio, closed(0, 1));
   r.read("friction", m.friction, kNonNegative);
   r.read("rolling_friction", m.rolling_friction, kNonNegative);
@@ -145,7 +155,7 @@ void read_surface(TableReader r, SurfaceConfig& s, Real diameter) {
   if (s.extent) check_surface_extent(r, s, diameter);
 }
 
-void read_output(TableReader r, OutputConfig& o) {
+void read_output(TableReader r, OutputConfig& o, const MaterialConfig& m) {
   r.read("fps", o.fps, kPositive);
   r.read("duration", o.duration, kPositive);
   r.read("settle_time", o.settle_time, kNonNegative);
@@ -153,6 +163,13 @@ void read_output(TableReader r, OutputConfig& o) {
   r.read("export", exports);
   r.read("up_axis", o.up_axis, kUpAxes);
   r.read("vdb_voxel_size", o.vdb_voxel_size, kPositive);
+  if (o.vdb_voxel_size && *o.vdb_voxel_size < m.largest_diameter() / kVdbGrainVoxelsMax)
+    r.fail_at("vdb_voxel_size",
+              fmt::format("{} = {:.3g} m is below {:.3g} m, the largest grain's diameter / {:.0f}: "
+                          "a finer voxel draws nothing a picture can show, at a cost in bytes that "
+                          "grows as 1 / voxel^2",
+                          r.name("vdb_voxel_size"), *o.vdb_voxel_size,
+                          m.largest_diameter() / kVdbGrainVoxelsMax, kVdbGrainVoxelsMax));
   r.finish("[output]");
   if (exports) {
     o.exports.emplace();

@@ -42,14 +42,26 @@ TimeStep choose_time_step(const SceneConfig& scene) {
         scene.path, mat.density, mat.diameter, mat.k_n, norm(scene.simulation.gravity), sink,
         100 * scene.simulation.max_overlap_stop, guard));
   // Symplectic Euler on one spring is stable below 2/omega = 0.64 t_c; a grain held by many
-  // contacts vibrates up to ~3x faster, so the bound keeps that factor: t_c / 5.
-  ts.stable_bound = ts.t_c / 5;
-  Real dt = scene.simulation.dt.value_or(scene.simulation.dt_fraction * ts.t_c);
+  // contacts vibrates up to ~3x faster, so the bound keeps that factor: t_c / 5. The explicit
+  // dashpot takes c dt / m_eff = 2 beta omega dt of the relative speed in a step: past 1 it
+  // overshoots, past 2 it grows; with the same factor of 3 for many contacts, dt <= t_c / (3 pi
+  // beta), which binds only for restitutions below about 0.05 (beta > 1.7).
+  const Real beta = damping_beta(mat.restitution);
+  const Real damping_bound = beta > 0 ? ts.t_c / (3 * kPi * beta) : ts.t_c;
+  ts.stable_bound = std::min(ts.t_c / 5, damping_bound);
+  Real dt = scene.simulation.dt.value_or(
+      std::min(scene.simulation.dt_fraction * ts.t_c, ts.stable_bound));
   if (dt > ts.stable_bound)
     throw InputError(fmt::format(
-        "{}: simulation.dt = {:.4g} s is above the stable bound {:.4g} s (t_c / 5, with contact "
-        "time t_c = {:.4g} s for the smallest grains at k_n = {:.4g} N/m)",
-        scene.path, dt, ts.stable_bound, ts.t_c, mat.k_n));
+        "{}: simulation.dt = {:.4g} s is above the stable bound {:.4g} s ({}, with contact time "
+        "t_c = {:.4g} s for the smallest grains at k_n = {:.4g} N/m)",
+        scene.path, dt, ts.stable_bound,
+        damping_bound < ts.t_c / 5
+            ? fmt::format("t_c / (3 pi beta): the dashpot of material.restitution = {:.3g}, "
+                          "beta = {:.3g}",
+                          mat.restitution, beta)
+            : std::string("t_c / 5"),
+        ts.t_c, mat.k_n));
   const Real frame_dt = 1.0 / scene.output.fps;
   const Real steps = std::ceil(frame_dt / dt - 1e-9);
   if (!(steps <= kMaxSubsteps))
@@ -352,12 +364,40 @@ void World::emit() {
       seat_bed(e);
       continue;
     }
+    const std::size_t first = new_grains_.size();
     e.emit(time_, rng_, new_grains_, nearby_x_, nearby_r_);
+    if (e.type() != EmitterType::Bed)  // (a bed is packed around the solids)
+      check_emitted(static_cast<std::size_t>(&e - emitters_.data()), first);
   }
   if (new_grains_.empty()) return;
   for (const NewGrain& g : new_grains_)
     grains_.add(next_id_++, g.x, g.v, g.r, scene_.material.density);
   dem_.invalidate();
+}
+
+void World::check_emitted(std::size_t k, std::size_t first) const {
+  // A grain born deep in a solid is a misplaced emitter or solid, not soft contacts: say so now,
+  // rather than let the overlap guard stop the run with advice about k_n. (One born inside a
+  // closed mesh touches none of its particles: the count of grains inside the geometry names it.)
+  const Real limit = scene_.simulation.max_overlap_stop;
+  auto named = [](const std::string& name, const std::string& fallback) {
+    return name.empty() || name == fallback ? std::string() : fmt::format(" ('{}')", name);
+  };
+  for (std::size_t q = first; q < new_grains_.size(); ++q) {
+    const NewGrain& g = new_grains_[q];
+    for (const Obstacle& o : geometry_.obstacles()) {
+      const Real depth = (g.r - o.solid->closest(g.x).distance) / (2 * g.r);
+      if (!(depth > limit)) continue;
+      const GeometryConfig& solid = scene_.geometry[static_cast<std::size_t>(o.source)];
+      throw InputError(fmt::format(
+          "{}: emitter[{}]{} places a grain at ({:.4g}, {:.4g}, {:.4g}) m {:.0f} % of its "
+          "diameter inside geometry[{}]{} (more than simulation.max_overlap_stop = {:.0f} %): "
+          "move the emitter or the solid",
+          scene_.path, k, named(scene_.emitters[k].name, fmt::format("emitter {}", k)), g.x.x,
+          g.x.y, g.x.z, 100 * depth, o.source,
+          named(solid.name, fmt::format("geometry {}", o.source)), 100 * limit));
+    }
+  }
 }
 
 void World::seat_bed(Emitter& e) {

@@ -32,7 +32,7 @@ inline constexpr Real kMaxFrames = 10'000'000;
 
 struct TimeStep {
   Real t_c;           ///< contact duration of the two smallest grains [s]
-  Real stable_bound;  ///< largest dt accepted: t_c / 5 [s]
+  Real stable_bound;  ///< largest dt accepted: t_c / 5, less for a strong dashpot [s]
   Real dt;            ///< the step used: frame time / substeps [s]
   int substeps;       ///< steps per frame
 };
@@ -165,6 +165,9 @@ class World {
   /// Guards: the solids whose time has come are removed, then check_grains.
   void begin_step();
   void emit();
+  /// Throws InputError when a grain emitter k placed this step (new_grains_ from `first` on) lies
+  /// deeper in a solid than simulation.max_overlap_stop.
+  void check_emitted(std::size_t k, std::size_t first) const;
   /// A bed's grains, in surface mode: to the layers where they rest (SurfaceFlow::seat_bed).
   void seat_bed(Emitter& e);
   /// Height field: measure H, evolve h through the exchange (an update, every update_steps).

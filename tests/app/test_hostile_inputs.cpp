@@ -298,4 +298,121 @@ TEST(HostileInputs, ASecondRunIntoARunningOnesFolderIsRefused) {
   EXPECT_TRUE(fs::exists(out / "summary.json"));
 }
 
+// An emitter that places grains deep in a solid (a block half under the floor, a floor raised
+// above the block) is refused with exit 2, naming the emitter and the solid, not stopped by the
+// overlap guard with advice about k_n. The same block above the floor runs.
+TEST(HostileInputs, AnEmitterPlacingGrainsInsideASolidIsRefusedNamingBoth) {
+  Sandbox box;
+  const fs::path scene = box.write("buried.toml", sandflow_test::tiny_block_scene(20));
+  for (const std::string set :
+       {"emitter.0.center=[0,0,0]", "geometry.0.point=[0,0,0.2]", "geometry.0.normal=[0,0,-1]"}) {
+    std::string log;
+    EXPECT_EQ(bounded("run " + scene.string() + " --frames 1 --export none --set '" + set +
+                          "' --out " + (box.dir / "out").string() + " --force",
+                      &log),
+              2)
+        << set << "\n"
+        << log;
+    EXPECT_TRUE(has(log, "buried.toml: emitter[0] places a grain at") &&
+                has(log, "inside geometry[0]") && has(log, "move the emitter or the solid") &&
+                !has(log, "raise k_n"))
+        << set << "\n"
+        << log;
+  }
+  std::string log;
+  EXPECT_EQ(bounded("run " + scene.string() + " --frames 1 --export none --out " +
+                        (box.dir / "out").string() + " --force",
+                    &log),
+            0)
+      << log;
+}
+
+// A restitution near 0 needs a dashpot so strong that the step of an ordinary scene would let it
+// overshoot and blow up at the first contact: the derived step shrinks for it (the run ends with
+// its overlaps small), a fixed step above the bound is refused naming the restitution, and a
+// restitution below the law's least is refused by the loader.
+TEST(HostileInputs, AStrongDashpotShortensTheStepOrIsRefused) {
+  Sandbox box;
+  const fs::path scene = box.write("damped.toml", sandflow_test::tiny_block_scene(20));
+  const fs::path out = box.dir / "out";
+  std::string log;
+  ASSERT_EQ(bounded("run " + scene.string() +
+                        " --frames 2 --export none --set "
+                        "material.restitution=1e-4 --out " +
+                        out.string(),
+                    &log),
+            0)
+      << log;
+  const sandflow::TimeStep plain = [] {
+    sandflow::SceneConfig s;
+    s.material.k_n = 1e4;
+    return sandflow::choose_time_step(s);
+  }();
+  sandflow::SceneConfig damped;
+  damped.material.k_n = 1e4;
+  damped.material.restitution = 1e-4;
+  const sandflow::TimeStep strong = sandflow::choose_time_step(damped);
+  // the bound t_c / (3 pi beta), beta near its largest (50): about t_c / 470, against t_c / 20
+  // (dt is a frame over a whole number of steps: at most the bound, within a step's share of it)
+  const double bound = strong.t_c / (3 * sandflow::kPi * sandflow::damping_beta(1e-4));
+  EXPECT_LE(strong.dt, bound);
+  EXPECT_GT(strong.dt, bound * (1 - 1.0 / strong.substeps));
+  EXPECT_LE(plain.dt, 0.05 * plain.t_c);  // e = 0.3: the step is the usual one
+  EXPECT_GT(plain.dt, 0.05 * plain.t_c * (1 - 1.0 / plain.substeps));
+
+  EXPECT_EQ(bounded("run " + scene.string() +
+                        " --check --set material.restitution=1e-4 --set "
+                        "simulation.dt=1e-5",
+                    &log),
+            2)
+      << log;
+  EXPECT_TRUE(has(log, "damped.toml: simulation.dt = 1e-05 s is above the stable bound") &&
+              has(log, "material.restitution = 0.0001"))
+      << log;
+  EXPECT_EQ(bounded("run " + scene.string() + " --check --set material.restitution=1e-9", &log), 2)
+      << log;
+  EXPECT_TRUE(has(log, "material.restitution = 1e-09 is below")) << log;
+}
+
+// A run record whose counts are not whole numbers in range (edited: a float, 1e20) is refused
+// naming the field, before any of it is converted.
+TEST(HostileInputs, ARunRecordWithCountsOutOfRangeIsRefused) {
+  Sandbox box;
+  const fs::path scene = box.write("tiny.toml", sandflow_test::tiny_block_scene(20));
+  const fs::path out = box.dir / "out";
+  std::string log;
+  ASSERT_EQ(
+      bounded("run " + scene.string() + " --frames 1 --export none --out " + out.string(), &log), 0)
+      << log;
+  const std::string record = sandflow_test::read_text(out / "run.json");
+  const std::size_t at = record.find("\"frames\": 1");
+  ASSERT_NE(at, std::string::npos) << record;
+  for (const std::string value : {"1e20", "2.5", "-3"}) {
+    std::string edited = record;
+    edited.replace(at, std::string("\"frames\": 1").size(), "\"frames\": " + value);
+    std::ofstream(out / "run.json") << edited;
+    EXPECT_EQ(bounded("run --resume " + out.string(), &log), 2) << value << "\n" << log;
+    EXPECT_TRUE(has(log, "run.json: frames ") && has(log, "is not a whole number from 0 to"))
+        << value << "\n"
+        << log;
+  }
+}
+
+// A VDB voxel finer than d / 200 is refused at load: OpenVDB drops a sphere wider than 100 voxels
+// from the level set, which left it empty with exit 0. Frame counts out of range say the range.
+TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
+  Sandbox box;
+  const fs::path scene = box.write("fine.toml", sandflow_test::tiny_block_scene(20));
+  std::string log;
+  EXPECT_EQ(bounded("run " + scene.string() + " --check --set output.vdb_voxel_size=2e-5", &log), 2)
+      << log;
+  EXPECT_TRUE(has(log, "output.vdb_voxel_size = 2e-05 m is below 5e-05 m")) << log;
+  EXPECT_EQ(bounded("run " + scene.string() + " --check --set output.vdb_voxel_size=5e-5", &log), 0)
+      << log;
+  for (const std::string frames : {"0", "20000000"}) {
+    EXPECT_EQ(bounded("run " + scene.string() + " --check --frames " + frames, &log), 2) << log;
+    EXPECT_TRUE(has(log, "--frames: Value " + frames + " not in range 1 to 10000000")) << log;
+  }
+}
+
 }  // namespace
