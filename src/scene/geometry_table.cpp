@@ -129,6 +129,10 @@ void read_container(TableReader& r, GeometryConfig& g) {
   r.read("container", g.container);
   r.read("open_top", g.open_top);
   r.read("wall_thickness", g.wall_thickness, kPositive);
+  for (const char* key : {"open_top", "wall_thickness"})
+    if (r.has(key) && !g.container)
+      r.fail_at(key, r.name(key) + " belongs to a container: set " + r.name("container") +
+                         " = true, or leave it out");
 }
 
 void read_bowl(TableReader& r, GeometryConfig& g) {

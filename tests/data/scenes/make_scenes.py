@@ -122,6 +122,15 @@ CASES = {
     "non_ascii_after_line_backslash.toml": ("a non-ASCII character after a backslash in a multi-line "
                                             "string",
                                             '[scene]\ndescription = """\\\n\u00a7 sand"""\n\n' + EMITTER),
+    # values each in its type's range that the rest of the scene makes meaningless
+    "restitution_below_the_laws_least.toml": ("material.restitution = 1e-06 is below 9.98e-05",
+                                              "[material]\nrestitution = 1e-6\n\n" + EMITTER),
+    "vdb_voxel_finer_than_d_over_200.toml": ("output.vdb_voxel_size = 1e-05 m is below 5e-05 m",
+                                             "[output]\nvdb_voxel_size = 1e-5\n\n" + EMITTER),
+    "wall_thickness_without_container.toml": ("geometry[0].wall_thickness belongs to a container",
+                                              '[[geometry]]\ntype = "box"\ncenter = [0, 0, 0]\n'
+                                              'size = [1, 1, 0.1]\nwall_thickness = 0.02\n\n'
+                                              + EMITTER),
     # binary garbage and bad encodings
     "binary_garbage.toml": ("a non-ASCII character outside a string or comment", bytes((i * 131 + 17) % 256 for i in range(400))),
     "nul_bytes.toml": ("expected digit, saw '\\u0000'", "[material]\ndensity = 26\0\x0000\n\n" + EMITTER),
