@@ -36,11 +36,16 @@ std::string command_line(int argc, char** argv) {
 // frame counts and numbers: 1 to the most frames a run may have (sim/world.hpp)
 const CLI::Range kFrameRange(1, static_cast<int>(kMaxFrames));
 
+// an output folder given as '' would fall back to the default one, unasked
+const CLI::Validator kNonEmptyPath(
+    [](const std::string& s) { return s.empty() ? std::string("an empty folder name") : ""; },
+    "");
+
 /// The options of the commands that run a scene: the file, where to write, and how to scale it.
 void add_scene_options(CLI::App* cmd, RunOptions& o, const std::string& out_help,
                        const std::string& set_help) {
   cmd->add_option("scene", o.scene, "scene file (TOML)")->required();
-  cmd->add_option("--out", o.out, out_help);
+  cmd->add_option("--out", o.out, out_help)->check(kNonEmptyPath);
   cmd->add_option("--frames", o.frames, "number of frames (default: from the scene)")
       ->check(kFrameRange);
   cmd->add_option("--grains", o.grains, "scale the emitters to N grains in total")
@@ -173,7 +178,7 @@ int main(int argc, char** argv) {
                      "grains per scene: round(F x the paper's count), F in (0, 100] (default 1)");
   table1->add_option("--frames", to.frames, "number of frames per run (default: each scene's)")
       ->check(kFrameRange);
-  table1->add_option("--out", to.out, "output folder (default out/table1)");
+  table1->add_option("--out", to.out, "output folder (default out/table1)")->check(kNonEmptyPath);
   table1
       ->add_option("--scenes", to.scenes,
                    "comma-separated subset of floor,terrain,bowl,dragon,armadillo (default: all "

@@ -399,7 +399,8 @@ TEST(HostileInputs, ARunRecordWithCountsOutOfRangeIsRefused) {
 }
 
 // A VDB voxel finer than d / 200 is refused at load: OpenVDB drops a sphere wider than 100 voxels
-// from the level set, which left it empty with exit 0. Frame counts out of range say the range.
+// from the level set, which left it empty with exit 0. Frame counts out of range say the range,
+// and an empty --out is refused.
 TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
   Sandbox box;
   const fs::path scene = box.write("fine.toml", sandflow_test::tiny_block_scene(20));
@@ -413,6 +414,9 @@ TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
     EXPECT_EQ(bounded("run " + scene.string() + " --check --frames " + frames, &log), 2) << log;
     EXPECT_TRUE(has(log, "--frames: Value " + frames + " not in range 1 to 10000000")) << log;
   }
+  // an empty output folder is not the default one
+  EXPECT_EQ(bounded("run " + scene.string() + " --frames 1 --out ''", &log), 2) << log;
+  EXPECT_TRUE(has(log, "--out: an empty folder name")) << log;
 }
 
 }  // namespace
