@@ -237,6 +237,15 @@ int calibrate_command(const RunOptions& o, int trials, bool again, const RigSett
   fmt::print("{}        {}\n", cached ? "cached" : "stored",
              (fs::path(calibration_cache_dir()) / (key + ".json")).string());
   if (!cached) fmt::print("time             {:.0f} s\n", j->at("seconds").get<double>());
+  // A smaller base holds a lower heap whose flank stands lower (the floor's sand, seeds 1 and 2:
+  // base 4 gave 9.6-16.3 deg, 6: 23.2-25.5, 7: 27.4-28.7, 10: 31.2-34.9, 14: 35.0-35.3;
+  // docs/performance.md, forty-seventh); surface runs use the default rig's key, never these.
+  if (rig.base_diameters < RigSettings{}.base_diameters)
+    fmt::print(stderr,
+               "warning: a base of {:g} diameters measures the angles low (the floor's sand: "
+               "theta0 9.6-16.3 deg at 4, 27.4-28.7 at 7, 31.2-34.9 at 10); surface runs use the "
+               "default rig's, not these\n",
+               rig.base_diameters);
   return 0;
 }
 

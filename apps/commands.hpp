@@ -76,6 +76,9 @@ struct ReportOptions {
 std::string mode_name(Mode m);
 /// `a` as a shell word: quoted when it has anything but letters, digits and _-+./=:,@%.
 std::string shell_quote(const std::string& a);
+/// What is wrong with `dir` as a folder to read: "" (it is one), "no such folder", or that it is
+/// a file.
+std::string folder_problem(const std::string& dir);
 /// The options a run folder's run.json records (its scene file made absolute from the folder the
 /// run was started in), the record itself and the scene text the run was started with.
 RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::string& text);

@@ -98,7 +98,8 @@ std::vector<int> frame_numbers(const std::string& run) {
 /// A run folder, or the two runs of a comparison folder (surface/ and dem/).
 std::vector<std::string> run_folders(const std::string& dir) {
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw InputError(fmt::format("{}: no such folder", dir));
+  if (const std::string problem = folder_problem(dir); !problem.empty())
+    throw InputError(fmt::format("{}: {}", dir, problem));
   if (fs::is_directory(fs::path(dir) / "frames", ec)) return {dir};
   std::vector<std::string> runs;
   for (const char* mode : {"surface", "dem"})

@@ -154,9 +154,9 @@ std::string write_compare_report(const std::string& dir, const ReportOptions& o)
 
 std::string write_report(const ReportOptions& o) {
   std::error_code ec;
-  if (!fs::is_directory(o.dir, ec))
-    throw InputError(fmt::format("{}: no such folder (expected a run, compare or table1 folder)",
-                                 o.dir));
+  if (const std::string problem = folder_problem(o.dir); !problem.empty())
+    throw InputError(
+        fmt::format("{}: {} (expected a run, compare or table1 folder)", o.dir, problem));
   const fs::path d(o.dir);
   if (file_exists(d / "compare.json")) return write_compare_report(o.dir, o);
   if (file_exists(d / "table1.csv")) {

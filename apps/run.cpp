@@ -311,12 +311,19 @@ std::string shell_quote(const std::string& a) {
   return q + "'";
 }
 
+std::string folder_problem(const std::string& dir) {
+  std::error_code ec;
+  if (fs::is_directory(dir, ec)) return "";
+  return fs::exists(dir, ec) ? "a file, not a folder" : "no such folder";
+}
+
 /// The options a run folder's run.json records (its scene file made absolute from the folder the
 /// run was started in), the record itself and the scene text it was started with.
 RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::string& text) {
   const fs::path record_path = fs::path(dir) / "run.json";
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw InputError(dir + ": no such run folder");
+  if (const std::string problem = folder_problem(dir); !problem.empty())
+    throw InputError(dir + ": " + problem + " (expected a run folder)");
   if (!fs::exists(record_path, ec))
     throw InputError(fmt::format(
         "{}: no run.json: not a sandflow run folder, or its run stopped before it started; start "
@@ -776,6 +783,14 @@ int run_command(const RunOptions& o) {
 
 /// The last frame file of a run folder.
 std::string last_frame(const std::string& dir) {
+  if (const std::string problem = folder_problem(dir); !problem.empty())
+    throw InputError(dir + ": " + problem + " (expected a run folder)");
+  // a comparison's or a table's folder holds runs: name one
+  for (const char* inside : {"surface", "dem"})
+    if (fs::is_regular_file(fs::path(dir) / "compare.json") &&
+        fs::is_directory(fs::path(dir) / inside / "frames"))
+      throw InputError(fmt::format("{}: a comparison's folder: measure one of its runs, {}",
+                                   dir, (fs::path(dir) / inside).string()));
   std::string best;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(fs::path(dir) / "frames", ec))

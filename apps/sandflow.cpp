@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
   calibrate
       ->add_option("--base", rig.base_diameters,
                    "radius of the rig's base in grain diameters (default 10; what surface "
-                   "runs use. A smaller base measures less well, a larger one costs more)")
+                   "runs use. A smaller base reads the angles low, a larger one costs more)")
       ->check(CLI::Range(4.0, 40.0));
   calibrate
       ->add_option("--tilt-rate", rig.tilt_rate,

@@ -28,8 +28,8 @@ namespace {
 std::string table1_scene_dir(const std::string& given) {
   std::error_code ec;
   if (!given.empty()) {
-    if (!fs::is_directory(given, ec))
-      throw InputError(fmt::format("--scene-dir {}: no such folder", given));
+    if (const std::string problem = folder_problem(given); !problem.empty())
+      throw InputError(fmt::format("--scene-dir {}: {}", given, problem));
     return given;
   }
   if (fs::is_directory("scenes", ec)) return "scenes";

@@ -58,6 +58,9 @@ TEST(Calibrate, MeasuresOnceThenReadsTheCache) {
   const fs::path cached = box.dir / "cache" / "calibration" / (key + ".json");
   ASSERT_TRUE(fs::exists(cached)) << out;
   EXPECT_NE(out.find("stored"), std::string::npos) << out;
+  // a base under the default reads the angles low, and says so
+  EXPECT_NE(out.find("warning: a base of 7 diameters measures the angles low"), std::string::npos)
+      << out;
   const auto j = nlohmann::json::parse(read_text(cached));
   EXPECT_NEAR(j["theta0_deg"].get<double>(), std::stod(theta0), 0.005);
   EXPECT_GT(j["theta_max_deg"].get<double>(), j["theta0_deg"].get<double>());
