@@ -789,8 +789,8 @@ std::string last_frame(const std::string& dir) {
   for (const char* inside : {"surface", "dem"})
     if (fs::is_regular_file(fs::path(dir) / "compare.json") &&
         fs::is_directory(fs::path(dir) / inside / "frames"))
-      throw InputError(fmt::format("{}: a comparison's folder: measure one of its runs, {}",
-                                   dir, (fs::path(dir) / inside).string()));
+      throw InputError(fmt::format("{}: a comparison's folder: measure one of its runs, {}", dir,
+                                   (fs::path(dir) / inside).string()));
   std::string best;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(fs::path(dir) / "frames", ec))

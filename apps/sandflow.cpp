@@ -38,8 +38,7 @@ const CLI::Range kFrameRange(1, static_cast<int>(kMaxFrames));
 
 // an output folder given as '' would fall back to the default one, unasked
 const CLI::Validator kNonEmptyPath(
-    [](const std::string& s) { return s.empty() ? std::string("an empty folder name") : ""; },
-    "");
+    [](const std::string& s) { return s.empty() ? std::string("an empty folder name") : ""; }, "");
 
 /// The options of the commands that run a scene: the file, where to write, and how to scale it.
 void add_scene_options(CLI::App* cmd, RunOptions& o, const std::string& out_help,

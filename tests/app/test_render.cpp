@@ -147,9 +147,10 @@ TEST_F(Render, AFolderWithSpacesAndNonAsciiNamesRenders) {
   const auto scene = box.write("tiny.toml", kTinyScene);
   const fs::path run = box.dir / "run dir" / "sable fin \u00fc";
   std::string log;
-  ASSERT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 1 --out '" + run.string() + "'",
-                     &log),
-            0)
+  ASSERT_EQ(
+      sandflow("run " + scene.string() + " --mode dem --frames 1 --out '" + run.string() + "'",
+               &log),
+      0)
       << log;
   ASSERT_EQ(sandflow("render '" + run.string() +
                          "' --width 32 --height 24 --quality draft --keep-pov --set "
