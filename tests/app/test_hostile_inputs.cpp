@@ -39,6 +39,15 @@ bool has(const std::string& log, const std::string& part) {
   return log.find(part) != std::string::npos;
 }
 
+// A finished run of one frame of the tiny block in box.dir/out (empty when it failed: see log).
+fs::path one_frame_run(const Sandbox& box, std::string* log) {
+  const fs::path scene = box.write("tiny.toml", sandflow_test::tiny_block_scene(20));
+  const fs::path out = box.dir / "out";
+  const int status =
+      bounded("run " + scene.string() + " --frames 1 --export none --out " + out.string(), log);
+  return status == 0 ? out : fs::path();
+}
+
 TEST(HostileInputs, AMeshOfHugeCoordinatesIsRefusedBeforeTheWorldIsBuilt) {
   Sandbox box;
   box.write("huge.obj", "v 1e308 1e308 1e308\nv -1e308 -1e308 -1e308\nv 1e308 -1e308 0\nf 1 2 3\n");
@@ -175,12 +184,9 @@ TEST(HostileInputs, ContactsTooSoftForTheGrainsWeightAreRefusedByCheck) {
 // anything is read or allocated for it.
 TEST(HostileInputs, ACheckpointLargerThanHalfTheMemoryIsRefusedUnread) {
   Sandbox box;
-  const fs::path scene = box.write("tiny.toml", sandflow_test::tiny_block_scene(20));
-  const fs::path out = box.dir / "out";
   std::string log;
-  ASSERT_EQ(
-      bounded("run " + scene.string() + " --frames 1 --export none --out " + out.string(), &log), 0)
-      << log;
+  const fs::path out = one_frame_run(box, &log);
+  ASSERT_FALSE(out.empty()) << log;
   fs::remove(out / "summary.json");  // (a finished run is not resumed)
   fs::resize_file(out / "checkpoint.bin", std::uintmax_t{1} << 40);
   EXPECT_EQ(bounded("run --resume " + out.string(), &log), 2) << log;
@@ -378,12 +384,9 @@ TEST(HostileInputs, AStrongDashpotShortensTheStepOrIsRefused) {
 // naming the field, before any of it is converted.
 TEST(HostileInputs, ARunRecordWithCountsOutOfRangeIsRefused) {
   Sandbox box;
-  const fs::path scene = box.write("tiny.toml", sandflow_test::tiny_block_scene(20));
-  const fs::path out = box.dir / "out";
   std::string log;
-  ASSERT_EQ(
-      bounded("run " + scene.string() + " --frames 1 --export none --out " + out.string(), &log), 0)
-      << log;
+  const fs::path out = one_frame_run(box, &log);
+  ASSERT_FALSE(out.empty()) << log;
   const std::string record = sandflow_test::read_text(out / "run.json");
   const std::size_t at = record.find("\"frames\": 1");
   ASSERT_NE(at, std::string::npos) << record;
