@@ -522,7 +522,12 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
   nlohmann::json record;
   std::string text;
   RunOptions r = read_run_record(dir, record, text);
-  const bool finished = fs::exists(fs::path(dir) / "summary.json", ec);
+  // finished: its summary is written whole (one edited into something else is written again)
+  const bool finished = [&] {
+    std::ifstream in(fs::path(dir) / "summary.json");
+    const nlohmann::json summary = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+    return summary.is_object() && summary.contains("frames") && summary.contains("state_hash");
+  }();
   if (finished && !reload_finished && o.frames == 0) {
     fmt::print(stderr, "{}: this run is finished (its summary.json is written); nothing to resume\n",
                dir);

@@ -422,4 +422,23 @@ TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
   EXPECT_TRUE(has(log, "--out: an empty folder name")) << log;
 }
 
+// A finished run whose summary.json was edited into something else is not taken as finished: its
+// resume reads the run back from the checkpoint and writes the summary again, the same state.
+TEST(HostileInputs, ADamagedSummaryIsWrittenAgainByTheResume) {
+  Sandbox box;
+  std::string log;
+  const fs::path out = one_frame_run(box, &log);
+  ASSERT_FALSE(out.empty()) << log;
+  const std::string summary = sandflow_test::read_text(out / "summary.json");
+  const std::size_t at = summary.find("\"state_hash\"");
+  ASSERT_NE(at, std::string::npos) << summary;
+  const std::string hash = summary.substr(at, 40);
+  for (const std::string damaged : {"{}", "[1, 2]", "not json"}) {
+    std::ofstream(out / "summary.json") << damaged;
+    EXPECT_EQ(bounded("run --resume " + out.string(), &log), 0) << damaged << "\n" << log;
+    EXPECT_FALSE(has(log, "this run is finished")) << damaged << "\n" << log;
+    EXPECT_TRUE(has(sandflow_test::read_text(out / "summary.json"), hash)) << damaged;
+  }
+}
+
 }  // namespace
