@@ -220,6 +220,10 @@ void read_camera(TableReader r, CameraConfig& c) {
       r.fail_at("up", r.name("up") +
                           " is parallel to the view direction (look_at - position): expected a "
                           "direction across it");
+  } else if (norm(cross(Vec3{0, 0, 1}, view / norm(view))) < 1e-3) {
+    r.fail_at("look_at", r.name("look_at") +
+                             " is straight above or below camera.position, along the picture's "
+                             "default up (z): set camera.up, a direction across the view");
   }
 }
 

@@ -59,6 +59,9 @@ TEST(CameraTable, ErrorsNameThePlaceAndWhatWasExpected) {
                {"t.toml:4:1: camera.up is set without camera.position and camera.look_at"});
   expect_error(head + "position = [0, 0, 3]\nlook_at = [0, 0, 0]\nup = [0, 0, 1]\n",
                {"t.toml:6:1: camera.up is parallel to the view direction"});
+  // without up, the picture's up is z: a camera looking straight down needs one
+  expect_error(head + "position = [0, 0, 3]\nlook_at = [0, 0, 0]\n",
+               {"t.toml:5:1: camera.look_at is straight above or below camera.position"});
   expect_error(head + "position = [1, 0, 3]\nlook_at = [0, 0, 0]\nup = [0, 0, 0]\n",
                {"t.toml:6:1: camera.up = [0, 0, 0]: expected a direction"});
   expect_error(head + "angle = 30\n", {"t.toml:4:1: camera.angle is not a key of [camera]",
