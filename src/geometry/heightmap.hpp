@@ -28,6 +28,20 @@
 // grain of radius 5 mm on the terrain of tests/geometry/test_heightmap.cpp that is a few percent
 // of the gap, measured there against brute force.
 //
+// Within reach. A grain's contact needs the distance itself, not a bound: where the slope varies
+// within a grain (rough or steep terrains, finely sampled), L far exceeds |grad f(c)| and d is a
+// fraction of D, so grains would rest on nothing. So when d is below the reach given at
+// construction (the largest grain's diameter) and falls short of the distance to a known point of
+// the surface (the foot above) by more than kExactTolerance of it, closest() refines it by branch
+// and bound over the cells within that distance: blocks of cells bounded by the boxes of their
+// heights (a pyramid of block ranges), then parts of cells, each bounded by its box, by the slab
+// of its bilinear patch about its mean plane (half-thickness |twist| / 4) and by the tetrahedron
+// of its corners (its hull, exact at its edges and corners, where rough terrains are met),
+// halving the most promising parts until the least bound is within tolerance of the nearest
+// surface point found; the normal points from that point. It returns the bound, still never above
+// D. Beyond reach the cheap bound stands, and on a smooth terrain it is mostly within tolerance
+// already: 87 % of the queries 3 to 8 mm above scenes/terrain.toml's surface go no further.
+//
 // Outside the rectangle, f is taken at the nearest point c of the rectangle, and with h_out the
 // horizontal distance to the rectangle the distance is sqrt(h_out^2 + v^2), v the bound above
 // (or the depth below the bottom): the rectangle is convex, so every solid point is at least
@@ -53,6 +67,10 @@ constexpr int kMaxHeightmapSide = 4096;
 constexpr std::size_t kMaxHeightmapSamples = std::size_t{kMaxHeightmapSide} * kMaxHeightmapSide;
 /// Noise terrains are sampled every wavelength / 16, with at most this many samples a side.
 constexpr int kMaxNoiseSide = 1024;
+/// Within reach, closest() is the distance to the surface less at most this fraction of it (plus
+/// 1e-4 of a cell side): 50 um for a grain of 5 mm. (1e-3 refines 60 % of the contact queries of
+/// scenes/terrain.toml instead of 13 %, and doubled the time of its first 15 frames.)
+constexpr Real kExactTolerance = 1e-2;
 
 /// A deterministic smooth terrain over `extent`: a sum of 6 plane waves (directions, wavelengths in
 /// [0.7, 1.4] x `wavelength` and phases drawn from `seed`), sampled every wavelength / 16 (at most
@@ -64,7 +82,10 @@ HeightGrid noise_heights(const std::array<Real, 4>& extent, Real wavelength, std
 class SolidHeightmap final : public Solid {
  public:
   /// `grid` must have at least 2 x 2 samples; the solid reaches base_thickness below the lowest.
-  SolidHeightmap(HeightGrid grid, const std::array<Real, 4>& extent, Real base_thickness);
+  /// `reach`: closest() is exact (within kExactTolerance) up to that distance, a lower bound
+  /// beyond it (the largest grain's diameter, in a scene).
+  SolidHeightmap(HeightGrid grid, const std::array<Real, 4>& extent, Real base_thickness,
+                 Real reach = std::numeric_limits<Real>::infinity());
 
   SurfacePoint closest(const Vec3& p) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
@@ -83,6 +104,14 @@ class SolidHeightmap final : public Solid {
   struct Bound {
     Real v;  // lower bound of the distance from the top surface [m]
     Vec3 n;  // the local-plane normal (upwards)
+    Vec3 q;  // a point of the top surface no farther than delta (the foot, or straight above/below)
+  };
+  struct Exact {
+    Real lb;  // within tolerance(lb) of the distance, or a lower bound of at least reach_ [m]
+    Vec3 q;   // the nearest point found
+  };
+  struct ZRange {
+    float lo, hi;  // lowest and highest sample of a block, rounded outwards [m]
   };
   Local surface_at(Real x, Real y) const;
   Bound top_bound(Real cx, Real cy, Real z, const Local& s) const;
@@ -90,6 +119,12 @@ class SolidHeightmap final : public Solid {
   /// an upper bound from the pyramid of block maxima beyond.
   Real max_slope(Real xa, Real ya, Real xb, Real yb) const;
   Real cell_max_slope(int i, int j, Real sa, Real sb, Real ta, Real tb) const;
+  Real cell_z(int i, int j, bool highest) const;
+  /// How far a bound may fall short of the distance d and still stand for it.
+  Real tolerance(Real d) const;
+  /// The distance from p to the top surface (column false) or to the solid (true), by branch and
+  /// bound over the cells within ub of p, starting from q, a point of it ub away.
+  Exact exact(const Vec3& p, bool column, Real ub, Vec3 q) const;
 
   HeightGrid g_;
   Real x0_, y0_, x1_, y1_, dx_, dy_;
@@ -97,6 +132,11 @@ class SolidHeightmap final : public Solid {
   /// pyramid_[k]: largest slope over blocks of 2^k x 2^k cells, pyr_n_[k] blocks along x, y
   std::vector<std::vector<Real>> pyramid_;
   std::vector<std::array<int, 2>> pyr_n_;
+  /// z_pyramid_[k], k >= 1: the range of heights over blocks of 2^k x 2^k cells, z_n_[k] blocks
+  /// along x, y (z_pyramid_[0] is empty: a cell's range is that of its samples)
+  std::vector<std::vector<ZRange>> z_pyramid_;
+  std::vector<std::array<int, 2>> z_n_;
+  Real reach_;
 };
 
 }  // namespace sandflow

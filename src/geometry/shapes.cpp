@@ -337,7 +337,8 @@ Geometry Geometry::from_config(const std::vector<GeometryConfig>& configs,
                                         c.depth.value_or(c.radius), rot));
         break;
       case GeometryType::Heightmap:
-        add(std::make_unique<SolidHeightmap>(c.heights, c.extent, c.base_thickness));
+        add(std::make_unique<SolidHeightmap>(c.heights, c.extent, c.base_thickness,
+                                             material.largest_diameter()));
         break;
       case GeometryType::Mesh: {
         g.meshes_.push_back(place_mesh(c, material, scene_path, g.warnings_,

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "geometry/heightmap.hpp"
@@ -246,6 +247,169 @@ TEST(Heightmap, GrainsDroppedOnItEndAboveIt) {
     EXPECT_GT(p.z - terrain.height(p.x, p.y), 0.5 * w.grains().r[i]);
   }
   EXPECT_GT(on_terrain, 150);
+}
+
+// The distance from p to the top surface of a grid over `extent`, by brute force: each bilinear
+// cell is, for fixed t, a straight segment along x, so its distance is the least over t of a
+// point-to-segment distance, sampled at n + 1 values of t. The segment's ends move at most V per
+// unit t, so the sampled least exceeds the true one by at most V / (2 n): the distance is in
+// [distance - error, distance]. Cells whose bounding box is farther than the best so far are
+// skipped.
+struct Reference {
+  Real distance, error;
+};
+
+Reference reference_distance(const HeightGrid& g, const std::array<Real, 4>& extent, const Vec3& p,
+                             int n = 2000) {
+  const Real dx = (extent[2] - extent[0]) / (g.nx - 1), dy = (extent[3] - extent[1]) / (g.ny - 1);
+  const auto z = [&](int a, int b) { return g.z[static_cast<std::size_t>(b) * g.nx + a]; };
+  Reference best{std::numeric_limits<Real>::infinity(), 0};
+  for (int j = 0; j + 1 < g.ny; ++j)
+    for (int i = 0; i + 1 < g.nx; ++i) {
+      const Real xa = extent[0] + i * dx, ya = extent[1] + j * dy;
+      const Real lo = std::min({z(i, j), z(i + 1, j), z(i, j + 1), z(i + 1, j + 1)});
+      const Real hi = std::max({z(i, j), z(i + 1, j), z(i, j + 1), z(i + 1, j + 1)});
+      const Real ex = std::max({xa - p.x, 0.0, p.x - xa - dx}),
+                 ey = std::max({ya - p.y, 0.0, p.y - ya - dy});
+      const Real ez = std::max({lo - p.z, 0.0, p.z - hi});
+      if (std::sqrt(ex * ex + ey * ey + ez * ez) >= best.distance) continue;
+      const Real v = std::max(std::hypot(dy, z(i, j + 1) - z(i, j)),
+                              std::hypot(dy, z(i + 1, j + 1) - z(i + 1, j)));
+      best.error = std::max(best.error, v / (2 * n));
+      for (int k = 0; k <= n; ++k) {
+        const Real t = static_cast<Real>(k) / n;
+        const Vec3 a{xa, ya + t * dy, (1 - t) * z(i, j) + t * z(i, j + 1)};
+        const Vec3 b{xa + dx, ya + t * dy, (1 - t) * z(i + 1, j) + t * z(i + 1, j + 1)};
+        const Vec3 ab = b - a;
+        const Real u = std::clamp(dot(p - a, ab) / norm2(ab), 0.0, 1.0);
+        best.distance = std::min(best.distance, norm(a + ab * u - p));
+      }
+    }
+  return best;
+}
+
+// f of a grid over `extent`, bilinear, clamped.
+Real grid_height(const HeightGrid& g, const std::array<Real, 4>& extent, Real x, Real y) {
+  const Real u = std::clamp((x - extent[0]) / (extent[2] - extent[0]), 0.0, 1.0) * (g.nx - 1);
+  const Real w = std::clamp((y - extent[1]) / (extent[3] - extent[1]), 0.0, 1.0) * (g.ny - 1);
+  const int i = std::min(static_cast<int>(u), g.nx - 2),
+            j = std::min(static_cast<int>(w), g.ny - 2);
+  const Real s = u - i, t = w - j;
+  const auto z = [&](int a, int b) { return g.z[static_cast<std::size_t>(b) * g.nx + a]; };
+  return (1 - s) * (1 - t) * z(i, j) + s * (1 - t) * z(i + 1, j) + (1 - s) * t * z(i, j + 1) +
+         s * t * z(i + 1, j + 1);
+}
+
+// Random heights in [0, amplitude] on a side x side grid (101, 1 cm over 0.2 m: every 2 mm, rough
+// to a grain of 1 cm).
+HeightGrid random_grid(int side, Real amplitude, std::uint64_t seed) {
+  HeightGrid g;
+  g.nx = g.ny = side;
+  Rng rng(seed);
+  for (int k = 0; k < side * side; ++k) g.z.push_back(rng.uniform(0.0, amplitude));
+  return g;
+}
+
+// Within reach of the surface (1 cm, a grain's), above it, touching it and below it, closest() is
+// the true distance less at most its tolerance (kExactTolerance of it, plus 1e-4 of a cell side),
+// never more, and p - d n lies on the surface (n points from the nearest point). The points stay
+// in the middle of the terrain, nearer its top than its sides and bottom.
+void expect_exact_near(const HeightGrid& g, const std::array<Real, 4>& extent, std::uint64_t seed) {
+  const SolidHeightmap terrain(g, extent, 0.5);
+  const Real h =
+      std::min((extent[2] - extent[0]) / (g.nx - 1), (extent[3] - extent[1]) / (g.ny - 1));
+  Real slope = 0;  // the largest slope, for the normal's check
+  for (int j = 0; j + 1 < g.ny; ++j)
+    for (int i = 0; i + 1 < g.nx; ++i) {
+      const auto z = [&](int a, int b) { return g.z[static_cast<std::size_t>(b) * g.nx + a]; };
+      slope = std::max(
+          slope,
+          std::hypot(
+              std::max(std::abs(z(i + 1, j) - z(i, j)), std::abs(z(i + 1, j + 1) - z(i, j + 1))),
+              std::max(std::abs(z(i, j + 1) - z(i, j)), std::abs(z(i + 1, j + 1) - z(i + 1, j)))) /
+              h);
+    }
+  const Real top = *std::max_element(g.z.begin(), g.z.end());
+  Rng rng(seed);
+  int checked = 0;
+  Real worst = 0;
+  for (int k = 0; k < 60; ++k) {
+    const Real x = extent[0] + (extent[2] - extent[0]) * rng.uniform(0.3, 0.7);
+    const Real y = extent[1] + (extent[3] - extent[1]) * rng.uniform(0.3, 0.7);
+    // a third above the highest sample, the rest about the surface at (x, y)
+    const Real z = k % 3 == 0 ? top + rng.uniform(0.0, 0.008)
+                              : grid_height(g, extent, x, y) + rng.uniform(-0.004, 0.01);
+    const Vec3 p{x, y, z};
+    const Reference ref = reference_distance(g, extent, p);
+    if (ref.distance > 0.01) continue;
+    ++checked;
+    const SurfacePoint sp = terrain.closest(p);
+    const Real d = std::abs(sp.distance);
+    const Real tol = kExactTolerance * d + 1e-4 * h;
+    EXPECT_EQ(sp.distance < 0, z < grid_height(g, extent, x, y))
+        << "at (" << x << ", " << y << ", " << z << ")";
+    EXPECT_LE(d, ref.distance + 1e-12)
+        << "overestimates at (" << x << ", " << y << ", " << z << ")";
+    EXPECT_GE(d, ref.distance - ref.error - tol)
+        << "at (" << x << ", " << y << ", " << z << "): " << d << " for a distance of "
+        << ref.distance;
+    worst = std::max(worst, (ref.distance - d) / ref.distance);
+    const Vec3 q = p - sp.normal * sp.distance;  // (inside, distance < 0: p + |d| n)
+    EXPECT_NEAR(q.z, grid_height(g, extent, q.x, q.y), (1 + slope) * (2 * tol + ref.error) + 1e-9)
+        << "normal (" << sp.normal.x << ", " << sp.normal.y << ", " << sp.normal.z << ") at (" << x
+        << ", " << y << ", " << z << ")";
+  }
+  EXPECT_GT(checked, 30);
+  ::testing::Test::RecordProperty("worst_relative_shortfall", std::to_string(worst));
+}
+
+TEST(Heightmap, DistanceIsExactNearARoughGrid) {
+  // slopes up to ~7: the cheap bound alone is about a fifth of the distance here
+  expect_exact_near(random_grid(101, 0.01, 17), {0, 0, 0.2, 0.2}, 31);
+}
+
+TEST(Heightmap, DistanceIsExactNearSteepNoise) {
+  // a wavelength of 5 mm sampled every 0.31 mm, 0.1 m high: slopes of a hundred and more
+  const std::array<Real, 4> extent{0, 0, 0.02, 0.02};
+  expect_exact_near(noise_heights(extent, 0.005, 3, 0.0, 0.1), extent, 32);
+}
+
+// Grains dropped 3 diameters apart on the rough grid come to rest touching it: the distance from
+// each centre to the surface is its radius, within closest()'s tolerance above and the overlap of
+// a contact below, not hovering above it (the bound alone held grains up to a radius up).
+TEST(Heightmap, GrainsComeToRestOnARoughGrid) {
+  SceneConfig s;
+  s.path = "rough";
+  s.simulation.mode = Mode::Dem;
+  GeometryConfig t;
+  t.type = GeometryType::Heightmap;
+  t.extent = {-0.1, -0.1, 0.1, 0.1};
+  t.heights = random_grid(101, 0.01, 17);
+  s.geometry = {t};
+  EmitterConfig e;
+  e.type = EmitterType::Lattice;
+  e.count = 16;
+  e.spacing = 3;
+  e.center = {0, 0, 0.025};
+  e.size = {0.12, 0.12, 0.012};
+  s.emitters = {e};
+  s.output.frames = 30;
+  World w(s);
+  for (int f = 0; f < 30; ++f) w.advance_frame();
+  ASSERT_EQ(w.grains().x.size(), 16u);
+  int resting = 0;
+  for (std::size_t i = 0; i < w.grains().x.size(); ++i) {
+    const Vec3& p = w.grains().x[i];
+    const Real r = w.grains().r[i];
+    if (std::abs(p.x) > 0.09 || std::abs(p.y) > 0.09 || norm(w.grains().v[i]) > 0.01) continue;
+    ++resting;
+    const Reference ref = reference_distance(t.heights, t.extent, p, 500);
+    EXPECT_LT(ref.distance - ref.error, (1 + kExactTolerance) * r + 1e-6)
+        << "grain " << i << " hovers at (" << p.x << ", " << p.y << ", " << p.z << ")";
+    EXPECT_GT(ref.distance, 0.97 * r)
+        << "grain " << i << " sinks in at (" << p.x << ", " << p.y << ", " << p.z << ")";
+  }
+  EXPECT_GE(resting, 12);
 }
 
 }  // namespace
