@@ -307,7 +307,7 @@ SolidHeightmap::Exact SolidHeightmap::exact(const Vec3& p, bool column, Real ub,
     // (a column lies below the upper face of the slab: only a gap above it counts)
     const Real slab = (column ? gap : std::abs(gap)) - twist;
     if (slab > 0) lb = std::max(lb, slab / std::sqrt(len2));
-    // a point of the part: the one under the foot of p on the plane
+    if (lb >= ub) return;  // (nothing of it is nearer than q)
     // and within the tetrahedron of its corners (a bilinear patch is a blend of its corners), whose
     // edges along s and t are the part's own: exact where the nearest point is on one of them
     // (for a column, only from above all of them: its nearest point is then on the top)
