@@ -155,7 +155,7 @@ TEST_F(Render, AFolderWithSpacesAndNonAsciiNamesRenders) {
   ASSERT_EQ(sandflow("render '" + run.string() +
                          "' --width 32 --height 24 --quality draft --keep-pov --set "
                          "'camera.position=[0.3,-0.3,1]' --set "
-                         "'camera.look_at=[0.3,-0.3,0.9999999999]'",
+                         "'camera.look_at=[0.3,-0.3,0.9999999999]' --set 'camera.up=[0,1,0]'",
                      &log),
             0)
       << log;
