@@ -46,6 +46,24 @@ HeightGrid noise_heights(const std::array<Real, 4>& extent, Real wavelength, std
   return g;
 }
 
+namespace {
+
+// One level up a pyramid over an nx x ny grid: each entry of the (nx + 1) / 2 x (ny + 1) / 2
+// level combines, from `empty`, the (up to) four entries fine(k, i, j) under it (k = j nx + i).
+template <class T, class Fine, class Combine>
+std::vector<T> coarsen(int nx, int ny, T empty, Fine fine, Combine combine) {
+  const int mx = (nx + 1) / 2, my = (ny + 1) / 2;
+  std::vector<T> coarse(static_cast<std::size_t>(mx) * my, empty);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      T& c = coarse[static_cast<std::size_t>(j / 2) * mx + i / 2];
+      c = combine(c, fine(static_cast<std::size_t>(j) * nx + i, i, j));
+    }
+  return coarse;
+}
+
+}  // namespace
+
 SolidHeightmap::SolidHeightmap(HeightGrid grid, const std::array<Real, 4>& extent,
                                Real base_thickness, Real reach)
     : g_(std::move(grid)),
@@ -65,30 +83,10 @@ SolidHeightmap::SolidHeightmap(HeightGrid grid, const std::array<Real, 4>& exten
   bottom_ = *lo - base_thickness;
   top_ = *hi;
 
-  // level 0: the largest slope of each cell (at one of its corners); level k + 1: of 2 x 2 blocks
-  int nx = g_.nx - 1, ny = g_.ny - 1;
-  std::vector<Real> level(static_cast<std::size_t>(nx) * ny);
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) level[static_cast<std::size_t>(j) * nx + i] = cell_max_slope(i, j, 0, 1, 0, 1);
-  pyramid_.push_back(std::move(level));
-  pyr_n_.push_back({nx, ny});
-  while (nx > 1 || ny > 1) {
-    const int mx = (nx + 1) / 2, my = (ny + 1) / 2;
-    const std::vector<Real>& fine = pyramid_.back();
-    std::vector<Real> coarse(static_cast<std::size_t>(mx) * my, 0.0);
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        Real& c = coarse[static_cast<std::size_t>(j / 2) * mx + i / 2];
-        c = std::max(c, fine[static_cast<std::size_t>(j) * nx + i]);
-      }
-    pyramid_.push_back(std::move(coarse));
-    pyr_n_.push_back({mx, my});
-    nx = mx;
-    ny = my;
-  }
-
-  // the heights' pyramid for the exact distance: [lowest, highest] sample of blocks of 2^k x 2^k
-  // cells, k >= 1 (a cell's own range comes from its four samples), rounded outwards to float
+  // Two pyramids over blocks of 2^k x 2^k cells, pyr_n_[k] blocks along x, y for both: the
+  // largest slope (level 0: each cell's, at one of its corners) and, for the exact distance, the
+  // range of heights rounded outwards to float (from level 1: a cell's own range comes from its
+  // four samples)
   const auto down = [](Real v) {
     const float f = static_cast<float>(v);
     return static_cast<Real>(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity())
@@ -98,36 +96,44 @@ SolidHeightmap::SolidHeightmap(HeightGrid grid, const std::array<Real, 4>& exten
     const float f = static_cast<float>(v);
     return static_cast<Real>(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
   };
-  nx = g_.nx - 1;
-  ny = g_.ny - 1;
-  z_n_.push_back({nx, ny});
+  int nx = g_.nx - 1, ny = g_.ny - 1;
+  std::vector<Real> level(static_cast<std::size_t>(nx) * ny);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      level[static_cast<std::size_t>(j) * nx + i] = cell_max_slope(i, j, 0, 1, 0, 1);
+  pyramid_.push_back(std::move(level));
   z_pyramid_.emplace_back();  // level 0: not stored
+  pyr_n_.push_back({nx, ny});
+  const auto wider = [](ZRange a, ZRange b) {
+    return ZRange{std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
+  };
+  constexpr ZRange kNoRange{std::numeric_limits<float>::infinity(),
+                            -std::numeric_limits<float>::infinity()};
   while (nx > 1 || ny > 1) {
-    const int mx = (nx + 1) / 2, my = (ny + 1) / 2;
-    std::vector<ZRange> coarse(
-        static_cast<std::size_t>(mx) * my,
-        {std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()});
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        ZRange& c = coarse[static_cast<std::size_t>(j / 2) * mx + i / 2];
-        const ZRange f = z_pyramid_.size() == 1
-                             ? ZRange{down(cell_z(i, j, false)), up(cell_z(i, j, true))}
-                             : z_pyramid_.back()[static_cast<std::size_t>(j) * nx + i];
-        c.lo = std::min(c.lo, f.lo);
-        c.hi = std::max(c.hi, f.hi);
-      }
-    z_pyramid_.push_back(std::move(coarse));
-    z_n_.push_back({mx, my});
-    nx = mx;
-    ny = my;
+    const std::vector<Real>& slopes = pyramid_.back();
+    const std::vector<ZRange>& heights = z_pyramid_.back();
+    const bool cells = z_pyramid_.size() == 1;
+    std::vector<Real> coarse_slopes = coarsen(
+        nx, ny, Real{0}, [&](std::size_t k, int, int) { return slopes[k]; },
+        [](Real a, Real b) { return std::max(a, b); });
+    std::vector<ZRange> coarse_heights = coarsen(
+        nx, ny, kNoRange,
+        [&](std::size_t k, int i, int j) {
+          return cells ? ZRange{down(cell_z(i, j, false)), up(cell_z(i, j, true))} : heights[k];
+        },
+        wider);
+    pyramid_.push_back(std::move(coarse_slopes));
+    z_pyramid_.push_back(std::move(coarse_heights));
+    nx = (nx + 1) / 2;
+    ny = (ny + 1) / 2;
+    pyr_n_.push_back({nx, ny});
   }
 }
 
 Real SolidHeightmap::cell_z(int i, int j, bool highest) const {
   const std::size_t k = static_cast<std::size_t>(j) * g_.nx + i;
-  const Real a = std::min(g_.z[k], g_.z[k + 1]), b = std::min(g_.z[k + g_.nx], g_.z[k + g_.nx + 1]);
-  const Real c = std::max(g_.z[k], g_.z[k + 1]), d = std::max(g_.z[k + g_.nx], g_.z[k + g_.nx + 1]);
-  return highest ? std::max(c, d) : std::min(a, b);
+  const auto corners = {g_.z[k], g_.z[k + 1], g_.z[k + g_.nx], g_.z[k + g_.nx + 1]};
+  return highest ? std::max(corners) : std::min(corners);
 }
 
 SolidHeightmap::Local SolidHeightmap::surface_at(Real x, Real y) const {
@@ -280,7 +286,7 @@ SolidHeightmap::Exact SolidHeightmap::exact(const Vec3& p, bool column, Real ub,
   const auto block = [&](int k, int i, int j) {
     const int ia = i << k, ib = std::min((i + 1) << k, ncx);
     const int ja = j << k, jb = std::min((j + 1) << k, ncy);
-    const ZRange& r = z_pyramid_[k][static_cast<std::size_t>(j) * z_n_[k][0] + i];
+    const ZRange& r = z_pyramid_[k][static_cast<std::size_t>(j) * pyr_n_[k][0] + i];
     push({box_distance(p, x0_ + ia * dx_, x0_ + ib * dx_, y0_ + ja * dy_, y0_ + jb * dy_,
                        column ? bottom_ : Real{r.lo}, Real{r.hi}),
           k, i, j, 0, 1, 0, 1});
@@ -365,7 +371,7 @@ SolidHeightmap::Exact SolidHeightmap::exact(const Vec3& p, bool column, Real ub,
     if (n.k >= 2) {
       for (int b = 0; b < 2; ++b)
         for (int a = 0; a < 2; ++a)
-          if (2 * n.i + a < z_n_[n.k - 1][0] && 2 * n.j + b < z_n_[n.k - 1][1])
+          if (2 * n.i + a < pyr_n_[n.k - 1][0] && 2 * n.j + b < pyr_n_[n.k - 1][1])
             block(n.k - 1, 2 * n.i + a, 2 * n.j + b);
     } else if (n.k == 1) {
       for (int b = 0; b < 2; ++b)

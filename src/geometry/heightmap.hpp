@@ -132,10 +132,9 @@ class SolidHeightmap final : public Solid {
   /// pyramid_[k]: largest slope over blocks of 2^k x 2^k cells, pyr_n_[k] blocks along x, y
   std::vector<std::vector<Real>> pyramid_;
   std::vector<std::array<int, 2>> pyr_n_;
-  /// z_pyramid_[k], k >= 1: the range of heights over blocks of 2^k x 2^k cells, z_n_[k] blocks
+  /// z_pyramid_[k], k >= 1: the range of heights over blocks of 2^k x 2^k cells, pyr_n_[k] blocks
   /// along x, y (z_pyramid_[0] is empty: a cell's range is that of its samples)
   std::vector<std::vector<ZRange>> z_pyramid_;
-  std::vector<std::array<int, 2>> z_n_;
   Real reach_;
 };
 
