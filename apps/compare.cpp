@@ -15,6 +15,7 @@
 #include "analysis/statistics.hpp"
 #include "commands.hpp"
 #include "core/atomic_file.hpp"
+#include "core/counted.hpp"
 #include "core/error.hpp"
 #include "io/folder_lock.hpp"
 #include "scene/scene_loader.hpp"
@@ -143,8 +144,11 @@ double mean_distance(const HeightFieldParams& grid, const std::vector<MeasuredSu
                      const std::vector<MeasuredSurface>& b,
                      const std::vector<std::pair<std::size_t, std::size_t>>& pairs) {
   std::vector<double> d;
-  for (const auto& [i, j] : pairs) d.push_back(surface_distance(grid, a[i], b[j]).rms);
-  return mean(d);
+  for (const auto& [i, j] : pairs)
+    // (two runs with no sand on the grid have no distance, not a distance of 0)
+    if (const SurfaceDistance s = surface_distance(grid, a[i], b[j]); s.samples > 0)
+      d.push_back(s.rms);
+  return mean(d);  // NaN (null in compare.json) when no pair had sand
 }
 
 }  // namespace
@@ -332,9 +336,9 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
       {"repose_angle_diff_deg", number_or_null(std::abs(a_surf_mean - a_dem_mean))},
       {"repose_angle_fits", {{"dem", a_dem.size()}, {"surface", a_surf.size()}}},
       {"reference_height", reference},
-      {"surface_rms", rms},
-      {"surface_rms_rel", rms / reference},
-      {"surface_rms_d", rms / d},
+      {"surface_rms", number_or_null(rms)},
+      {"surface_rms_rel", number_or_null(rms / reference)},
+      {"surface_rms_d", number_or_null(rms / d)},
       {"surface_rms_dem_vs_dem", number_or_null(rms_noise)},
       {"surface_rms_dem_vs_dem_rel", number_or_null(rms_noise / reference)},
       {"surface_rms_dem_vs_dem_d", number_or_null(rms_noise / d)},
@@ -467,8 +471,9 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
                               : std::string("n/a");
   };
   const int seeds = co.seeds;
-  fmt::print("\n{} ({} grains, {} frames, {} threads, {} seed{} per mode)\n", scene.name,
-             last.n_total, n_frames, thread_count(scene), seeds, seeds > 1 ? "s" : "");
+  fmt::print("\n{} ({}, {}, {}, {} per mode)\n", scene.name, counted(last.n_total, "grain"),
+             counted(n_frames, "frame"), counted(thread_count(scene), "thread"),
+             counted(seeds, "seed"));
   fmt::print("{:<34}{:>16}{:>16}\n", "", "plain DEM", "surface flow");
   fmt::print("{:<34}{:>16}{:>16}\n", "total grains", c.dem[0].frames.back().n_total, last.n_total);
   fmt::print("{:<34}{:>16.0f}{:>16.0f}\n", "simulated grains, mean",

@@ -22,6 +22,7 @@
 #include "calibration/calibration.hpp"
 #include "commands.hpp"
 #include "core/atomic_file.hpp"
+#include "core/counted.hpp"
 #include "core/error.hpp"
 #include "core/memory.hpp"
 #include "io/export_formats.hpp"
@@ -110,10 +111,10 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
   const int threads = thread_count(scene);
   omp_set_num_threads(threads);
   fmt::print(stderr,
-             "sandflow {}: {} ({} grains, mode {}), {} frames, k_n = {:.4g} N/m, dt = {:.3g} s, {} "
-             "threads -> {}\n",
-             SANDFLOW_VERSION, scene.path, scene.total_grains(), mode_name(scene.simulation.mode),
-             frames, world.scene().material.k_n, ts.dt, threads, out);
+             "sandflow {}: {} ({}, mode {}), {}, k_n = {:.4g} N/m, dt = {:.3g} s, {} -> {}\n",
+             SANDFLOW_VERSION, scene.path, counted(scene.total_grains(), "grain"),
+             mode_name(scene.simulation.mode), counted(frames, "frame"), world.scene().material.k_n,
+             ts.dt, counted(threads, "thread"), out);
 
   RunResult res;
   // a resumable run: checkpoints carry the hash of its scene; a resumed one starts from one
@@ -594,10 +595,11 @@ Started start_new(const RunOptions& o, const std::string& text) {
       fmt::print("{}: {} boundary particles of radius {:.3g} m on its meshes\n", scene.path,
                  world.dem().boundary().size(), world.dem().boundary().radius);
     fmt::print(
-        "{}: ok — {} grains, mode {}, {} frames at {} fps, k_n = {:.4g} N/m, dt = {:.3g} s "
+        "{}: ok — {}, mode {}, {} at {} fps, k_n = {:.4g} N/m, dt = {:.3g} s "
         "({} substeps/frame, t_c = {:.3g} s)\n",
-        scene.path, scene.total_grains(), mode_name(scene.simulation.mode), world.planned_frames(),
-        scene.output.fps, world.scene().material.k_n, ts.dt, ts.substeps, ts.t_c);
+        scene.path, counted(scene.total_grains(), "grain"), mode_name(scene.simulation.mode),
+        counted(world.planned_frames(), "frame"), scene.output.fps, world.scene().material.k_n,
+        ts.dt, ts.substeps, ts.t_c);
     std::vector<std::string> exports;
     std::vector<ExportFormat> dropped;
     for (const ExportFormat f : run_exports(scene.output, scene.simulation.mode, &dropped))
@@ -735,20 +737,19 @@ int run_command(const RunOptions& o) {
     const auto left_out = e.value("left_out_by_occupied_slots", std::int64_t{0});
     if (left_out > 0)
       fmt::print(stderr,
-                 "warning: emitter '{}' left out {} of its {} grains: grains already there took "
+                 "warning: emitter '{}' left out {} of its {}: grains already there took "
                  "their places (start it earlier, or move it)\n",
-                 e["name"].get<std::string>(), left_out, count);
+                 e["name"].get<std::string>(), left_out, counted(count, "grain"));
     if (emitted + left_out < count)
-      fmt::print(stderr,
-                 "warning: emitter '{}' emitted {} of its {} grains before the run ended{}\n",
-                 e["name"].get<std::string>(), emitted, count,
-                 delayed > 0 ? fmt::format("; {} grains waited for slots taken by grains below it: "
+      fmt::print(stderr, "warning: emitter '{}' emitted {} of its {} before the run ended{}\n",
+                 e["name"].get<std::string>(), emitted, counted(count, "grain"),
+                 delayed > 0 ? fmt::format("; {} waited for slots taken by grains below it: "
                                            "raise it or add frames",
-                                           delayed)
+                                           counted(delayed, "grain"))
                              : std::string(": add frames"));
     else if (delayed > 0)
-      fmt::print("emitter          '{}': {} grains waited for a free slot\n",
-                 e["name"].get<std::string>(), delayed);
+      fmt::print("emitter          '{}': {} waited for a free slot\n", e["name"].get<std::string>(),
+                 counted(delayed, "grain"));
   }
   fmt::print("inside geometry  {}\n", s["grains_inside_geometry"].get<std::int64_t>());
   fmt::print("max overlap      {:.2f} % of a diameter\n", 100 * s["max_overlap_rel"].get<double>());
@@ -777,10 +778,10 @@ int run_command(const RunOptions& o) {
   // particles: counted here on the final state, which is written either way)
   if (const auto inside = s["grains_inside_geometry"].get<std::int64_t>(); inside > 0) {
     fmt::print(stderr,
-               "error: {}: {} grains ended inside the geometry: they went through its surface "
+               "error: {}: {} ended inside the geometry: they went through its surface "
                "(the contacts are too soft for the impacts, or the time step too long); the run "
                "is written, but its result is not to be trusted\n",
-               scene.path, inside);
+               scene.path, counted(inside, "grain"));
     return 3;
   }
   return 0;

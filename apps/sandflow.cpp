@@ -3,7 +3,9 @@
 //
 // Exit status: 0 done, 1 unexpected failure, 2 bad input (scene, option, file),
 // 3 the simulation blew up, 4 an output could not be written, 128 + N stopped by signal N.
+#include <charconv>
 #include <csignal>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -33,8 +35,25 @@ std::string command_line(int argc, char** argv) {
   return s;
 }
 
+/// A count from lo to hi, written as a whole number: CLI11's Range alone calls "2e2" or "1.0"
+/// out of range, which sends the user looking for the wrong mistake.
+CLI::Validator whole(std::int64_t lo, std::int64_t hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& v) {
+        std::int64_t n = 0;
+        const char* end = v.data() + v.size();
+        const auto [p, ec] = std::from_chars(v.data(), end, n);
+        if (v.empty() || p != end || ec == std::errc::invalid_argument)
+          return fmt::format("{} is not a whole number", v.empty() ? "''" : v);
+        if (ec == std::errc::result_out_of_range || n < lo || n > hi)
+          return fmt::format("{} is not in range {} to {}", v, lo, hi);
+        return std::string();
+      },
+      fmt::format("INT in [{} - {}]", lo, hi));
+}
+
 // frame counts and numbers: 1 to the most frames a run may have (sim/world.hpp)
-const CLI::Range kFrameRange(1, static_cast<int>(kMaxFrames));
+const CLI::Validator kFrameRange = whole(1, static_cast<std::int64_t>(kMaxFrames));
 
 // an output folder given as '' would fall back to the default one, unasked
 const CLI::Validator kNonEmptyPath(
@@ -48,9 +67,9 @@ void add_scene_options(CLI::App* cmd, RunOptions& o, const std::string& out_help
   cmd->add_option("--frames", o.frames, "number of frames (default: from the scene)")
       ->check(kFrameRange);
   cmd->add_option("--grains", o.grains, "scale the emitters to N grains in total")
-      ->check(CLI::Range(std::int64_t{1}, std::int64_t{2000000000}));
+      ->check(whole(1, 2000000000));
   cmd->add_option("--threads", o.threads, "OpenMP threads (default: all cores)")
-      ->check(CLI::Range(1, 1024));
+      ->check(whole(1, 1024));
   cmd->add_option("--set", o.sets, set_help);
   cmd->add_option("--export", o.exports,
                   "files written each frame, comma-separated: ply, vtk, geo, geo_gz, pov, csv, "
@@ -91,7 +110,7 @@ int main(int argc, char** argv) {
   run->add_option("--checkpoint-every", ro.checkpoint_every,
                   "write DIR/checkpoint.bin every N frames and after the last (default 30; 0: "
                   "only on SIGINT/SIGTERM)")
-      ->check(CLI::Range(0, static_cast<int>(kMaxFrames)));
+      ->check(whole(0, static_cast<std::int64_t>(kMaxFrames)));
   run->footer(
       "A run writes DIR/run.json (how it was started) and, every N frames, DIR/checkpoint.bin.\n"
       "SIGINT (Ctrl-C) or SIGTERM finishes the current frame, writes a checkpoint and exits;\n"
@@ -112,9 +131,9 @@ int main(int argc, char** argv) {
   calibrate->add_option("scene", cao.scene, "scene file (TOML)")->required();
   calibrate->add_option("--set", cao.sets, "override a scene key: --set material.friction=0.4");
   calibrate->add_option("--threads", cao.threads, "OpenMP threads (default: all cores)")
-      ->check(CLI::Range(1, 1024));
+      ->check(whole(1, 1024));
   calibrate->add_option("--trials", calibration_trials, "seeds measured (default 3)")
-      ->check(CLI::Range(1, 100));
+      ->check(whole(1, 100));
   calibrate->add_flag("--again", calibrate_again, "measure even when the cache holds the result");
   RigSettings rig;
   calibrate
@@ -155,7 +174,7 @@ int main(int argc, char** argv) {
       ->add_option("--seeds", cmp.seeds,
                    "runs per mode, with seeds S, S+1, ... (S: the scene's simulation.seed); the "
                    "spread of the plain-DEM runs is the noise floor of the comparison (default 3)")
-      ->check(CLI::Range(1, kMaxSeeds));
+      ->check(whole(1, kMaxSeeds));
   compare->add_flag("--equal-stiffness", cmp.equal_stiffness,
                     "also run plain DEM at the surface run's k_n and dt (DIR/dem-equal-stiffness): "
                     "the speed-up without the softer springs");
@@ -187,13 +206,14 @@ int main(int argc, char** argv) {
                      "folder of the scene files NAME.toml (default: ./scenes if there is one, "
                      "else the source tree's scenes/)");
   table1->add_option("--threads", to.threads, "OpenMP threads (default: all cores)")
-      ->check(CLI::Range(1, 1024));
+      ->check(whole(1, 1024));
   table1->add_flag("--force", to.force,
                    "write into a non-empty output folder, replacing its table and the folders of "
                    "the scenes run");
-  table1->add_option("--seeds", to.seeds,
-                     "runs per mode of each scene, as compare --seeds (default 1)")
-      ->check(CLI::Range(1, kMaxSeeds));
+  table1
+      ->add_option("--seeds", to.seeds,
+                   "runs per mode of each scene, as compare --seeds (default 1)")
+      ->check(whole(1, kMaxSeeds));
   table1->add_flag("--resume", to.resume,
                    "go on with the table in a non-empty output folder, given the same options: "
                    "finished runs are read back from their last checkpoints, stopped ones go on "
@@ -215,9 +235,9 @@ int main(int argc, char** argv) {
   render->add_option("dir", rdo.dir, "run folder, or a comparison's folder (surface/ and dem/)")
       ->required();
   render->add_option("--width", rdo.width, "image width [pixels] (default 1280)")
-      ->check(CLI::Range(16, 16384));
+      ->check(whole(16, 16384));
   render->add_option("--height", rdo.height, "image height [pixels] (default 720)")
-      ->check(CLI::Range(16, 16384));
+      ->check(whole(16, 16384));
   auto* frame_opt =
       render->add_option("--frame", rdo.frame, "one frame (default: the last)")->check(kFrameRange);
   render
@@ -236,7 +256,7 @@ int main(int argc, char** argv) {
                    "final (antialiased, soft light; the default) or draft (fast previews)")
       ->check(CLI::IsMember({"draft", "final"}));
   render->add_option("--jobs", rdo.jobs, "frames rendered at once (default: one per core)")
-      ->check(CLI::Range(1, 1024));
+      ->check(whole(1, 1024));
   render->add_flag("--movie", rdo.movie,
                    "also encode the frames to DIR/render/movie.mp4 (H.264) with ffmpeg");
   render->add_flag("--keep-pov", rdo.keep_pov,
@@ -264,10 +284,11 @@ int main(int argc, char** argv) {
   auto* report = app.add_subcommand(
       "report", "write DIR/report.html: summary, plots, contact sheet (both modes for compare)");
   report->add_option("dir", rpo.dir, "run, compare or table1 folder")->required();
-  report->add_option("--contact-sheet", rpo.contact_sheet,
-                     "frames on the contact sheet, evenly spaced, ending with the last (default "
-                     "6; 0: none)")
-      ->check(CLI::Range(0, 100));
+  report
+      ->add_option("--contact-sheet", rpo.contact_sheet,
+                   "frames on the contact sheet, evenly spaced, ending with the last (default "
+                   "6; 0: none)")
+      ->check(whole(0, 100));
   bool no_render = false;
   report->add_flag("--no-render", no_render,
                    "do not run POV-Ray: show only the frames already in DIR/render/");

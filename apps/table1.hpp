@@ -77,7 +77,8 @@ struct Table1Row {
 };
 
 inline constexpr std::string_view kTable1CsvHeader =
-    "scene,total,surface_simulated_mean,surface_s_per_frame,dem_simulated_mean,dem_s_per_frame,"
+    "scene,total,emitted,surface_simulated_mean,surface_s_per_frame,dem_simulated_mean,dem_s_per_"
+    "frame,"
     "speedup,surface_rms_rel,grains_inside_geometry,max_overlap_surface_rel,impact_overlap,"
     "energy_added_by_waking_j";
 
@@ -87,11 +88,11 @@ inline std::string table1_csv(const std::vector<Table1Row>& rows) {
   std::string s = std::string(kTable1CsvHeader) + "\n";
   for (const Table1Row& r : rows)
     if (r.status == RowStatus::Done)
-      s += fmt::format("{},{},{:.1f},{:.6g},{:.1f},{:.6g},{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g}\n",
-                       r.scene, r.total, r.surface_simulated_mean, r.surface_s_per_frame,
-                       r.dem_simulated_mean, r.dem_s_per_frame, r.speedup, r.surface_rms_rel,
-                       r.inside_dem + r.inside_surface, r.max_overlap_surface, r.impact_overlap,
-                       r.energy_woken);
+      s += fmt::format(
+          "{},{},{},{:.1f},{:.6g},{:.1f},{:.6g},{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g}\n", r.scene,
+          r.total, r.emitted, r.surface_simulated_mean, r.surface_s_per_frame, r.dem_simulated_mean,
+          r.dem_s_per_frame, r.speedup, r.surface_rms_rel, r.inside_dem + r.inside_surface,
+          r.max_overlap_surface, r.impact_overlap, r.energy_woken);
   return s;
 }
 
@@ -128,7 +129,8 @@ inline std::array<std::string, 10> table1_cells(const Table1Row& r) {
       fmt::format("{:.3g}", r.surface_s_per_frame),
       fmt::format("{:.3g}", r.dem_s_per_frame),
       fmt::format("{:.2f}x", r.speedup),
-      fmt::format("{:.1f} %", 100 * r.surface_rms_rel),
+      std::isnan(r.surface_rms_rel) ? std::string("n/a")
+                                    : fmt::format("{:.1f} %", 100 * r.surface_rms_rel),
       fmt::format("{} ({} + {})", r.inside_dem + r.inside_surface, r.inside_dem, r.inside_surface),
       fmt::format("{:.1f} % (of {:.0f} %)", 100 * r.max_overlap_surface, 100 * r.impact_overlap),
       fmt::format("{:.3g} J", r.energy_woken)};

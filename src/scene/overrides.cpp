@@ -75,6 +75,13 @@ toml::table parse_override_value(const Override& o, const std::string& where) {
     }
   } catch (const toml::parse_error&) {
   }
+  // a number no double holds (1e400) fails to parse like a word, but is not meant as a string
+  double number = 0;
+  const char* end = o.value.data() + o.value.size();
+  if (const auto [p, ec] = std::from_chars(o.value.data(), end, number);
+      p == end && ec == std::errc::result_out_of_range)
+    fail(where,
+         "the value " + o.value + " is beyond the range of a double (about 1e-308 to 1e308)");
   std::ostringstream quoted;
   quoted << toml::value<std::string>(o.value);
   const std::string as_string = "v = " + quoted.str();

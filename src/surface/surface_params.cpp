@@ -126,9 +126,13 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   const Real nxf = std::ceil((x1 - x0) / hf.cell), nyf = std::ceil((y1 - y0) / hf.cell);
   if (!(nxf * nyf <= static_cast<Real>(kMaxHeightFieldColumns)))  // NaN too
     throw InputError(fmt::format(
-        "{}: the height field would need {:.0f} x {:.0f} columns of {:.4g} m (at most {}): set a "
-        "larger surface.cell_size or a smaller surface.extent",
-        scene.path, nxf, nyf, hf.cell, kMaxHeightFieldColumns));
+        "{}: the height field would need {:.0f} x {:.0f} columns of {:.4g} m (at most {}){}: set a "
+        "larger surface.cell_size or a smaller surface.extent{}",
+        scene.path, nxf, nyf, hf.cell, kMaxHeightFieldColumns,
+        sc.extent ? ""
+                  : fmt::format(" to cover the emitters, the heap of {} grains and the geometry",
+                                scene.total_grains()),
+        sc.extent ? "" : ", or ask for fewer grains"));
   hf.nx = std::max(1, static_cast<int>(nxf));
   hf.ny = std::max(1, static_cast<int>(nyf));
   // centre the whole columns on the extent

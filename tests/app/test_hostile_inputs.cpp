@@ -403,7 +403,7 @@ TEST(HostileInputs, ARunRecordWithCountsOutOfRangeIsRefused) {
 
 // A VDB voxel finer than d / 200 is refused at load: OpenVDB drops a sphere wider than 100 voxels
 // from the level set, which left it empty with exit 0. Frame counts out of range say the range,
-// and an empty --out is refused.
+// counts that are not whole numbers say so, and an empty --out is refused.
 TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
   Sandbox box;
   const fs::path scene = box.write("fine.toml", sandflow_test::tiny_block_scene(20));
@@ -415,8 +415,19 @@ TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
       << log;
   for (const std::string frames : {"0", "20000000"}) {
     EXPECT_EQ(bounded("run " + scene.string() + " --check --frames " + frames, &log), 2) << log;
-    EXPECT_TRUE(has(log, "--frames: Value " + frames + " not in range 1 to 10000000")) << log;
+    EXPECT_TRUE(has(log, "--frames: " + frames + " is not in range 1 to 10000000")) << log;
   }
+  // a count written as a decimal or with an exponent is not a whole number: CLI11's range check
+  // alone called it out of range
+  for (const std::string option : {"--grains 2e2", "--threads 1.0", "--frames 1x"}) {
+    EXPECT_EQ(bounded("run " + scene.string() + " --check " + option, &log), 2) << log;
+    EXPECT_TRUE(has(log, option.substr(0, option.find(' ')) + ": " +
+                             option.substr(option.find(' ') + 1) + " is not a whole number"))
+        << log;
+  }
+  EXPECT_EQ(bounded("run " + scene.string() + " --check --grains 99999999999999999999", &log), 2)
+      << log;
+  EXPECT_TRUE(has(log, "is not in range 1 to 2000000000")) << log;
   // an empty output folder is not the default one
   EXPECT_EQ(bounded("run " + scene.string() + " --frames 1 --out ''", &log), 2) << log;
   EXPECT_TRUE(has(log, "--out: an empty folder name")) << log;

@@ -270,6 +270,10 @@ TEST(SceneLoader, OverriddenValuesAreValidatedAndNamed) {
   expect_error(text,
                {"--set emitter[0].count: emitter[0].count: expected an integer, got a string"},
                {{"emitter[0].count", "many"}});
+  // a number past a double's range is not read as the word "1e400" (which said "got a string")
+  expect_error(text,
+               {"--set material.restitution: the value 1e400 is beyond the range of a double"},
+               {{"material.restitution", "1e400"}});
 }
 
 TEST(SceneLoader, OverrideOfUnknownKeyOrMissingTableIsAnError) {
