@@ -146,8 +146,8 @@ SceneConfig calibration_rig(const SceneConfig& scene, std::uint64_t seed,
   const Real d_max = scene.material.largest_diameter();
   const Real g = norm(scene.simulation.gravity);
   if (!(g > 0))
-    throw InputError(
-        fmt::format("{}: calibration needs gravity (simulation.gravity is zero)", scene.path));
+    throw InputError(fmt::format("{}: calibration needs gravity (simulation.gravity is zero)",
+                                 scene.place({"simulation.gravity"})));
   SceneConfig rig;
   rig.path = scene.path + " (calibration rig)";
   rig.name = "calibration";

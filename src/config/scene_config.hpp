@@ -6,8 +6,11 @@
 
 #include <array>
 #include <cstdint>
+#include <initializer_list>
+#include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/vec3.hpp"
@@ -215,10 +218,35 @@ struct SceneConfig {
   std::vector<GeometryConfig> geometry;
   std::vector<EmitterConfig> emitters;
 
+  /// Where each key read came from ("PATH:LINE:COL", or "--set KEY" for an override), by its
+  /// name in messages ("emitter[0].rate"), with its line (0 for an override).
+  struct KeyPlace {
+    std::string text;
+    int line = 0;
+  };
+  std::map<std::string, KeyPlace, std::less<>> key_places;
+
   std::int64_t total_grains() const {
     std::int64_t n = 0;
     for (const auto& e : emitters) n += e.count;
     return n;
+  }
+
+  /// The place of the first of `keys` the scene gave ("material.k_n"), or of a table
+  /// ("emitter[0]": its first key in the file), so that an error found after loading, about
+  /// keys checked together, points at a line as the loader's own do; else the file.
+  std::string place(std::initializer_list<std::string_view> keys) const {
+    for (std::string_view key : keys) {
+      if (const auto it = key_places.find(key); it != key_places.end()) return it->second.text;
+      const KeyPlace* first = nullptr;
+      const std::string prefix = std::string(key) + ".";
+      for (auto it = key_places.lower_bound(prefix);
+           it != key_places.end() && it->first.compare(0, prefix.size(), prefix) == 0; ++it)
+        if (!first || (it->second.line > 0 && (first->line == 0 || it->second.line < first->line)))
+          first = &it->second;
+      if (first) return first->text;
+    }
+    return path;
   }
 };
 

@@ -139,8 +139,8 @@ void read_emitters(TableReader& doc, const Places& places, SceneConfig& c) {
 
 SceneConfig read_scene(const toml::table& root, const std::string& path,
                        const ImageReader& read_image) {
-  const Places places(path);
   SceneConfig c;
+  const Places places(path, &c);
   c.path = path;
   c.name = std::filesystem::path(path).stem().string();
 

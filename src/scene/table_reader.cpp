@@ -101,6 +101,12 @@ std::string Places::of(const toml::key& key, const toml::node& value) const {
   return of(key.source());
 }
 
+void Places::note(const std::string& name, const toml::key& key, const toml::node& value) const {
+  if (!record_) return;
+  const int line = is_override(value.source()) ? 0 : static_cast<int>(key.source().begin.line);
+  record_->key_places.insert_or_assign(name, SceneConfig::KeyPlace{of(key, value), line});
+}
+
 void fail(const std::string& place, const std::string& what) {
   throw InputError(place + ": " + what);
 }
@@ -277,6 +283,7 @@ std::optional<TableReader::Entry> TableReader::find(std::string_view key) {
   if (std::find(known_.begin(), known_.end(), key) == known_.end()) known_.emplace_back(key);
   const auto it = table_.find(key);
   if (it == table_.end()) return std::nullopt;
+  places_.note(name(key), it->first, it->second);
   return Entry{&it->first, &it->second};
 }
 

@@ -85,7 +85,12 @@ using Choices = std::pair<std::string_view, E>;
 /// (override values are parsed with that text as their source path).
 class Places {
  public:
-  explicit Places(std::string file) : file_(std::move(file)) {}
+  /// `record`, when given, collects the place of every key read (SceneConfig::key_places).
+  explicit Places(std::string file, SceneConfig* record = nullptr)
+      : file_(std::move(file)), record_(record) {}
+
+  /// Notes where the key named `name` (as messages name it) was read from.
+  void note(const std::string& name, const toml::key& key, const toml::node& value) const;
 
   std::string of(const toml::source_region& src) const;
   /// A key = value pair is placed at the key, unless an override supplied the value.
@@ -95,6 +100,7 @@ class Places {
   bool is_override(const toml::source_region& src) const { return src.path && *src.path != file_; }
 
   std::string file_;
+  SceneConfig* record_;
 };
 
 /// Throws InputError("PLACE: WHAT").

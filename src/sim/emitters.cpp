@@ -394,8 +394,10 @@ void resolve_beds(SceneConfig& scene) {
     if (const auto problem =
             pack_bed_emitter(e, scene.material, geometry, bed_seed(scene.simulation.seed, k), bed,
                              kMaxBedGrains, scene.simulation.threads))
-      throw InputError(
-          fmt::format("{}: emitter[{}].{} {}", scene.path, k, problem->key, problem->what));
+      throw InputError(fmt::format("{}: emitter[{}].{} {}",
+                                   scene.place({fmt::format("emitter[{}].{}", k, problem->key),
+                                                fmt::format("emitter[{}]", k)}),
+                                   k, problem->key, problem->what));
     set_bed_extent(e, bed);
   }
 }

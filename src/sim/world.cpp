@@ -26,7 +26,8 @@ TimeStep choose_time_step(const SceneConfig& scene) {
     throw InputError(fmt::format(
         "{}: material.density = {:.4g} kg/m^3, diameter = {:.4g} m and k_n = {:.4g} N/m give a "
         "grain mass of {:.4g} kg and a contact time of {:.4g} s: not finite positive numbers",
-        scene.path, mat.density, mat.diameter, mat.k_n, m_min, ts.t_c));
+        scene.place({"material.density", "material.diameter", "material.k_n"}), mat.density,
+        mat.diameter, mat.k_n, m_min, ts.t_c));
   // A grain resting on the floor sinks m g / k_n into it; past the guard's overlap the run would
   // stop as soon as the heaviest grain lands (k_n = 1e-300 N/m, or a density of 1e300 kg/m^3).
   const Real r_max = 0.5 * mat.largest_diameter();
@@ -39,7 +40,8 @@ TimeStep choose_time_step(const SceneConfig& scene) {
         "heaviest grain, resting on the floor under gravity {:.4g} m/s^2, would sink {:.4g} m "
         "into it, more than simulation.max_overlap_stop = {:.0f} % of its diameter ({:.4g} m); "
         "raise k_n or lower the density",
-        scene.path, mat.density, mat.diameter, mat.k_n, norm(scene.simulation.gravity), sink,
+        scene.place({"material.k_n", "material.density", "material.diameter"}), mat.density,
+        mat.diameter, mat.k_n, norm(scene.simulation.gravity), sink,
         100 * scene.simulation.max_overlap_stop, guard));
   // Symplectic Euler on one spring is stable below 2/omega = 0.64 t_c; a grain held by many
   // contacts vibrates up to ~3x faster, so the bound keeps that factor: t_c / 5. The explicit
@@ -55,7 +57,7 @@ TimeStep choose_time_step(const SceneConfig& scene) {
     throw InputError(fmt::format(
         "{}: simulation.dt = {:.4g} s is above the stable bound {:.4g} s ({}, with contact time "
         "t_c = {:.4g} s for the smallest grains at k_n = {:.4g} N/m)",
-        scene.path, dt, ts.stable_bound,
+        scene.place({"simulation.dt"}), dt, ts.stable_bound,
         damping_bound < ts.t_c / 5
             ? fmt::format("t_c / (3 pi beta): the dashpot of material.restitution = {:.3g}, "
                           "beta = {:.3g}",
@@ -68,7 +70,8 @@ TimeStep choose_time_step(const SceneConfig& scene) {
     throw InputError(fmt::format(
         "{}: a frame of {:.4g} s would take {:.4g} steps of dt = {:.4g} s, more than the limit of "
         "{:.0f}; raise simulation.dt, lower material.k_n or enlarge the grains",
-        scene.path, frame_dt, steps, dt, kMaxSubsteps));
+        scene.place({"simulation.dt", "output.fps", "material.k_n"}), frame_dt, steps, dt,
+        kMaxSubsteps));
   ts.substeps = std::max(1, static_cast<int>(steps));
   ts.dt = frame_dt / ts.substeps;
   return ts;
@@ -248,7 +251,7 @@ StaticFrame static_store_frame(const SceneConfig& scene, const HeightField& hf, 
     throw InputError(
         fmt::format("{}: the static layer cannot be stored: {} (simulation.domain, "
                     "surface, material.diameter)",
-                    scene.path, e));
+                    scene.place({"simulation.domain", "surface"}), e));
   const Real bound = 1e-3 * mat.smallest_diameter();
   if (!(f.position_error() <= bound && f.radius_error() <= bound))
     throw InputError(fmt::format(
@@ -257,9 +260,9 @@ StaticFrame static_store_frame(const SceneConfig& scene, const HeightField& hf, 
         "{:.4g} m (simulation.domain along z, {:.4g} m, widened by as much on either side) and its "
         "{} steps across a column {:.4g} m (surface.cell_size); narrow the domain along z, or "
         "the columns",
-        scene.path, f.position_error(), f.radius_error(), bound,
-        std::uint64_t{1} << StaticStore::kZBits, f.z_hi - f.z_lo, height, 1u << StaticStore::kXBits,
-        f.cell));
+        scene.place({"simulation.domain", "surface.cell_size"}), f.position_error(),
+        f.radius_error(), bound, std::uint64_t{1} << StaticStore::kZBits, f.z_hi - f.z_lo, height,
+        1u << StaticStore::kXBits, f.cell));
   return f;
 }
 }  // namespace
@@ -281,7 +284,8 @@ World::World(const SceneConfig& scene)
     }
   }
   for (std::size_t k = 0; k < scene.emitters.size(); ++k) {
-    const std::string where = fmt::format("{}: emitter[{}]", scene.path, k);
+    const std::string table = fmt::format("emitter[{}]", k);
+    const std::string where = scene.place({table}) + ": " + table;
     emitters_.emplace_back(scene.emitters[k], scene.material, scene.simulation.gravity, where);
     if (scene.emitters[k].type != EmitterType::Bed) continue;
     // a bed is packed again, the same as when the scene was loaded (resolve_beds), on this
@@ -333,7 +337,8 @@ int World::planned_frames() const {
     throw InputError(fmt::format(
         "{}: {} make a run of {:.4g} s, {:.4g} frames at output.fps = {:.4g}, more than the limit "
         "of {:.0f}; set output.duration, or --frames",
-        scene_.path, from, duration, frames, scene_.output.fps, kMaxFrames));
+        scene_.place({"output.duration", "output.settle_time", "output.fps"}), from, duration,
+        frames, scene_.output.fps, kMaxFrames));
   return std::max(1, static_cast<int>(frames));
 }
 
@@ -393,9 +398,10 @@ void World::check_emitted(std::size_t k, std::size_t first) const {
           "{}: emitter[{}]{} places a grain at ({:.4g}, {:.4g}, {:.4g}) m {:.0f} % of its "
           "diameter inside geometry[{}]{} (more than simulation.max_overlap_stop = {:.0f} %): "
           "move the emitter or the solid",
-          scene_.path, k, named(scene_.emitters[k].name, fmt::format("emitter {}", k)), g.x.x,
-          g.x.y, g.x.z, 100 * depth, o.source,
-          named(solid.name, fmt::format("geometry {}", o.source)), 100 * limit));
+          scene_.place({fmt::format("emitter[{}]", k)}), k,
+          named(scene_.emitters[k].name, fmt::format("emitter {}", k)), g.x.x, g.x.y, g.x.z,
+          100 * depth, o.source, named(solid.name, fmt::format("geometry {}", o.source)),
+          100 * limit));
     }
   }
 }

@@ -79,7 +79,8 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
         "{}: surface.flow_speed = {:.4g} m/s is less than surface.trap_speed = {:.4g} m/s{}: a "
         "grain would move the static layer while slow enough to be trapped in it; set flow_speed "
         ">= trap_speed",
-        scene.path, sc.flow_speed.value_or(seat_speed), sc.trap_speed.value_or(seat_speed),
+        scene.place({"surface.flow_speed", "surface.trap_speed"}),
+        sc.flow_speed.value_or(seat_speed), sc.trap_speed.value_or(seat_speed),
         sc.flow_speed ? (sc.trap_speed ? "" : " (trap_speed unset: the seat's bound)")
                       : " (flow_speed unset: the seat's bound)"));
   p.interface.density = scene.material.density;
@@ -128,7 +129,8 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
     throw InputError(fmt::format(
         "{}: the height field would need {:.0f} x {:.0f} columns of {:.4g} m (at most {}){}: set a "
         "larger surface.cell_size or a smaller surface.extent{}",
-        scene.path, nxf, nyf, hf.cell, kMaxHeightFieldColumns,
+        scene.place({"surface.extent", "surface.cell_size"}), nxf, nyf, hf.cell,
+        kMaxHeightFieldColumns,
         sc.extent ? ""
                   : fmt::format(" to cover the emitters, the heap of {} grains and the geometry",
                                 scene.total_grains()),

@@ -142,6 +142,21 @@ TEST(SceneLoader, OutOfRangeValueGivesTheDocumentedMessage) {
   EXPECT_EQ(error_of(text), "t.toml:2:3: material.restitution = 1.4 is outside (0, 1]");
 }
 
+// Errors found after loading, about keys checked together, are placed as the loader's own: at the
+// line of the first key named that the scene gave, at an override's --set, or at a table's first
+// key; a scene without any of them is named by its file.
+TEST(SceneLoader, KeysKeepTheirPlacesForLaterErrors) {
+  const std::string text =
+      "[material]\ndensity = 2000\n  k_n = 5e4\n[[emitter]]\nrate = 10\ncount = 100\n";
+  const SceneConfig c = load_scene_from_string(text, "t.toml", {{"material.friction", "0.4"}});
+  EXPECT_EQ(c.place({"material.k_n"}), "t.toml:3:3");
+  EXPECT_EQ(c.place({"material.diameter", "material.density"}), "t.toml:2:1");  // the first given
+  EXPECT_EQ(c.place({"material.friction"}), "--set material.friction");
+  EXPECT_EQ(c.place({"emitter[0]"}), "t.toml:5:1");  // the table: its first key
+  EXPECT_EQ(c.place({"emitter[0].count"}), "t.toml:6:1");
+  EXPECT_EQ(c.place({"simulation.dt", "output"}), "t.toml");
+}
+
 TEST(SceneLoader, OneSidedRangesSayWhatIsExpected) {
   expect_error("[material]\ndensity = -1\n" + std::string(kMinimal),
                {"t.toml:2:1: material.density = -1 is not > 0"});
