@@ -104,6 +104,7 @@ int thread_count(const SceneConfig& scene) {
 /// `label` prefixes the progress line (table1's "scene k of n: ").
 RunResult run_scene(const SceneConfig& scene, const std::string& out, const std::string& label,
                     const RunControl& control) {
+  for (const std::string& w : scene.warnings) fmt::print(stderr, "warning: {}\n", w);
   World world(scene);
   for (const std::string& w : world.geometry().warnings()) fmt::print(stderr, "warning: {}\n", w);
   const int frames = world.planned_frames();
@@ -587,6 +588,7 @@ Started start_new(const RunOptions& o, const std::string& text) {
   const SceneConfig& scene = run.scene;
   if (o.check) {
     run.done = true;
+    for (const std::string& w : scene.warnings) fmt::print(stderr, "warning: {}\n", w);
     World world(scene);
     for (const std::string& w : world.geometry().warnings())
       fmt::print(stderr, "warning: {}\n", w);

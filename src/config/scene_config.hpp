@@ -225,6 +225,9 @@ struct SceneConfig {
     int line = 0;
   };
   std::map<std::string, KeyPlace, std::less<>> key_places;
+  /// The loader's warnings, "PLACE: what": keys the scene gave that nothing uses, angles that look
+  /// like radians. Each run prints them.
+  std::vector<std::string> warnings;
 
   std::int64_t total_grains() const {
     std::int64_t n = 0;

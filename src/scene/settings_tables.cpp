@@ -54,6 +54,8 @@ void read_simulation(TableReader r, SimulationConfig& s) {
   r.read("gravity", s.gravity);
   r.read("dt", s.dt, kPositive);
   r.read("dt_fraction", s.dt_fraction, open_closed(0, 0.2));
+  if (r.has("dt_fraction") && r.in_file("dt"))
+    r.warn_at("dt_fraction", r.name("dt_fraction") + " is not used: " + r.name("dt") + " is given");
   r.read("skin", s.skin, open_closed(0, 2));
   r.read("skin_steps", s.skin_steps, closed(0, 1000));  // 0: one skin for all grains
   r.read("skin_max", s.skin_max, closed(0, 2));
@@ -83,7 +85,29 @@ void read_stiffness(TableReader r, StiffnessConfig& k) {
   r.read("dem_depth", k.dem_depth, kPositive);
   r.read("surface_depth", k.surface_depth, kPositive);
   r.finish("[stiffness]");
+  // (impact_overlap stays the limit compare and table1 hold the overlaps to; a --set of
+  // from_load, as compare --equal-stiffness makes, leaves the file's keys unused knowingly)
+  if (!k.from_load && r.in_file("from_load"))
+    for (const std::string_view key : {"max_overlap", "impact_speed", "dem_depth", "surface_depth"})
+      if (r.has(key))
+        r.warn_at(key, r.name(key) + " is not used: " + r.name("from_load") +
+                           " = false takes k_n from material.k_n");
 }
+
+namespace {
+
+// Angles in scene files are degrees. One small enough to be the key's range in radians (below
+// `most` = pi / 2 for an angle of repose, pi for a field of view) reads like radians; it is taken
+// as given (it is in range), with a warning that says what it would be in degrees.
+void warn_if_radians(const TableReader& r, std::string_view key, Real deg, Real most,
+                     std::string_view looks) {
+  if (deg < most)
+    r.warn_at(key, r.name(key) + " = " + format_real(deg) + " is in degrees, " +
+                       std::string(looks) + "; if it was meant in radians, write " +
+                       fmt::format("{:.4g}", rad_to_deg(deg)));
+}
+
+}  // namespace
 
 void check_extent(const TableReader& r, const std::array<Real, 4>& extent) {
   const auto& [x0, y0, x1, y1] = extent;
@@ -135,6 +159,8 @@ void read_surface(TableReader r, SurfaceConfig& s, Real diameter) {
   r.read("extent", s.extent);
   r.finish("[surface]");
 
+  for (const auto& [key, deg] : {std::pair{"repose_angle", repose_deg}, {"max_angle", max_deg}})
+    if (deg) warn_if_radians(r, key, *deg, kPi / 2, "a heap all but flat");
   if (repose_deg) {
     s.repose_angle = deg_to_rad(*repose_deg);
     s.repose_angle_given = true;
@@ -196,6 +222,7 @@ void read_camera(TableReader r, CameraConfig& c) {
   vector("look_at", c.look_at);
   vector("up", c.up);
   r.read("fov", c.fov_deg, open(0, 180));
+  if (r.has("fov")) warn_if_radians(r, "fov", c.fov_deg, kPi, "a view through a keyhole");
   r.finish("[camera]");
 
   if (c.position && !c.look_at)

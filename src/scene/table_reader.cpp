@@ -107,6 +107,10 @@ void Places::note(const std::string& name, const toml::key& key, const toml::nod
   record_->key_places.insert_or_assign(name, SceneConfig::KeyPlace{of(key, value), line});
 }
 
+void Places::warn(const std::string& place, const std::string& what) const {
+  if (record_) record_->warnings.push_back(place + ": " + what);
+}
+
 void fail(const std::string& place, const std::string& what) {
   throw InputError(place + ": " + what);
 }
@@ -251,6 +255,17 @@ void TableReader::fail_at(std::string_view key, const std::string& what) const {
   const auto it = table_.find(key);
   if (it != table_.end()) fail(places_.of(it->first, it->second), what);
   fail(places_.of(table_.source()), what);
+}
+
+void TableReader::warn_at(std::string_view key, const std::string& what) const {
+  const auto it = table_.find(key);
+  places_.warn(it != table_.end() ? places_.of(it->first, it->second) : places_.of(table_.source()),
+               what);
+}
+
+bool TableReader::in_file(std::string_view key) const {
+  const auto it = table_.find(key);
+  return it != table_.end() && !places_.is_override(it->second.source());
 }
 
 void TableReader::require(std::string_view key, std::string_view expected) const {

@@ -91,14 +91,16 @@ class Places {
 
   /// Notes where the key named `name` (as messages name it) was read from.
   void note(const std::string& name, const toml::key& key, const toml::node& value) const;
+  /// Adds "PLACE: what" to the scene's warnings.
+  void warn(const std::string& place, const std::string& what) const;
 
   std::string of(const toml::source_region& src) const;
   /// A key = value pair is placed at the key, unless an override supplied the value.
   std::string of(const toml::key& key, const toml::node& value) const;
 
- private:
   bool is_override(const toml::source_region& src) const { return src.path && *src.path != file_; }
 
+ private:
   std::string file_;
   SceneConfig* record_;
 };
@@ -194,6 +196,10 @@ class TableReader {
 
   /// Fails at `key` if the table has it, else at the table itself.
   [[noreturn]] void fail_at(std::string_view key, const std::string& what) const;
+  /// A warning at `key` (which the table has).
+  void warn_at(std::string_view key, const std::string& what) const;
+  /// The table has `key` from the scene file itself, not from a --set.
+  bool in_file(std::string_view key) const;
 
   void require(std::string_view key, std::string_view expected) const;
 

@@ -442,6 +442,19 @@ TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
   EXPECT_TRUE(has(log, "--out: an empty folder name")) << log;
 }
 
+// An angle of repose given in radians is in range as degrees: the run goes on, and says so.
+TEST(HostileInputs, AnAngleThatReadsLikeRadiansIsWarnedOf) {
+  Sandbox box;
+  const fs::path scene = box.write("radians.toml", sandflow_test::tiny_block_scene(20));
+  std::string log;
+  EXPECT_EQ(bounded("run " + scene.string() + " --check --set surface.repose_angle=0.6", &log), 0)
+      << log;
+  EXPECT_TRUE(has(log,
+                  "warning: --set surface.repose_angle: surface.repose_angle = 0.6 is in "
+                  "degrees, a heap all but flat; if it was meant in radians, write 34.38"))
+      << log;
+}
+
 // A finished run whose summary.json was edited into something else is not taken as finished: its
 // resume reads the run back from the checkpoint and writes the summary again, the same state.
 TEST(HostileInputs, ADamagedSummaryIsWrittenAgainByTheResume) {

@@ -157,6 +157,35 @@ TEST(SceneLoader, KeysKeepTheirPlacesForLaterErrors) {
   EXPECT_EQ(c.place({"simulation.dt", "output"}), "t.toml");
 }
 
+// Keys the scene gives but nothing uses, and angles that read like radians, are warnings at their
+// lines. A --set that makes a key unused (compare --equal-stiffness sets from_load = false) is
+// asked for knowingly and warns of nothing.
+TEST(SceneLoader, UnusedKeysAndAnglesLikeRadiansAreWarnedOf) {
+  const std::string text =
+      "[simulation]\ndt = 1e-5\ndt_fraction = 0.05\n"
+      "[stiffness]\nfrom_load = false\nimpact_speed = 2\nimpact_overlap = 0.2\n"
+      "[surface]\nrepose_angle = 0.6\nmax_angle = 40\n[camera]\nfov = 1\n" +
+      std::string(kMinimal);
+  const SceneConfig c = load_scene_from_string(text, "t.toml");
+  const std::vector<std::string> expected = {
+      "t.toml:3:1: simulation.dt_fraction is not used: simulation.dt is given",
+      "t.toml:6:1: stiffness.impact_speed is not used: stiffness.from_load = false takes k_n from "
+      "material.k_n",
+      "t.toml:9:1: surface.repose_angle = 0.6 is in degrees, a heap all but flat; if it was meant "
+      "in radians, write 34.38",
+      "t.toml:12:1: camera.fov = 1 is in degrees, a view through a keyhole; if it was meant in "
+      "radians, write 57.3"};
+  EXPECT_EQ(c.warnings, expected);
+  // (impact_overlap is still the limit compare holds the overlaps to: no warning; nor for 40)
+
+  const std::string quiet =
+      "[simulation]\ndt_fraction = 0.05\n[stiffness]\nimpact_speed = 2\n" + std::string(kMinimal);
+  EXPECT_TRUE(load_scene_from_string(quiet, "t.toml",
+                                     {{"simulation.dt", "1e-5"}, {"stiffness.from_load", "false"}})
+                  .warnings.empty());
+  EXPECT_TRUE(load_scene_from_string(kMinimal, "t.toml").warnings.empty());
+}
+
 TEST(SceneLoader, OneSidedRangesSayWhatIsExpected) {
   expect_error("[material]\ndensity = -1\n" + std::string(kMinimal),
                {"t.toml:2:1: material.density = -1 is not > 0"});
