@@ -367,7 +367,11 @@ SolidHeightmap::Exact SolidHeightmap::exact(const Vec3& p, bool column, Real ub,
     const Node n = heap.back();
     heap.pop_back();
     if (n.lb >= ub) break;  // (the least bound of all left): q is the nearest
-    if (ub - n.lb <= tolerance(n.lb) || n.lb >= reach_ || parts >= kMaxParts) return {n.lb, q};
+    if (ub - n.lb <= tolerance(n.lb) || n.lb >= reach_) return {n.lb, q};
+    if (parts >= kMaxParts) {
+      capped_.fetch_add(1, std::memory_order_relaxed);
+      return {n.lb, q};
+    }
     if (n.k >= 2) {
       for (int b = 0; b < 2; ++b)
         for (int a = 0; a < 2; ++a)
