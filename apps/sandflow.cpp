@@ -42,7 +42,9 @@ CLI::Validator whole(std::int64_t lo, std::int64_t hi) {
       [lo, hi](std::string& v) {
         std::int64_t n = 0;
         const char* end = v.data() + v.size();
-        const auto [p, ec] = std::from_chars(v.data(), end, n);
+        const char* begin =
+            v.data() + (v.size() > 1 && v[0] == '+');  // (+5 is 5, as CLI11 reads it)
+        const auto [p, ec] = std::from_chars(begin, end, n);
         if (v.empty() || p != end || ec == std::errc::invalid_argument)
           return fmt::format("{} is not a whole number", v.empty() ? "''" : v);
         if (ec == std::errc::result_out_of_range || n < lo || n > hi)
