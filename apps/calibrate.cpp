@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 #include "scene/scene_loader.hpp"
 
 namespace sandflow {
@@ -32,6 +33,7 @@ std::string calibration_cache_dir() {
 
 std::optional<nlohmann::json> cached_calibration(const std::string& key) {
   const fs::path path = fs::path(calibration_cache_dir()) / (key + ".json");
+  refuse_special_file(path.string(), "calibration cache file");
   std::ifstream in(path);
   if (!in) return std::nullopt;
   std::stringstream ss;

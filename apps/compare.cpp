@@ -17,6 +17,7 @@
 #include "core/atomic_file.hpp"
 #include "core/counted.hpp"
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 #include "io/folder_lock.hpp"
 #include "scene/scene_loader.hpp"
 #include "surface/surface_params.hpp"
@@ -110,7 +111,17 @@ CompareOptions read_plan(const std::string& out) {
   co.seeds = 1;
   const fs::path path = fs::path(out) / kPlanFile;
   std::error_code ec;
-  if (!fs::exists(path, ec)) return co;
+  if (!fs::exists(path, ec)) {
+    // (only a comparison of one seed is a folder with no seed-S/ in it)
+    for (const auto& e : fs::directory_iterator(out, ec))
+      if (e.path().filename().string().rfind("seed-", 0) == 0)
+        throw InputError(fmt::format(
+            "{}: missing, but {} holds {}: the plan of its seeds is lost; run the comparison "
+            "again with --force",
+            path.string(), out, e.path().filename().string()));
+    return co;
+  }
+  refuse_special_file(path.string(), "comparison plan");
   try {
     std::ifstream in(path);
     const nlohmann::json j = nlohmann::json::parse(in);
@@ -132,6 +143,7 @@ CompareOptions read_plan(const std::string& out) {
 
 /// How many frames the run in `dir` has written (the rows of its stats.csv; 0 when there is none).
 int frames_written(const std::string& dir) {
+  refuse_special_file((fs::path(dir) / "stats.csv").string(), "statistics file");
   std::ifstream in(fs::path(dir) / "stats.csv");
   int rows = -1;  // (the header)
   for (std::string line; std::getline(in, line);)

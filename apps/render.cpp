@@ -27,7 +27,9 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "core/counted.hpp"
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 #include "core/process.hpp"
 #include "geometry/shapes.hpp"
 #include "io/ply.hpp"
@@ -126,6 +128,7 @@ struct RenderScene {
 };
 
 nlohmann::json read_summary(const std::string& run) {
+  refuse_special_file((fs::path(run) / "summary.json").string(), "summary");
   std::ifstream in(fs::path(run) / "summary.json");
   if (!in) return nlohmann::json();
   auto j = nlohmann::json::parse(in, nullptr, false);
@@ -231,6 +234,8 @@ struct HeightImages {
 };
 
 std::optional<HeightImages> read_height_images(const std::string& run) {
+  refuse_special_file((fs::path(run) / "heightfield" / "heightfield.json").string(),
+                      "height field's record");
   std::ifstream in(fs::path(run) / "heightfield" / "heightfield.json");
   if (!in) return std::nullopt;
   const auto j = nlohmann::json::parse(in, nullptr, false);
@@ -419,6 +424,18 @@ int render_command(const RenderOptions& o) {
   std::vector<std::optional<HeightImages>> heights;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     heights.push_back(read_height_images(runs[k]));
+    const nlohmann::json summary = read_summary(runs[k]);
+    const auto field = [&](const char* key) {
+      return summary.is_object() && summary.contains(key) ? summary.at(key) : nlohmann::json();
+    };
+    const nlohmann::json statics = field("n_static_final");
+    if (!heights.back() && field("mode") == "surface" && statics.is_number_integer() &&
+        statics.get<std::int64_t>() > 0)
+      fmt::print(stderr,
+                 "warning: {}: its static layer ({} at the end) is not drawn: "
+                 "heightfield/heightfield.json is missing or not one sandflow wrote (a run "
+                 "exports it with --export height)\n",
+                 runs[k], counted(statics.get<std::int64_t>(), "grain"));
     if (!heights.back() || !still) continue;  // (in an animation the grains cover it)
     for (int f : framed[k]) {
       const SandSurface sf = static_layer(runs[k], f, *heights.back(), scene);

@@ -24,6 +24,7 @@
 #include "core/atomic_file.hpp"
 #include "core/counted.hpp"
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 #include "core/memory.hpp"
 #include "geometry/heightmap.hpp"
 #include "io/export_formats.hpp"
@@ -338,6 +339,7 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
   std::error_code ec;
   if (const std::string problem = folder_problem(dir); !problem.empty())
     throw InputError(dir + ": " + problem + " (expected a run folder)");
+  refuse_broken_link(record_path.string(), "run record");
   if (!fs::exists(record_path, ec))
     throw InputError(fmt::format(
         "{}: no run.json: not a sandflow run folder, or its run stopped before it started; start "
@@ -357,11 +359,17 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
                       record_path.string(), name, v.dump(), lo, hi));
     return v.get<std::int64_t>();
   };
+  refuse_special_file(record_path.string(), "run record");
   try {
     std::ifstream in(record_path);
     record = nlohmann::json::parse(in);
     text = record.at("start").at("scene_text").get<std::string>();
     r.scene = record.at("scene_file").get<std::string>();
+    if (r.scene.empty() || r.scene.find('\0') != std::string::npos)
+      throw InputError(
+          fmt::format("{}: scene_file {} names no file: the record was edited or "
+                      "damaged",
+                      record_path.string(), nlohmann::json(r.scene).dump()));
     r.sets = record.at("start").at("sets").get<std::vector<std::string>>();
     r.mode = record.at("start").at("mode").get<std::string>();
     r.grains = whole(record.at("start").at("grains"), "grains", 0, 2'000'000'000);
@@ -538,6 +546,7 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
   RunOptions r = read_run_record(dir, record, text);
   // finished: its summary is written whole (one edited into something else is written again)
   const bool finished = [&] {
+    refuse_special_file((fs::path(dir) / "summary.json").string(), "summary");
     std::ifstream in(fs::path(dir) / "summary.json");
     const nlohmann::json summary = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
     return summary.is_object() && summary.contains("frames") && summary.contains("state_hash");
@@ -553,6 +562,7 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
   run.out = dir;
   run.resumed = true;
   const std::string path = (fs::path(dir) / "checkpoint.bin").string();
+  refuse_broken_link(path, "checkpoint");  // (else taken for none, and the run started over)
   if (fs::exists(path, ec)) {
     try {
       run.checkpoint = read_checkpoint(path);
@@ -668,7 +678,8 @@ int check_resumable(const RunOptions& o, const std::string& text, bool run_on) {
     throw InputError(fmt::format(
         "{}: holds a run started otherwise (its run.json records another scene text, --set, "
         "--grains, --frames, --export or --up-axis than now, or it was run on to another frame); "
-        "it cannot be resumed as this one: pass --force to run it again",
+        "it cannot be resumed as this one: start it again with the command that made it, given "
+        "--force in place of --resume",
         o.out));
   return run_to_frame(record);
 }

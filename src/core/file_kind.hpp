@@ -4,6 +4,7 @@
 #pragma once
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <string>
 
@@ -29,6 +30,20 @@ inline std::string special_file_kind(const std::string& path) {
 inline void refuse_special_file(const std::string& path, const std::string& what) {
   const std::string kind = special_file_kind(path);
   if (!kind.empty()) throw InputError(path + ": the " + what + " is " + kind + ", not a file");
+}
+
+/// Throws InputError "PATH: the WHAT is a link to nothing (TARGET)" when `path` is a symbolic link
+/// that leads nowhere (a missing target, a loop): a reader that takes a missing file for "not made
+/// yet" must not take a link to storage that is not mounted for it.
+inline void refuse_broken_link(const std::string& path, const std::string& what) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0 || !S_ISLNK(st.st_mode) || ::stat(path.c_str(), &st) == 0)
+    return;
+  std::string target(4096, '\0');
+  const ssize_t n = ::readlink(path.c_str(), target.data(), target.size());
+  target.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
+  throw InputError(path + ": the " + what + " is a link to nothing (" + target +
+                   "): mount or restore what it leads to, or remove the link");
 }
 
 }  // namespace sandflow

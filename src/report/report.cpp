@@ -1,4 +1,5 @@
 #include "report/report.hpp"
+#include "core/file_kind.hpp"
 
 #include <charconv>
 #include <cmath>
@@ -142,11 +143,14 @@ std::string table(const std::vector<std::pair<std::string, std::string>>& rows) 
 
 /// A PNG as an <img> with a data: URI, or a note when it cannot be read.
 std::string image(const std::string& png, const std::string& alt) {
+  if (const std::string kind = special_file_kind(png); !kind.empty())
+    return note(png + ": is " + kind + ", not a picture");
   std::ifstream in(png, std::ios::binary);
   std::stringstream ss;
   ss << in.rdbuf();
   const std::string bytes = in ? ss.str() : std::string();
   if (bytes.empty()) return note(png + ": cannot be read");
+  if (bytes.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0) return note(png + ": not a PNG picture");
   std::string size;
   if (const auto s = png_size(png)) size = fmt::format(" width=\"{}\" height=\"{}\"", s->width, s->height);
   return "<img src=\"data:image/png;base64," + base64_encode(bytes) + "\" alt=\"" +
@@ -392,6 +396,7 @@ Table1ReportData load_table1_report_data(const std::string& dir) {
   Table1ReportData t;
   t.dir = dir;
   const std::string csv = (fs::path(dir) / "table1.csv").string();
+  refuse_special_file(csv, "table");
   std::ifstream in(csv);
   if (!in) throw InputError(fmt::format("{}: cannot read", csv));
   std::string line;
@@ -415,12 +420,20 @@ Table1ReportData load_table1_report_data(const std::string& dir) {
     } else if (fields.size() != t.columns.size()) {
       throw InputError(fmt::format("{}:{}: {} fields; expected {} as in the header", csv, line_no,
                                    fields.size(), t.columns.size()));
+    } else if (const std::string& scene = fields[0];
+               scene.empty() || scene == "." || scene == ".." ||
+               scene.find_first_of("/\\") != std::string::npos) {
+      // (a scene's name is its folder under DIR: one that leads elsewhere is no scene of it)
+      throw InputError(fmt::format("{}:{}: scene '{}' is not the name of a folder in {}", csv,
+                                   line_no, scene, dir));
     } else {
       t.rows.push_back(fields);
     }
   }
   if (t.columns.empty()) throw InputError(fmt::format("{}:1: empty file; expected a header", csv));
-  std::ifstream md(fs::path(dir) / "table1.md");
+  const fs::path md_path = fs::path(dir) / "table1.md";
+  refuse_special_file(md_path.string(), "table");
+  std::ifstream md(md_path);
   std::stringstream ss;
   ss << md.rdbuf();
   t.table_md = ss.str();

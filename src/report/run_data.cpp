@@ -1,4 +1,5 @@
 #include "report/run_data.hpp"
+#include "core/file_kind.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -64,6 +65,7 @@ std::vector<double> StatsTable::column(const std::string& name) const {
 }
 
 StatsTable read_stats_csv(const std::string& path) {
+  refuse_special_file(path, "statistics file");  // (a FIFO would block, /dev/zero never end)
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(fmt::format("{}: cannot read (the run folder has no statistics)", path));
   std::stringstream ss;
@@ -129,6 +131,7 @@ StatsTable read_stats_csv(const std::string& path) {
 }
 
 nlohmann::json read_json_object(const std::string& path) {
+  refuse_special_file(path, "JSON file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(fmt::format("{}: cannot read", path));
   nlohmann::json j;
@@ -174,6 +177,7 @@ std::vector<int> evenly_spaced(const std::vector<int>& available, int n) {
 
 std::optional<ImageSize> png_size(const std::string& path) {
   // the signature (8 bytes), then the IHDR chunk: length, "IHDR", width, height (big-endian)
+  if (!special_file_kind(path).empty()) return std::nullopt;
   std::ifstream in(path, std::ios::binary);
   unsigned char b[24];
   if (!in.read(reinterpret_cast<char*>(b), sizeof b)) return std::nullopt;

@@ -21,7 +21,7 @@ EmitterConfig read_emitter(TableReader r, std::size_t index, const MaterialConfi
   EmitterConfig e;
   e.name = "emitter " + std::to_string(index);
   r.read("type", e.type, kEmitterTypes);
-  r.read("name", e.name);
+  r.read_name("name", e.name);
   if (e.type == EmitterType::Bed) {
     // (its count is its packing's: scene_loader.cpp packs it once the geometry is read)
     if (r.has("count"))

@@ -214,7 +214,7 @@ GeometryConfig read_geometry(TableReader r, std::size_t index, const std::string
   GeometryConfig g;
   g.name = "geometry " + std::to_string(index);
   r.read("type", g.type, kGeometryTypes);
-  r.read("name", g.name);
+  r.read_name("name", g.name);
   r.read("render", g.render, kRenderStyles);
   r.read("friction", g.friction, kNonNegative);
   r.read("remove_at", g.remove_at, kNonNegative);

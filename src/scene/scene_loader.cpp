@@ -38,7 +38,13 @@ namespace {
 void read_settings(TableReader& doc, const Places& places, SceneConfig& c) {
   if (const auto* t = doc.table("scene")) {
     TableReader r(places, *t, "scene");
-    r.read("name", c.name);
+    r.read_name("name", c.name);
+    // (the name makes the default output folder, out/NAME-MODE)
+    if (c.name.empty() || c.name == "." || c.name == ".." ||
+        c.name.find_first_of("/\\") != std::string::npos)
+      r.fail_at("name", "scene.name = \"" + c.name +
+                            "\": expected a name that can make a folder's (not empty, no / or \\, "
+                            "not . or ..)");
     r.read("description", c.description);
     r.finish("[scene]");
   }

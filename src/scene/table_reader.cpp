@@ -257,6 +257,20 @@ void TableReader::fail_at(std::string_view key, const std::string& what) const {
   fail(places_.of(table_.source()), what);
 }
 
+void TableReader::read_name(std::string_view key, std::string& out) {
+  const auto e = find(key);
+  if (!e) return;
+  std::string v;
+  read(key, v);
+  for (const char ch : v) {
+    const auto u = static_cast<unsigned char>(ch);
+    if (u < 0x20 || u == 0x7f)
+      fail(place(*e), name(key) + " = \"" + printable(v) +
+                          "\" holds a control character: a name is one line of printable text");
+  }
+  out = v;
+}
+
 void TableReader::warn_at(std::string_view key, const std::string& what) const {
   const auto it = table_.find(key);
   places_.warn(it != table_.end() ? places_.of(it->first, it->second) : places_.of(table_.source()),

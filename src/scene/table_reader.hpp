@@ -139,6 +139,9 @@ class TableReader {
 
   void read(std::string_view key, bool& out);
   void read(std::string_view key, std::string& out);
+  /// A name: one line of printable text (it goes into the comments and headers of exported files,
+  /// where a line break or a control character would end the comment and start code).
+  void read_name(std::string_view key, std::string& out);
 
   /// An array of strings, each with the place it came from (for messages about one of them).
   struct Word {

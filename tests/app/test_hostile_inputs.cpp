@@ -455,6 +455,63 @@ TEST(HostileInputs, AnAngleThatReadsLikeRadiansIsWarnedOf) {
       << log;
 }
 
+// The files of a run folder are read only when they are files: a FIFO would block the reader for
+// ever, /dev/zero behind a link would fill the memory (report grew 0.75 GB a second), a folder
+// gave rc 1 with libstdc++'s words. A checkpoint that is a link to nothing (storage not mounted)
+// is not "no checkpoint yet", which ran the run again from the start over it, and a record whose
+// scene_file is "" is refused before the run, not with rc 1 after it.
+TEST(HostileInputs, RunFolderFilesThatAreNoFilesAreRefusedNotWaitedOn) {
+  Sandbox box;
+  std::string log;
+  const fs::path out = one_frame_run(box, &log);
+  ASSERT_FALSE(out.empty()) << log;
+  const fs::path c = box.dir / "copy";
+  const auto fresh = [&] {
+    fs::remove_all(c);
+    fs::copy(out, c, fs::copy_options::recursive);
+  };
+  fresh();
+  fs::remove(c / "summary.json");
+  ASSERT_EQ(mkfifo((c / "summary.json").c_str(), 0600), 0);
+  EXPECT_EQ(bounded("report " + c.string() + " --no-render", &log), 2) << log;
+  EXPECT_TRUE(has(log, "summary.json: the JSON file is a FIFO, not a file")) << log;
+  EXPECT_EQ(bounded("run --resume " + c.string(), &log), 2) << log;
+  EXPECT_TRUE(has(log, "summary.json: the summary is a FIFO, not a file")) << log;
+
+  fresh();
+  fs::remove(c / "stats.csv");
+  fs::create_symlink("/dev/zero", c / "stats.csv");
+  EXPECT_EQ(bounded("report " + c.string() + " --no-render", &log), 2) << log;
+  EXPECT_TRUE(has(log, "stats.csv: the statistics file is a character device, not a file")) << log;
+
+  fresh();
+  fs::remove(c / "run.json");
+  fs::create_directory(c / "run.json");
+  EXPECT_EQ(bounded("run --resume " + c.string(), &log), 2) << log;
+  EXPECT_TRUE(has(log, "run.json: the run record is a folder, not a file")) << log;
+
+  fresh();
+  fs::remove(c / "summary.json");  // (unfinished: a resume reads the checkpoint)
+  fs::remove(c / "checkpoint.bin");
+  fs::create_symlink("/nonexistent/sandflow-checkpoint", c / "checkpoint.bin");
+  EXPECT_EQ(bounded("run --resume " + c.string(), &log), 2) << log;
+  EXPECT_TRUE(has(log,
+                  "checkpoint.bin: the checkpoint is a link to nothing "
+                  "(/nonexistent/sandflow-checkpoint)"))
+      << log;
+  EXPECT_TRUE(fs::is_symlink(c / "checkpoint.bin"));  // not replaced by a run from the start
+
+  fresh();
+  std::string record = sandflow_test::read_text(c / "run.json");
+  const std::size_t at = record.find("\"scene_file\": \"");
+  ASSERT_NE(at, std::string::npos) << record;
+  const std::size_t value = at + std::string("\"scene_file\": \"").size();
+  record.erase(value, record.find('"', value) - value);
+  std::ofstream(c / "run.json") << record;
+  EXPECT_EQ(bounded("run --resume " + c.string() + " --frames 2", &log), 2) << log;
+  EXPECT_TRUE(has(log, "run.json: scene_file \"\" names no file")) << log;
+}
+
 // A finished run whose summary.json was edited into something else is not taken as finished: its
 // resume reads the run back from the checkpoint and writes the summary again, the same state.
 TEST(HostileInputs, ADamagedSummaryIsWrittenAgainByTheResume) {

@@ -172,9 +172,16 @@ TEST(ReportCli, Table1FolderGetsAnIndexOfTheScenesReports) {
   EXPECT_NE(html.find("1,077"), std::string::npos);
   EXPECT_EQ(html_problem(read_text(out / "floor" / "report.html")), "");
   // a row of table1.csv cut short: the file and the line
-  box.write("t1/table1.csv", read_text(out / "table1.csv") + "bowl,3181,12\n");
+  const std::string csv = read_text(out / "table1.csv");
+  box.write("t1/table1.csv", csv + "bowl,3181,12\n");
   EXPECT_EQ(sandflow("report " + out.string() + " --no-render", &log), 2) << log;
   EXPECT_NE(log.find((out / "table1.csv").string() + ":3: 3 fields"), std::string::npos) << log;
+  // a scene named as a path out of the folder: report wrote that folder's report.html
+  const std::size_t row = csv.find('\n') + 1;  // floor,...
+  box.write("t1/table1.csv", csv.substr(0, row) + "../run" + csv.substr(csv.find(',', row)));
+  EXPECT_EQ(sandflow("report " + out.string() + " --no-render", &log), 2) << log;
+  EXPECT_NE(log.find(":2: scene '../run' is not the name of a folder in"), std::string::npos)
+      << log;
 }
 
 TEST(ReportCli, WithoutPovrayTheSheetSaysHowToGetIt) {

@@ -186,6 +186,25 @@ TEST(SceneLoader, UnusedKeysAndAnglesLikeRadiansAreWarnedOf) {
   EXPECT_TRUE(load_scene_from_string(kMinimal, "t.toml").warnings.empty());
 }
 
+// A name goes into the comments and headers of exported files: a line break in it ended a POV-Ray
+// comment and started code (#debug, #fopen). The scene's name makes the default output folder:
+// one with / or .. put it outside out/.
+TEST(SceneLoader, NamesAreOneLineAndTheScenesNameMakesAFolder) {
+  expect_error("[scene]\nname = \"x\\n#debug\"\n" + std::string(kMinimal),
+               {"t.toml:2:1: scene.name = \"x\\u000a#debug\" holds a control character"});
+  expect_error("[[geometry]]\ntype = \"plane\"\nname = \"a\\tb\"\n" + std::string(kMinimal),
+               {"geometry[0].name", "holds a control character"});
+  expect_error(std::string(kMinimal) + "name = \"e\\u007f\"\n",
+               {"emitter[0].name", "holds a control character"});
+  for (const char* name : {"../../zz", "x/y", "", "..", "a\\\\b"})
+    expect_error("[scene]\nname = \"" + std::string(name) + "\"\n" + std::string(kMinimal),
+                 {"t.toml:2:1: scene.name = ", "expected a name that can make a folder's"});
+  EXPECT_EQ(
+      load_scene_from_string("[scene]\nname = \"dune 2, ok\"\n" + std::string(kMinimal), "t.toml")
+          .name,
+      "dune 2, ok");
+}
+
 TEST(SceneLoader, OneSidedRangesSayWhatIsExpected) {
   expect_error("[material]\ndensity = -1\n" + std::string(kMinimal),
                {"t.toml:2:1: material.density = -1 is not > 0"});
