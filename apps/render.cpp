@@ -112,6 +112,11 @@ std::vector<std::string> run_folders(const std::string& dir) {
         "{}: no frames/NNNN.ply in this folder: expected the folder of a run (sandflow run) or of "
         "a comparison (sandflow compare, with surface/ and dem/)",
         dir));
+  if (runs.size() == 1)
+    fmt::print(stderr,
+               "warning: {}: a comparison with frames in {} only: it alone is rendered, and no "
+               "side-by-side movie is made\n",
+               dir, runs.front());
   return runs;
 }
 
@@ -387,6 +392,12 @@ int render_command(const RenderOptions& o) {
     spans.push_back({first, last});
   }
 
+  if (runs.size() > 1 && (spans[0].first != spans[1].first || spans[0].last != spans[1].last))
+    fmt::print(stderr,
+               "warning: {}: its runs' frames differ ({} {}-{}, {} {}-{}: frames were deleted, or "
+               "a run was run on alone): each is rendered on its own{}\n",
+               o.dir, runs[0], spans[0].first, spans[0].last, runs[1], spans[1].first,
+               spans[1].last, o.movie ? ", and no side-by-side movie is made" : "");
   if (find_povray().empty())
     throw InputError("povray is not installed: sudo apt-get install povray");
   if (!movie_tool)
@@ -532,7 +543,9 @@ int render_command(const RenderOptions& o) {
     const std::string folder = (fs::path(runs[k]) / "render").string();
     movies.push_back({{folder}, spans[k], (fs::path(folder) / "movie.mp4").string()});
   }
-  if (runs.size() > 1 && spans[0].first == spans[1].first && spans[0].last == spans[1].last) {
+  const bool side_by_side =
+      runs.size() > 1 && spans[0].first == spans[1].first && spans[0].last == spans[1].last;
+  if (side_by_side) {
     const fs::path folder = fs::path(o.dir) / "render";
     std::error_code ec;
     fs::create_directories(folder, ec);

@@ -372,6 +372,11 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
                       record_path.string(), nlohmann::json(r.scene).dump()));
     r.sets = record.at("start").at("sets").get<std::vector<std::string>>();
     r.mode = record.at("start").at("mode").get<std::string>();
+    if (!r.mode.empty() && r.mode != "surface" && r.mode != "dem")
+      throw InputError(
+          fmt::format("{}: mode \"{}\" is not surface or dem: the record was edited "
+                      "or damaged",
+                      record_path.string(), r.mode));
     r.grains = whole(record.at("start").at("grains"), "grains", 0, 2'000'000'000);
     if (const auto& e = record.at("start").at("exports"); !e.is_null())
       r.exports = e.get<std::string>();
@@ -573,6 +578,22 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
     }
   }
   const int frame = run.checkpoint ? run.checkpoint->world.frame : 0;
+  // frames deleted by hand before the checkpoint cannot be written again: say which
+  if (frame > 0 &&
+      has_export(run_exports(run.scene.output, run.scene.simulation.mode), ExportFormat::Ply)) {
+    std::vector<int> missing;
+    for (int f = 1; f <= frame; ++f)
+      if (!fs::exists(frame_path(dir, f), ec)) missing.push_back(f);
+    if (!missing.empty())
+      fmt::print(stderr,
+                 "warning: {}: {} of its {} before the checkpoint {} missing from frames/ ({}): "
+                 "the run goes on from frame {} and cannot write {} again\n",
+                 dir, missing.size(), counted(frame, "frame"), missing.size() == 1 ? "is" : "are",
+                 missing.size() == 1
+                     ? fmt::format("frame {}", missing.front())
+                     : fmt::format("the first {}, the last {}", missing.front(), missing.back()),
+                 frame + 1, missing.size() == 1 ? "it" : "them");
+  }
   if (o.frames > 0) {
     // another last frame: the run goes on from its checkpoint, so not one before it. The summary
     // goes first: a folder stopped between the two is an unfinished run of its old length

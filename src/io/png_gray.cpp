@@ -192,7 +192,7 @@ GrayImage parse_gray_png(std::string_view bytes, const std::string& name, int ma
     case ReadStatus::Colour:
       throw InputError(at(kColourTypeAt) + "a colour PNG (" +
                        std::string(raw.color_type == PNG_COLOR_TYPE_PALETTE ? "palette" : "RGB") +
-                       "): a heightmap must be a grey-scale PNG (8 or 16 bits)");
+                       "): a heightmap must be a grey-scale PNG (1, 2, 4, 8 or 16 bits)");
     case ReadStatus::TooLarge:
       throw InputError(at(kWidthAt) + "the image is " + std::to_string(raw.width) + " x " +
                        std::to_string(raw.height) + " pixels: at most " +

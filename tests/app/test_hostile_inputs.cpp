@@ -512,6 +512,25 @@ TEST(HostileInputs, RunFolderFilesThatAreNoFilesAreRefusedNotWaitedOn) {
   EXPECT_TRUE(has(log, "run.json: scene_file \"\" names no file")) << log;
 }
 
+// A resumed run whose frames before its checkpoint were deleted by hand goes on, and says which
+// are missing (they cannot be written again): it said nothing and ended "finished" with holes.
+TEST(HostileInputs, AResumeSaysWhichFramesBeforeItsCheckpointAreMissing) {
+  Sandbox box;
+  const fs::path scene = box.write("tiny.toml", sandflow_test::tiny_block_scene(20));
+  const fs::path out = box.dir / "out";
+  std::string log;
+  ASSERT_EQ(
+      bounded("run " + scene.string() + " --frames 3 --export ply --out " + out.string(), &log), 0)
+      << log;
+  fs::remove(out / "frames" / "0002.ply");
+  EXPECT_EQ(bounded("run --resume " + out.string() + " --frames 4", &log), 0) << log;
+  EXPECT_TRUE(has(log,
+                  "1 of its 3 frames before the checkpoint is missing from frames/ (frame "
+                  "2): the run goes on from frame 4 and cannot write it again"))
+      << log;
+  EXPECT_TRUE(fs::exists(out / "frames" / "0004.ply"));
+}
+
 // A finished run whose summary.json was edited into something else is not taken as finished: its
 // resume reads the run back from the checkpoint and writes the summary again, the same state.
 TEST(HostileInputs, ADamagedSummaryIsWrittenAgainByTheResume) {
