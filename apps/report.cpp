@@ -164,7 +164,11 @@ std::string write_report(const ReportOptions& o) {
     // a page per scene that has a comparison, in the table's order
     for (const auto& row : t.rows) {
       const fs::path scene = d / row[0];
-      if (!file_exists(scene / "compare.json")) continue;
+      if (!file_exists(scene / "compare.json")) {
+        fmt::print(stderr, "report: {} has no compare.json (not run, or not finished): left out\n",
+                   scene.string());
+        continue;
+      }
       fmt::print(stderr, "report: {}\n", scene.string());
       write_compare_report(scene.string(), o);
       t.linked.push_back(row[0]);
@@ -174,6 +178,11 @@ std::string write_report(const ReportOptions& o) {
     return path;
   }
   if (file_exists(d / "stats.csv") || file_exists(d / "summary.json")) return write_run_report(o.dir, o);
+  if (file_exists(d / "compare_plan.json"))
+    throw InputError(fmt::format(
+        "{}: a comparison that did not finish (no compare.json yet): go on with it with "
+        "sandflow compare --resume {}",
+        o.dir, o.dir));
   throw InputError(fmt::format(
       "{}: not a run folder (stats.csv), a compare folder (compare.json) or a table1 folder "
       "(table1.csv)",

@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 
 namespace sandflow {
 
@@ -53,6 +54,12 @@ FolderLock::FolderLock(const std::string& dir) {
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
     throw InputError(fmt::format("{}: the output path exists and is not a folder", dir));
+  refuse_broken_link(dir, "output folder");
+  // (a file on the way is the user's mistake, not an output error: out/afile/sub)
+  for (fs::path up = fs::path(dir).parent_path(); !up.empty() && up != up.root_path();
+       up = up.parent_path())
+    if (fs::exists(up, ec) && !fs::is_directory(up, ec))
+      throw InputError(fmt::format("{}: {} is a file, not a folder", dir, up.string()));
   fs::create_directories(dir, ec);
   if (ec) throw OutputError(fmt::format("{}: cannot create the output folder: {}", dir, ec.message()));
   fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);

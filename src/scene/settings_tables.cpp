@@ -239,9 +239,15 @@ void read_camera(TableReader r, CameraConfig& c) {
     r.fail_at("look_at", r.name("look_at") +
                              " is camera.position: expected a point the camera "
                              "looks at, away from where it stands");
+  // (past about 1e154 m the length overflows, and every direction below would be NaN)
+  if (!std::isfinite(norm(view)))
+    r.fail_at("look_at", r.name("look_at") +
+                             " is too far from camera.position: the distance between them is not "
+                             "a finite number");
   if (c.up) {
     const Real n = norm(*c.up);
     if (n == 0) r.fail_at("up", r.name("up") + " = [0, 0, 0]: expected a direction");
+    if (!std::isfinite(n)) r.fail_at("up", r.name("up") + ": its length is not a finite number");
     // the picture's up must not point along the view, or it cannot be set upright
     if (norm(cross(*c.up / n, view / norm(view))) < 1e-3)
       r.fail_at("up", r.name("up") +

@@ -512,6 +512,29 @@ TEST(HostileInputs, RunFolderFilesThatAreNoFilesAreRefusedNotWaitedOn) {
   EXPECT_TRUE(has(log, "run.json: scene_file \"\" names no file")) << log;
 }
 
+// An output folder under a file, or a link to nothing, is the user's mistake (exit 2), named as
+// such: it was exit 4, "cannot create the output folder: File exists".
+TEST(HostileInputs, AnOutputFolderUnderAFileOrALinkToNothingIsRefused) {
+  Sandbox box;
+  const fs::path scene = box.write("tiny.toml", sandflow_test::tiny_block_scene(20));
+  box.write("afile", "x");
+  std::string log;
+  EXPECT_EQ(
+      bounded("run " + scene.string() + " --frames 1 --out " + (box.dir / "afile" / "sub").string(),
+              &log),
+      2)
+      << log;
+  EXPECT_TRUE(has(log, "afile is a file, not a folder")) << log;
+  fs::create_symlink("/nonexistent/sandflow-out", box.dir / "dangling");
+  EXPECT_EQ(
+      bounded("run " + scene.string() + " --frames 1 --out " + (box.dir / "dangling").string(),
+              &log),
+      2)
+      << log;
+  EXPECT_TRUE(has(log, "the output folder is a link to nothing (/nonexistent/sandflow-out)"))
+      << log;
+}
+
 // A resumed run whose frames before its checkpoint were deleted by hand goes on, and says which
 // are missing (they cannot be written again): it said nothing and ended "finished" with holes.
 TEST(HostileInputs, AResumeSaysWhichFramesBeforeItsCheckpointAreMissing) {

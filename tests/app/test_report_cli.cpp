@@ -100,6 +100,14 @@ TEST(ReportCli, MissingOrBrokenInputsExitTwoNamingTheFile) {
   EXPECT_EQ(sandflow("report " + run.string(), &log), 2) << log;
   EXPECT_NE(log.find((run / "stats.csv").string()), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(run / "report.html"));
+  // a comparison stopped before its compare.json: how to finish it
+  fs::create_directories(box.dir / "cmp");
+  box.write("cmp/compare_plan.json", "{\"seeds\": 2, \"equal_stiffness\": false}");
+  EXPECT_EQ(sandflow("report " + (box.dir / "cmp").string(), &log), 2) << log;
+  EXPECT_NE(log.find("a comparison that did not finish (no compare.json yet): go on with it with "
+                     "sandflow compare --resume"),
+            std::string::npos)
+      << log;
   // a row cut short in the middle of stats.csv: the file and the line
   box.write("run/stats.csv",
             "frame,time,substeps,dt,n_total,n_active,n_interface,n_static,contacts,wall_contacts,"

@@ -64,6 +64,11 @@ TEST(CameraTable, ErrorsNameThePlaceAndWhatWasExpected) {
                {"t.toml:5:1: camera.look_at is straight above or below camera.position"});
   expect_error(head + "position = [1, 0, 3]\nlook_at = [0, 0, 0]\nup = [0, 0, 0]\n",
                {"t.toml:6:1: camera.up = [0, 0, 0]: expected a direction"});
+  // a distance that overflows said "straight above" (it is along x) or "parallel" of an up across
+  expect_error(head + "position = [1e160, 0, 0]\nlook_at = [0, 0, 0]\n",
+               {"t.toml:5:1: camera.look_at is too far from camera.position"});
+  expect_error(head + "position = [1, 0, 0]\nlook_at = [0, 0, 0]\nup = [0, 1e300, 1e300]\n",
+               {"t.toml:6:1: camera.up: its length is not a finite number"});
   expect_error(head + "angle = 30\n", {"t.toml:4:1: camera.angle is not a key of [camera]",
                                        "(keys: position, look_at, up, fov)"});
   expect_error(kEmitter, {"--set camera.fov: camera.fov = -3 is outside (0, 180)"},
