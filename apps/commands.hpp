@@ -82,6 +82,9 @@ std::string folder_problem(const std::string& dir);
 /// The options a run folder's run.json records (its scene file made absolute from the folder the
 /// run was started in), the record itself and the scene text the run was started with.
 RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::string& text);
+/// The scene of a recorded run, as read_run_record returned it: its text with the run's options.
+SceneConfig recorded_scene(const RunOptions& r, const std::string& text,
+                           const nlohmann::json& record);
 /// The scene of a run: the file, its --set overrides, --mode, --grains, --frames, --threads,
 /// --export, --up-axis.
 SceneConfig load_for_run(const RunOptions& o);

@@ -179,19 +179,28 @@ std::vector<Override> look_overrides(const std::vector<std::string>& sets) {
   return out;
 }
 
-/// The scene from --scene, else from the scene file the first run's summary.json names. Without
-/// either only the grains are drawn.
-RenderScene load_render_scene(const std::string& scene_option,
+/// The scene from --scene, else the one the first run ran (its run.json: the scene text with its
+/// --set, so a moved scene file or a --set of the geometry draws what the grains met), else the
+/// scene file its summary.json names. Without any only the grains are drawn.
+RenderScene load_render_scene(const std::string& scene_option, const std::vector<std::string>& sets,
                               const std::vector<Override>& overrides, const std::string& run) {
   RenderScene rs;
   const nlohmann::json summary = read_summary(run);
   if (summary.contains("fps") && summary["fps"].is_number()) rs.fps = summary["fps"].get<double>();
   std::string file = scene_option;
   const std::string summary_path = (fs::path(run) / "summary.json").string();
-  if (file.empty()) {
+  std::optional<SceneConfig> recorded;
+  std::error_code ec;
+  if (file.empty() && fs::exists(fs::path(run) / "run.json", ec)) {
+    nlohmann::json record;
+    std::string text;
+    RunOptions r = read_run_record(run, record, text);
+    r.sets.insert(r.sets.end(), sets.begin(), sets.end());  // (the look: camera keys)
+    recorded = recorded_scene(r, text, record);
+  }
+  if (file.empty() && !recorded) {
     if (summary.contains("scene_file") && summary["scene_file"].is_string()) {
       file = summary["scene_file"].get<std::string>();
-      std::error_code ec;
       if (!fs::is_regular_file(file, ec))
         throw InputError(fmt::format(
             "{}: the run's scene file {} cannot be opened (moved, or the run was started from "
@@ -210,7 +219,7 @@ RenderScene load_render_scene(const std::string& scene_option,
       return rs;
     }
   }
-  const SceneConfig scene = load_scene(file, overrides);
+  const SceneConfig scene = recorded ? *recorded : load_scene(file, overrides);
   rs.geometry = scene.geometry;
   rs.solids = Geometry::from_config(scene.geometry, scene.material, scene.path);
   rs.diameter = scene.material.diameter;
@@ -405,7 +414,7 @@ int render_command(const RenderOptions& o) {
                "warning: ffmpeg is not installed: the frames will be rendered, but no movie made "
                "(sudo apt-get install ffmpeg)\n");
 
-  const RenderScene scene = load_render_scene(o.scene, overrides, runs.front());
+  const RenderScene scene = load_render_scene(o.scene, o.sets, overrides, runs.front());
   const int cores = std::max(1, omp_get_num_procs());
   const int jobs = std::min(o.jobs > 0 ? o.jobs : cores, static_cast<int>(tasks.size()));
   // the cores shared out: each povray gets its share of them as render threads

@@ -265,8 +265,8 @@ int main(int argc, char** argv) {
                    "keep each picture's POV-Ray scene (NNNN.pov) and the logs of POV-Ray "
                    "(NNNN.png.log) and ffmpeg (movie.mp4.log)");
   render->add_option("--scene", rdo.scene,
-                     "scene file for the geometry and [camera] (default: the one the run's "
-                     "summary.json names)");
+                     "scene file for the geometry and [camera] (default: the one the run ran, "
+                     "recorded in its run.json with its --set)");
   render->add_option("--set", rdo.sets,
                      "change the look: --set camera.fov=30, --set geometry.1.render=glass "
                      "(camera.KEY and geometry.N.render only)");

@@ -141,6 +141,30 @@ TEST_F(Render, LastFrameByDefaultAndNoLeftovers) {
   EXPECT_EQ(names, std::vector<std::string>{"0002.png"});
 }
 
+// Without --scene the picture shows the scene the run ran: its run.json's text with its --set,
+// even when the scene file has moved away (it said "pass it with --scene FILE") and whatever the
+// file now says (a --set floor was drawn where the file put it).
+TEST_F(Render, TheRunsOwnSceneIsDrawnFromItsRecord) {
+  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto out = box.dir / "run";
+  std::string log;
+  ASSERT_EQ(sandflow("run " + scene.string() +
+                         " --mode dem --frames 1 --set 'geometry.0.point=[0, 0, "
+                         "-0.0123]' --out " +
+                         out.string(),
+                     &log),
+            0)
+      << log;
+  fs::remove(scene);
+  ASSERT_EQ(
+      sandflow("render " + out.string() + " --width 32 --height 24 --quality draft --keep-pov",
+               &log),
+      0)
+      << log;
+  const std::string pov = sandflow_test::read_text(out / "render" / "0001.pov");
+  EXPECT_NE(pov.find("-0.0123>"), std::string::npos) << pov.substr(0, 3000);
+}
+
 // POV-Ray splits its options at spaces and cannot open non-ASCII paths: a run folder whose path
 // has both renders all the same; a look_at a hair from the location is still a direction.
 TEST_F(Render, AFolderWithSpacesAndNonAsciiNamesRenders) {
