@@ -5,10 +5,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <string>
 #include <thread>
 #include <utility>
@@ -36,9 +36,23 @@ int bounded(const std::string& args, std::string* log) {
   return sandflow_test::sandflow(args, log, "timeout 30");
 }
 
-// the log has a line matching `pattern` (a place written FILE:LINE:COL is matched by \d+)
-bool has_line(const std::string& log, const std::string& pattern) {
-  return std::regex_search(log, std::regex(pattern));
+// the log has "FILE:LINE:COL: WHAT" for some line and column (std::regex would do, but GCC 12
+// warns inside it under the sanitizers, and the warnings are errors)
+bool has_placed(const std::string& log, const std::string& file, const std::string& what) {
+  for (std::size_t at = log.find(file + ":"); at != std::string::npos;
+       at = log.find(file + ":", at + 1)) {
+    std::size_t k = at + file.size();
+    bool ok = true;
+    for (int part = 0; part < 2 && ok; ++part) {  // ":LINE" then ":COL"
+      ok = k < log.size() && log[k] == ':';
+      std::size_t digits = 0;
+      for (++k; ok && k < log.size() && std::isdigit(static_cast<unsigned char>(log[k])); ++k)
+        ++digits;
+      ok = ok && digits > 0;
+    }
+    if (ok && log.compare(k, 2 + what.size(), ": " + what) == 0) return true;
+  }
+  return false;
 }
 
 bool has(const std::string& log, const std::string& part) {
@@ -175,13 +189,13 @@ TEST(HostileInputs, ContactsTooSoftForTheGrainsWeightAreRefusedByCheck) {
   Sandbox box;
   const fs::path scene = box.dir / "soft.toml";
   std::ofstream(scene) << sandflow_test::tiny_block_scene(20);
-  for (const auto& [set, place] :
-       {std::pair<std::string, std::string>{"material.k_n=1e-300", "--set material\\.k_n"},
-        {"material.density=1e300", "soft\\.toml:\\d+:\\d+"}}) {
+  for (const std::string set : {"material.k_n=1e-300", "material.density=1e300"}) {
     std::string log;
     EXPECT_EQ(bounded("run " + scene.string() + " --check --set " + set, &log), 2) << set;
-    EXPECT_TRUE(has_line(log, place + ": material\\.density") && has(log, "would sink") &&
-                has(log, "max_overlap_stop"))
+    EXPECT_TRUE((set.rfind("material.k_n", 0) == 0
+                     ? has(log, "--set material.k_n: material.density")
+                     : has_placed(log, "soft.toml", "material.density")) &&
+                has(log, "would sink") && has(log, "max_overlap_stop"))
         << log;
   }
   // k_n of 1e4 N/m holds a 1 cm grain of sand (it sinks 1.3e-6 m, 0.013 % of its diameter)
@@ -328,7 +342,7 @@ TEST(HostileInputs, AnEmitterPlacingGrainsInsideASolidIsRefusedNamingBoth) {
               2)
         << set << "\n"
         << log;
-    EXPECT_TRUE(has_line(log, "buried\\.toml:\\d+:\\d+: emitter\\[0\\] places a grain at") &&
+    EXPECT_TRUE(has_placed(log, "buried.toml", "emitter[0] places a grain at") &&
                 has(log, "inside geometry[0]") && has(log, "move the emitter or the solid") &&
                 !has(log, "raise k_n"))
         << set << "\n"
