@@ -107,6 +107,18 @@ std::vector<std::string> run_folders(const std::string& dir) {
   for (const char* mode : {"surface", "dem"})
     if (fs::is_directory(fs::path(dir) / mode / "frames", ec))
       runs.push_back((fs::path(dir) / mode).string());
+  if (runs.empty() && fs::exists(fs::path(dir) / "table1.csv", ec)) {
+    std::vector<std::string> scenes;
+    for (const auto& e : fs::directory_iterator(dir, ec))
+      if (fs::is_directory(e.path() / "surface" / "frames", ec))
+        scenes.push_back(e.path().string());
+    std::sort(scenes.begin(), scenes.end());
+    std::string list;
+    for (const std::string& sc : scenes) list += (list.empty() ? "" : ", ") + sc;
+    throw InputError(
+        fmt::format("{}: a table1 folder: render each scene's comparison on its own ({})", dir,
+                    list.empty() ? std::string("none has frames yet") : list));
+  }
   if (runs.empty())
     throw InputError(fmt::format(
         "{}: no frames/NNNN.ply in this folder: expected the folder of a run (sandflow run) or of "

@@ -70,6 +70,11 @@ MeshObstacle place_mesh(const GeometryConfig& c, const MaterialConfig& material,
     if (fs::exists(p, ec))  // (a FIFO or a device: never read, and never "not found")
       throw InputError(fmt::format("{}: {}: the mesh file '{}' is {}, not a file", scene_path,
                                    c.name, p.string(), special_file_kind(p.string())));
+    try {  // (a link to nothing is a mount or a file gone, not a mesh never fetched)
+      refuse_broken_link(p.string(), "mesh file");
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}: {}", scene_path, c.name, e.what()));
+    }
     looked += (looked.empty() ? "" : ", ") + p.string();
   }
   if (found.empty()) {

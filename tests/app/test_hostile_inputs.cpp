@@ -549,6 +549,17 @@ TEST(HostileInputs, AnOutputFolderUnderAFileOrALinkToNothingIsRefused) {
       << log;
 }
 
+// A mesh file that is a link to nothing (a loop, or storage not mounted) is said to be one, not
+// "not found" (which sent the user to fetch_meshes.sh, or let fallback = "box" stand in).
+TEST(HostileInputs, AMeshFileLinkedToNothingIsNamedSo) {
+  Sandbox box;
+  fs::create_symlink("loop.obj", box.dir / "loop.obj");
+  const auto scene = box.write("loop.toml", mesh_scene("loop.obj", "fallback = \"box\""));
+  std::string log;
+  EXPECT_EQ(bounded("run " + scene.string() + " --check", &log), 2) << log;
+  EXPECT_TRUE(has(log, "loop.obj: the mesh file is a link to nothing (loop.obj)")) << log;
+}
+
 // A resumed run whose frames before its checkpoint were deleted by hand goes on, and says which
 // are missing (they cannot be written again): it said nothing and ended "finished" with holes.
 TEST(HostileInputs, AResumeSaysWhichFramesBeforeItsCheckpointAreMissing) {

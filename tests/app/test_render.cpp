@@ -165,6 +165,18 @@ TEST_F(Render, TheRunsOwnSceneIsDrawnFromItsRecord) {
   EXPECT_NE(pov.find("-0.0123>"), std::string::npos) << pov.substr(0, 3000);
 }
 
+// A table1 folder is no run: render names its scenes' comparisons to render instead.
+TEST_F(Render, ATable1FolderNamesItsScenes) {
+  fs::create_directories(box.dir / "t1" / "bowl" / "surface" / "frames");
+  box.write("t1/table1.csv", "scene,total\n");
+  std::string log;
+  EXPECT_EQ(sandflow("render " + (box.dir / "t1").string(), &log), 2) << log;
+  EXPECT_NE(log.find("a table1 folder: render each scene's comparison on its own (" +
+                     (box.dir / "t1" / "bowl").string() + ")"),
+            std::string::npos)
+      << log;
+}
+
 // POV-Ray splits its options at spaces and cannot open non-ASCII paths: a run folder whose path
 // has both renders all the same; a look_at a hair from the location is still a direction.
 TEST_F(Render, AFolderWithSpacesAndNonAsciiNamesRenders) {
