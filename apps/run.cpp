@@ -393,13 +393,8 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
     if (fs::path(r.scene).is_relative() && fs::current_path(ec) != fs::path(wd))
       r.scene = (fs::path(wd) / r.scene).lexically_normal().string();
   } catch (const nlohmann::json::exception& e) {
-    // (e.what() begins "[json.exception.type_error.302] ": the library's, not the user's words)
-    std::string what = e.what();
-    if (const std::size_t p = what.find("] ");
-        what.rfind("[json.exception", 0) == 0 && p != std::string::npos)
-      what = what.substr(p + 2);
-    throw InputError(
-        fmt::format("{}: not a run record sandflow can read: {}", record_path.string(), what));
+    throw InputError(fmt::format("{}: not a run record sandflow can read: {}", record_path.string(),
+                                 without_library_tag(e.what())));
   }
   return r;
 }

@@ -77,10 +77,9 @@ struct Table1Row {
 };
 
 inline constexpr std::string_view kTable1CsvHeader =
-    "scene,total,emitted,surface_simulated_mean,surface_s_per_frame,dem_simulated_mean,dem_s_per_"
-    "frame,"
-    "speedup,surface_rms_rel,grains_inside_geometry,max_overlap_surface_rel,impact_overlap,"
-    "energy_added_by_waking_j";
+    "scene,total,emitted,surface_simulated_mean,surface_s_per_frame,dem_simulated_mean,"
+    "dem_s_per_frame,speedup,surface_rms_rel,grains_inside_geometry,max_overlap_surface_rel,"
+    "impact_overlap,energy_added_by_waking_j";
 
 /// table1.csv: the header and one row per scene that ran; grains_inside_geometry is the sum of
 /// both modes.

@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace sandflow {
 
@@ -24,5 +25,14 @@ class OutputError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+/// A library's message without its leading tag: nlohmann::json's "[json.exception.type_error.302]
+/// type must be string" is "type must be string", the user's words without the library's.
+inline std::string without_library_tag(std::string_view what) {
+  const std::size_t end = what.find("] ");
+  return std::string(!what.empty() && what.front() == '[' && end != std::string_view::npos
+                         ? what.substr(end + 2)
+                         : what);
+}
 
 }  // namespace sandflow

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <string>
+#include <string_view>
 
 #include "core/error.hpp"
 
@@ -30,6 +31,12 @@ inline std::string special_file_kind(const std::string& path) {
 inline void refuse_special_file(const std::string& path, const std::string& what) {
   const std::string kind = special_file_kind(path);
   if (!kind.empty()) throw InputError(path + ": the " + what + " is " + kind + ", not a file");
+}
+
+/// A name that makes exactly one folder inside another: not empty, not . or .., no / or \.
+inline bool is_plain_folder_name(std::string_view name) {
+  return !name.empty() && name != "." && name != ".." &&
+         name.find_first_of("/\\") == std::string_view::npos;
 }
 
 /// Throws InputError "PATH: the WHAT is a link to nothing (TARGET)" when `path` is a symbolic link

@@ -1,5 +1,4 @@
 #include "report/report.hpp"
-#include "core/file_kind.hpp"
 
 #include <charconv>
 #include <cmath>
@@ -11,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 #include "report/html.hpp"
 #include "report/svg_plot.hpp"
 
@@ -420,9 +420,7 @@ Table1ReportData load_table1_report_data(const std::string& dir) {
     } else if (fields.size() != t.columns.size()) {
       throw InputError(fmt::format("{}:{}: {} fields; expected {} as in the header", csv, line_no,
                                    fields.size(), t.columns.size()));
-    } else if (const std::string& scene = fields[0];
-               scene.empty() || scene == "." || scene == ".." ||
-               scene.find_first_of("/\\") != std::string::npos) {
+    } else if (const std::string& scene = fields[0]; !is_plain_folder_name(scene)) {
       // (a scene's name is its folder under DIR: one that leads elsewhere is no scene of it)
       throw InputError(fmt::format("{}:{}: scene '{}' is not the name of a folder in {}", csv,
                                    line_no, scene, dir));

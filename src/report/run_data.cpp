@@ -1,5 +1,4 @@
 #include "report/run_data.hpp"
-#include "core/file_kind.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -11,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 
 namespace sandflow {
 
@@ -139,9 +139,7 @@ nlohmann::json read_json_object(const std::string& path) {
     j = nlohmann::json::parse(in);
   } catch (const nlohmann::json::parse_error& e) {
     // e.what() reads "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
-    std::string what = e.what();
-    if (const std::size_t p = what.find("] "); p != std::string::npos) what = what.substr(p + 2);
-    throw InputError(fmt::format("{}: not valid JSON: {}", path, what));
+    throw InputError(fmt::format("{}: not valid JSON: {}", path, without_library_tag(e.what())));
   }
   if (!j.is_object())
     throw InputError(fmt::format("{}: expected a JSON object {{...}}, found a {}", path, j.type_name()));

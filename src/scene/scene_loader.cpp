@@ -21,6 +21,7 @@
 #include <optional>
 
 #include "core/error.hpp"
+#include "core/file_kind.hpp"
 #include "geometry/bed_packing.hpp"
 #include "geometry/heightmap.hpp"
 #include "geometry/shapes.hpp"
@@ -40,8 +41,7 @@ void read_settings(TableReader& doc, const Places& places, SceneConfig& c) {
     TableReader r(places, *t, "scene");
     r.read_name("name", c.name);
     // (the name makes the default output folder, out/NAME-MODE)
-    if (c.name.empty() || c.name == "." || c.name == ".." ||
-        c.name.find_first_of("/\\") != std::string::npos)
+    if (!is_plain_folder_name(c.name))
       r.fail_at("name", "scene.name = \"" + c.name +
                             "\": expected a name that can make a folder's (not empty, no / or \\, "
                             "not . or ..)");

@@ -251,30 +251,27 @@ const toml::array* TableReader::array_of_tables(std::string_view key) {
   return a;
 }
 
-void TableReader::fail_at(std::string_view key, const std::string& what) const {
+std::string TableReader::place_at(std::string_view key) const {
   const auto it = table_.find(key);
-  if (it != table_.end()) fail(places_.of(it->first, it->second), what);
-  fail(places_.of(table_.source()), what);
+  return it != table_.end() ? places_.of(it->first, it->second) : places_.of(table_.source());
+}
+
+void TableReader::fail_at(std::string_view key, const std::string& what) const {
+  fail(place_at(key), what);
 }
 
 void TableReader::read_name(std::string_view key, std::string& out) {
-  const auto e = find(key);
-  if (!e) return;
-  std::string v;
-  read(key, v);
-  for (const char ch : v) {
-    const auto u = static_cast<unsigned char>(ch);
-    if (u < 0x20 || u == 0x7f)
-      fail(place(*e), name(key) + " = \"" + printable(v) +
-                          "\" holds a control character: a name is one line of printable text");
-  }
-  out = v;
+  read(key, out);
+  if (std::any_of(out.begin(), out.end(), [](char ch) {
+        const auto u = static_cast<unsigned char>(ch);
+        return u < 0x20 || u == 0x7f;
+      }))
+    fail_at(key, name(key) + " = \"" + printable(out) +
+                     "\" holds a control character: a name is one line of printable text");
 }
 
 void TableReader::warn_at(std::string_view key, const std::string& what) const {
-  const auto it = table_.find(key);
-  places_.warn(it != table_.end() ? places_.of(it->first, it->second) : places_.of(table_.source()),
-               what);
+  places_.warn(place_at(key), what);
 }
 
 bool TableReader::in_file(std::string_view key) const {

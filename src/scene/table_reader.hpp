@@ -197,6 +197,8 @@ class TableReader {
     return {places_, t, name(key)};
   }
 
+  /// Where `key` is in the file (or the --set that gave it), else where the table is.
+  std::string place_at(std::string_view key) const;
   /// Fails at `key` if the table has it, else at the table itself.
   [[noreturn]] void fail_at(std::string_view key, const std::string& what) const;
   /// A warning at `key` (which the table has).
