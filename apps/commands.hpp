@@ -90,6 +90,10 @@ SceneConfig recorded_scene(const RunOptions& r, const std::string& text,
 SceneConfig load_for_run(const RunOptions& o);
 int thread_count(const SceneConfig& scene);
 
+/// Prints "warning: TEXT" on stderr once per command: compare and table1 load a scene for each
+/// of their runs, and its warnings printed at every one bury the rest of the output.
+void warn_once(const std::string& text);
+
 /// `sandflow calibrate` (calibrate.cpp): measures (or, unless `again`, reads from the cache) the
 /// angles of the scene's material with `trials` seeds, prints and caches them.
 int calibrate_command(const RunOptions& o, int trials, bool again, const RigSettings& rig);

@@ -191,6 +191,33 @@ std::vector<Override> look_overrides(const std::vector<std::string>& sets) {
   return out;
 }
 
+/// A --scene other than the one the run ran draws geometry the grains never met: say so when its
+/// name or its geometry's entries differ from the run's record (run.json). A run.json that cannot
+/// be read is not an error here: --scene is how such a run is drawn.
+void warn_if_not_the_runs_scene(const SceneConfig& given, const std::string& run) {
+  std::error_code ec;
+  if (!fs::exists(fs::path(run) / "run.json", ec)) return;
+  std::optional<SceneConfig> ran;
+  try {
+    nlohmann::json record;
+    std::string text;
+    ran = recorded_scene(read_run_record(run, record, text), text, record);
+  } catch (const InputError&) {
+    return;
+  }
+  bool same = ran->name == given.name && ran->geometry.size() == given.geometry.size();
+  for (std::size_t k = 0; same && k < given.geometry.size(); ++k)
+    same = ran->geometry[k].type == given.geometry[k].type;
+  if (!same)
+    fmt::print(stderr,
+               "warning: --scene {} is the scene '{}' with {}; {} ran '{}' with {} (its run.json): "
+               "the geometry drawn is not what its grains met\n",
+               given.path, given.name,
+               counted(static_cast<std::int64_t>(given.geometry.size()), "[[geometry]] table"), run,
+               ran->name,
+               counted(static_cast<std::int64_t>(ran->geometry.size()), "[[geometry]] table"));
+}
+
 /// The scene from --scene, else the one the first run ran (its run.json: the scene text with its
 /// --set, so a moved scene file or a --set of the geometry draws what the grains met), else the
 /// scene file its summary.json names. Without any only the grains are drawn.
@@ -232,6 +259,7 @@ RenderScene load_render_scene(const std::string& scene_option, const std::vector
     }
   }
   const SceneConfig scene = recorded ? *recorded : load_scene(file, overrides);
+  if (!recorded) warn_if_not_the_runs_scene(scene, run);
   rs.geometry = scene.geometry;
   rs.solids = Geometry::from_config(scene.geometry, scene.material, scene.path);
   rs.diameter = scene.material.diameter;

@@ -98,6 +98,11 @@ nlohmann::json stiffness_json(const Stiffness& s) {
 
 }  // namespace
 
+void warn_once(const std::string& text) {
+  static std::set<std::string> printed;
+  if (printed.insert(text).second) fmt::print(stderr, "warning: {}\n", text);
+}
+
 int thread_count(const SceneConfig& scene) {
   return scene.simulation.threads > 0 ? scene.simulation.threads : omp_get_num_procs();
 }
@@ -106,9 +111,9 @@ int thread_count(const SceneConfig& scene) {
 /// `label` prefixes the progress line (table1's "scene k of n: ").
 RunResult run_scene(const SceneConfig& scene, const std::string& out, const std::string& label,
                     const RunControl& control) {
-  for (const std::string& w : scene.warnings) fmt::print(stderr, "warning: {}\n", w);
+  for (const std::string& w : scene.warnings) warn_once(w);
   World world(scene);
-  for (const std::string& w : world.geometry().warnings()) fmt::print(stderr, "warning: {}\n", w);
+  for (const std::string& w : world.geometry().warnings()) warn_once(w);
   const int frames = world.planned_frames();
   const TimeStep& ts = world.time_step();
   const int threads = thread_count(scene);
@@ -134,7 +139,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
   if (control.resumed) prepare_resumed_dir(out, world.frame());
   StatsWriter stats(fs::path(out) / "stats.csv", res.frames);
   FrameExporter exporter(world, out);  // the per-frame files of --export
-  for (const std::string& w : exporter.warnings()) fmt::print(stderr, "warning: {}\n", w);
+  for (const std::string& w : exporter.warnings()) warn_once(w);
   exporter.continue_after(res.frames);  // a resumed run's frames.pvd lists the frames before it
   Progress progress(fmt::format("{}{} [{}]", label, scene.name, mode_name(scene.simulation.mode)),
                     frames, world.frame());
@@ -631,10 +636,9 @@ Started start_new(const RunOptions& o, const std::string& text) {
   const SceneConfig& scene = run.scene;
   if (o.check) {
     run.done = true;
-    for (const std::string& w : scene.warnings) fmt::print(stderr, "warning: {}\n", w);
+    for (const std::string& w : scene.warnings) warn_once(w);
     World world(scene);
-    for (const std::string& w : world.geometry().warnings())
-      fmt::print(stderr, "warning: {}\n", w);
+    for (const std::string& w : world.geometry().warnings()) warn_once(w);
     const TimeStep& ts = world.time_step();
     if (!world.dem().boundary().x.empty())
       fmt::print("{}: {} boundary particles of radius {:.3g} m on its meshes\n", scene.path,
@@ -649,8 +653,7 @@ Started start_new(const RunOptions& o, const std::string& text) {
     std::vector<ExportFormat> dropped;
     for (const ExportFormat f : run_exports(scene.output, scene.simulation.mode, &dropped))
       exports.emplace_back(export_name(f));
-    if (!dropped.empty())
-      fmt::print(stderr, "warning: {}\n", dropped_exports_warning(scene.path, dropped));
+    if (!dropped.empty()) warn_once(dropped_exports_warning(scene.path, dropped));
     fmt::print("{}: exports {} each frame (up axis {})\n", scene.path,
                exports.empty() ? "nothing" : fmt::format("{}", fmt::join(exports, ", ")),
                up_axis_name(scene.output.up_axis));
@@ -910,12 +913,18 @@ int measure_command(const std::string& dir) {
     f = read_ply(final_state.string());
     fmt::print("frame            {}\n", final_state.string());
   } else if (scene && scene->simulation.mode == Mode::Surface) {
-    if (!fs::exists(checkpoint, ec))
+    if (!fs::exists(checkpoint, ec)) {
+      const std::string why =
+          fs::exists(fs::path(dir) / "summary.json", ec)
+              ? fmt::format("the run finished, but its {} and checkpoint.bin are gone",
+                            final_state.filename().string())
+              : std::string("the run is not finished and has no checkpoint yet");
       throw InputError(fmt::format(
-          "{}: the run is not finished and has no checkpoint yet. A surface run's frames hold only "
-          "the grains it simulates, not the sand asleep under them, so its heap cannot be measured "
-          "from them; measure it after its first checkpoint, or finish it: {}",
-          dir, resume_command(dir)));
+          "{}: {}. A surface run's frames hold only the grains it simulates, not the sand asleep "
+          "under them, so its heap cannot be measured from them; measure it after its first "
+          "checkpoint, or run it (again): {}",
+          dir, why, resume_command(dir)));
+    }
     int frame = 0;
     f = grains_at_checkpoint(*scene, record, checkpoint.string(), frame);
     fmt::print("frame            {} (frame {}, every grain)\n", checkpoint.string(), frame);

@@ -54,6 +54,17 @@ CLI::Validator whole(std::int64_t lo, std::int64_t hi) {
       fmt::format("INT in [{} - {}]", lo, hi));
 }
 
+/// CLI11 words an option given twice as a count of values ("--grains: At Most 1 required but
+/// received 2"), which sends the user looking for a missing value; say that it was repeated.
+std::string failure_message(const CLI::App* /*app*/, const CLI::Error& e) {
+  std::string what = e.what();
+  const std::string repeated = ": At Most 1 required but received ";
+  if (const std::size_t at = what.find(repeated); at != std::string::npos)
+    what = fmt::format("{} is given {} times: give it once", what.substr(0, at),
+                       what.substr(at + repeated.size()));
+  return fmt::format("{}\nRun with --help for more information.\n", what);
+}
+
 // frame counts and numbers: 1 to the most frames a run may have (sim/world.hpp)
 const CLI::Validator kFrameRange = whole(1, static_cast<std::int64_t>(kMaxFrames));
 
@@ -94,6 +105,7 @@ int main(int argc, char** argv) {
       "sandflow: sand animated as a surface flow (Zhu & Yang 2010), with plain DEM beside it"};
   app.require_subcommand(1);
   app.set_version_flag("--version", SANDFLOW_VERSION);
+  app.failure_message(failure_message);
 
   RunOptions ro;
   auto* run = app.add_subcommand("run", "simulate a scene and write its frames and statistics");

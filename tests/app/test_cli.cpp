@@ -112,6 +112,7 @@ TEST(Cli, MeasureReadsAnUnfinishedSurfaceRunFromItsCheckpointWithEveryGrain) {
   ASSERT_GT(summary["n_static_final"].get<int>(), 0) << "no grain asleep: the test shows nothing";
   ASSERT_LT(sandflow::read_ply((out / "frames" / "0030.ply").string()).size(), 200u);
   // the run as it stood at its last checkpoint, before it finished
+  const std::string summary_text = sandflow_test::read_text(out / "summary.json");
   fs::remove(out / "final_grains.ply");
   fs::remove(out / "summary.json");
   ASSERT_EQ(sandflow("measure " + out.string(), &log), 0) << log;
@@ -121,6 +122,12 @@ TEST(Cli, MeasureReadsAnUnfinishedSurfaceRunFromItsCheckpointWithEveryGrain) {
   fs::remove(out / "checkpoint.bin");
   EXPECT_EQ(sandflow("measure " + out.string(), &log), 2) << log;
   EXPECT_NE(log.find("no checkpoint yet"), std::string::npos) << log;
+  // a finished run whose final state and checkpoint were deleted is not called unfinished
+  std::ofstream(out / "summary.json") << summary_text;
+  EXPECT_EQ(sandflow("measure " + out.string(), &log), 2) << log;
+  EXPECT_NE(log.find("the run finished, but its final_grains.ply and checkpoint.bin are gone"),
+            std::string::npos)
+      << log;
 }
 
 TEST(Cli, CompareWritesBothRunsAndTheTable) {
@@ -157,11 +164,17 @@ TEST(Cli, CompareRunsEachSeedInBothModesAndTheEqualStiffnessRun) {
   const auto out = box.dir / "cmp";
   std::string log;
   ASSERT_EQ(sandflow("compare " + box.write("t.toml", kTinyScene).string() +
-                         " --frames 8 --seeds 2 --equal-stiffness --set simulation.seed=5 --out " +
+                         " --frames 8 --seeds 2 --equal-stiffness --set simulation.seed=5 "
+                         "--set camera.fov=1 --out " +
                          out.string(),
                      &log),
             0)
       << log;
+  // the scene's warning once, not once for each of its five runs
+  const std::string warning = "camera.fov = 1 is in degrees";
+  const std::size_t first = log.find(warning);
+  EXPECT_NE(first, std::string::npos) << log;
+  EXPECT_EQ(log.find(warning, first + 1), std::string::npos) << log;
   const auto j = nlohmann::json::parse(std::ifstream(out / "compare.json"));
   EXPECT_EQ(j["seeds"], 2);
   EXPECT_EQ(j["seed_values"], nlohmann::json::array({5, 6}));

@@ -451,6 +451,9 @@ TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
   EXPECT_EQ(bounded("run " + scene.string() + " --check --grains 99999999999999999999", &log), 2)
       << log;
   EXPECT_TRUE(has(log, "is not in range 1 to 2000000000")) << log;
+  // an option given twice is named so, not "At Most 1 required" (which reads like a missing value)
+  EXPECT_EQ(bounded("run " + scene.string() + " --check --grains 5 --grains 6", &log), 2) << log;
+  EXPECT_TRUE(has(log, "--grains is given 2 times: give it once")) << log;
   // an empty output folder is not the default one
   EXPECT_EQ(bounded("run " + scene.string() + " --frames 1 --out ''", &log), 2) << log;
   EXPECT_TRUE(has(log, "--out: an empty folder name")) << log;

@@ -259,6 +259,26 @@ TEST_F(Render, SceneCameraIsUsed) {
   EXPECT_NE(pov.find("angle 30"), std::string::npos);
 }
 
+// --scene draws another scene file's geometry and camera: one that is not the scene the run ran
+// (another name, other geometry) is warned of, the same scene moved or with a new camera is not.
+TEST_F(Render, ASceneOtherThanTheRunsIsWarnedOf) {
+  const fs::path run = tiny_run(1);
+  std::string other = kTinyScene;
+  other.replace(other.find("name = \"tiny\""), 13, "name = \"bin\"");
+  other += "[[geometry]]\ntype = \"box\"\ncenter = [0.5, 0.0, 0.1]\nsize = [0.1, 0.1, 0.2]\n";
+  const std::string base = "render " + run.string() + " --width 32 --height 24 --quality draft ";
+  std::string log;
+  ASSERT_EQ(sandflow(base + "--scene " + box.write("bin.toml", other).string(), &log), 0) << log;
+  EXPECT_NE(log.find("is the scene 'bin' with 2 [[geometry]] tables; " + run.string() +
+                     " ran 'tiny' with 1 [[geometry]] table (its run.json)"),
+            std::string::npos)
+      << log;
+  const std::string camera =
+      kTinyScene + "[camera]\nposition = [0.4, -0.5, 0.3]\nlook_at = [0, 0, 0.05]\n";
+  ASSERT_EQ(sandflow(base + "--scene " + box.write("moved.toml", camera).string(), &log), 0) << log;
+  EXPECT_EQ(log.find("warning"), std::string::npos) << log;
+}
+
 TEST_F(Render, SetChangesTheLookOnly) {
   const fs::path run = tiny_run(1);
   std::string log;
