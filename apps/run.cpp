@@ -908,6 +908,7 @@ int measure_command(const std::string& dir) {
   }
   const fs::path final_state = fs::path(dir) / "final_grains.ply";
   const fs::path checkpoint = fs::path(dir) / "checkpoint.bin";
+  const bool finished = fs::exists(fs::path(dir) / "summary.json", ec);
   FrameData f;
   if (fs::exists(final_state, ec)) {
     f = read_ply(final_state.string());
@@ -915,10 +916,9 @@ int measure_command(const std::string& dir) {
   } else if (scene && scene->simulation.mode == Mode::Surface) {
     if (!fs::exists(checkpoint, ec)) {
       const std::string why =
-          fs::exists(fs::path(dir) / "summary.json", ec)
-              ? fmt::format("the run finished, but its {} and checkpoint.bin are gone",
-                            final_state.filename().string())
-              : std::string("the run is not finished and has no checkpoint yet");
+          finished ? fmt::format("the run finished, but its {} and checkpoint.bin are gone",
+                                 final_state.filename().string())
+                   : std::string("the run is not finished and has no checkpoint yet");
       throw InputError(fmt::format(
           "{}: {}. A surface run's frames hold only the grains it simulates, not the sand asleep "
           "under them, so its heap cannot be measured from them; measure it after its first "
@@ -934,7 +934,7 @@ int measure_command(const std::string& dir) {
     fmt::print("frame            {}\n", path);
   }
   fmt::print("grains           {}\n", f.size());
-  if (!fs::exists(fs::path(dir) / "summary.json", ec))
+  if (!finished)
     fmt::print(
         "note             the run is not finished: grains still falling or flowing are "
         "measured with the rest\n");
