@@ -149,7 +149,9 @@ std::string pair_list_error(const Grains& grains, const std::vector<Real>& allow
 constexpr std::uint32_t kNoSlot = 0xffffffffu;
 
 /// Below this many grains a loop runs on one thread: waking threads would cost more than the work.
-constexpr std::size_t kParallelMinGrains = 4096;
+/// Measured (docs/performance.md): 128 to 1,024 run alike; 4,096 left the second thread idle
+/// while a surface run simulated a few thousand grains.
+constexpr std::size_t kParallelMinGrains = 512;
 
 // ---------------------------------------------------------------------------------------------
 template <class F>
