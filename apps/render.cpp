@@ -191,20 +191,30 @@ std::vector<Override> look_overrides(const std::vector<std::string>& sets) {
   return out;
 }
 
+/// The scene the run ran (its run.json: the scene text with its --set, then `sets`), or nothing
+/// when the run has no run.json. Throws InputError when its run.json cannot be read.
+std::optional<SceneConfig> scene_the_run_ran(const std::string& run,
+                                             const std::vector<std::string>& sets) {
+  std::error_code ec;
+  if (!fs::exists(fs::path(run) / "run.json", ec)) return std::nullopt;
+  nlohmann::json record;
+  std::string text;
+  RunOptions r = read_run_record(run, record, text);
+  r.sets.insert(r.sets.end(), sets.begin(), sets.end());
+  return recorded_scene(r, text, record);
+}
+
 /// A --scene other than the one the run ran draws geometry the grains never met: say so when its
 /// name or its geometry's entries differ from the run's record (run.json). A run.json that cannot
 /// be read is not an error here: --scene is how such a run is drawn.
 void warn_if_not_the_runs_scene(const SceneConfig& given, const std::string& run) {
-  std::error_code ec;
-  if (!fs::exists(fs::path(run) / "run.json", ec)) return;
   std::optional<SceneConfig> ran;
   try {
-    nlohmann::json record;
-    std::string text;
-    ran = recorded_scene(read_run_record(run, record, text), text, record);
+    ran = scene_the_run_ran(run, {});
   } catch (const InputError&) {
     return;
   }
+  if (!ran) return;
   bool same = ran->name == given.name && ran->geometry.size() == given.geometry.size();
   for (std::size_t k = 0; same && k < given.geometry.size(); ++k)
     same = ran->geometry[k].type == given.geometry[k].type;
@@ -228,15 +238,10 @@ RenderScene load_render_scene(const std::string& scene_option, const std::vector
   if (summary.contains("fps") && summary["fps"].is_number()) rs.fps = summary["fps"].get<double>();
   std::string file = scene_option;
   const std::string summary_path = (fs::path(run) / "summary.json").string();
-  std::optional<SceneConfig> recorded;
+  // (`sets` change only the look: camera keys)
+  const std::optional<SceneConfig> recorded =
+      file.empty() ? scene_the_run_ran(run, sets) : std::nullopt;
   std::error_code ec;
-  if (file.empty() && fs::exists(fs::path(run) / "run.json", ec)) {
-    nlohmann::json record;
-    std::string text;
-    RunOptions r = read_run_record(run, record, text);
-    r.sets.insert(r.sets.end(), sets.begin(), sets.end());  // (the look: camera keys)
-    recorded = recorded_scene(r, text, record);
-  }
   if (file.empty() && !recorded) {
     if (summary.contains("scene_file") && summary["scene_file"].is_string()) {
       file = summary["scene_file"].get<std::string>();
