@@ -11,6 +11,7 @@
 #include "analysis/surface_diff.hpp"
 #include "core/error.hpp"
 #include "sim/world.hpp"
+#include "support/sanitizers.hpp"
 #include "support/test_scenes.hpp"
 
 namespace sandflow {
@@ -228,7 +229,9 @@ TEST(SurfaceMode, SettledHeapKeepsItsShapeAndSleeps) {
 
 TEST(SurfaceMode, AHeapAtRestStaysOpenUntilCloseAfter) {
   // the same heap with close_after 3 s: at 2 s its top layer is still ACTIVE (R_min holds: the
-  // grains a pour would roll over can move), and it closes within a second after 3 s at rest
+  // grains a pour would roll over can move), and it closes within a second after 3 s at rest.
+  // 132 s under the sanitizers, where the test above closes the same heap
+  if constexpr (test::kSanitizers) GTEST_SKIP() << "a long run, left to the Release suite";
   World w(collapsing_cube(3.0));
   FrameStats st;
   for (int f = 0; f < 60; ++f) st = w.advance_frame();  // 2 s
