@@ -7,7 +7,6 @@
 // layer, whose grains the frames do not hold, is drawn as a surface from the run's height images. A
 // comparison folder (DIR/surface and DIR/dem) is framed over both runs, so their pictures can be
 // put side by side. A [camera] table in the scene file replaces the automatic camera.
-#include <omp.h>
 
 #include <algorithm>
 #include <atomic>
@@ -31,6 +30,7 @@
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
 #include "core/process.hpp"
+#include "core/threads.hpp"
 #include "geometry/shapes.hpp"
 #include "io/ply.hpp"
 #include "io/png_gray.hpp"
@@ -460,7 +460,7 @@ int render_command(const RenderOptions& o) {
                "(sudo apt-get install ffmpeg)\n");
 
   const RenderScene scene = load_render_scene(o.scene, o.sets, overrides, runs.front());
-  const int cores = std::max(1, omp_get_num_procs());
+  const int cores = std::max(1, default_thread_count());  // the cores this job may take
   const int jobs = std::min(o.jobs > 0 ? o.jobs : cores, static_cast<int>(tasks.size()));
   // the cores shared out: each povray gets its share of them as render threads
   const int threads_each = std::max(1, cores / std::max(jobs, 1));

@@ -26,6 +26,7 @@
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
 #include "core/memory.hpp"
+#include "core/threads.hpp"
 #include "geometry/heightmap.hpp"
 #include "io/export_formats.hpp"
 #include "io/folder_lock.hpp"
@@ -104,7 +105,7 @@ void warn_once(const std::string& text) {
 }
 
 int thread_count(const SceneConfig& scene) {
-  return scene.simulation.threads > 0 ? scene.simulation.threads : omp_get_num_procs();
+  return scene.simulation.threads > 0 ? scene.simulation.threads : default_thread_count();
 }
 
 /// Runs a scene into `out` (prepared by the caller), writing stats.csv, frames and summary.json.

@@ -81,7 +81,8 @@ void add_scene_options(CLI::App* cmd, RunOptions& o, const std::string& out_help
       ->check(kFrameRange);
   cmd->add_option("--grains", o.grains, "scale the emitters to N grains in total")
       ->check(whole(1, 2000000000));
-  cmd->add_option("--threads", o.threads, "OpenMP threads (default: all cores)")
+  cmd->add_option("--threads", o.threads,
+                  "OpenMP threads (default: OMP_NUM_THREADS when set, else all cores)")
       ->check(whole(1, 1024));
   cmd->add_option("--set", o.sets, set_help);
   cmd->add_option("--export", o.exports,
@@ -144,7 +145,9 @@ int main(int argc, char** argv) {
       "measure the angles of repose (theta0, theta_max) of a scene's material in plain DEM");
   calibrate->add_option("scene", cao.scene, "scene file (TOML)")->required();
   calibrate->add_option("--set", cao.sets, "override a scene key: --set material.friction=0.4");
-  calibrate->add_option("--threads", cao.threads, "OpenMP threads (default: all cores)")
+  calibrate
+      ->add_option("--threads", cao.threads,
+                   "OpenMP threads (default: OMP_NUM_THREADS when set, else all cores)")
       ->check(whole(1, 1024));
   calibrate->add_option("--trials", calibration_trials, "seeds measured (default 3)")
       ->check(whole(1, 100));
@@ -219,7 +222,9 @@ int main(int argc, char** argv) {
   table1->add_option("--scene-dir", to.scene_dir,
                      "folder of the scene files NAME.toml (default: ./scenes if there is one, "
                      "else the source tree's scenes/)");
-  table1->add_option("--threads", to.threads, "OpenMP threads (default: all cores)")
+  table1
+      ->add_option("--threads", to.threads,
+                   "OpenMP threads (default: OMP_NUM_THREADS when set, else all cores)")
       ->check(whole(1, 1024));
   table1->add_flag("--force", to.force,
                    "write into a non-empty output folder, replacing its table and the folders of "
@@ -269,7 +274,9 @@ int main(int argc, char** argv) {
       ->add_option("--quality", rdo.quality,
                    "final (antialiased, soft light; the default) or draft (fast previews)")
       ->check(CLI::IsMember({"draft", "final"}));
-  render->add_option("--jobs", rdo.jobs, "frames rendered at once (default: one per core)")
+  render
+      ->add_option("--jobs", rdo.jobs,
+                   "frames rendered at once (default: one per core, or OMP_NUM_THREADS)")
       ->check(whole(1, 1024));
   render->add_flag("--movie", rdo.movie,
                    "also encode the frames to DIR/render/movie.mp4 (H.264) with ffmpeg");

@@ -13,6 +13,7 @@
 #include "commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/threads.hpp"
 #include "io/folder_lock.hpp"
 #include "scene/scene_loader.hpp"
 #include "table1.hpp"
@@ -165,7 +166,7 @@ int table1_command(const Table1Options& o, const std::string& command) {
   Table1Context ctx{command,
                     local_date_time(),
                     omp_get_num_procs(),
-                    o.threads > 0 ? o.threads : omp_get_num_procs(),
+                    o.threads > 0 ? o.threads : default_thread_count(),
                     o.scale,
                     o.frames};
   // rewritten after every scene, so an interrupted run keeps the scenes that finished

@@ -7,9 +7,9 @@
 #include <tuple>
 
 #include <fmt/format.h>
-#include <omp.h>
 
 #include "core/error.hpp"
+#include "core/threads.hpp"
 #include "geometry/heightmap.hpp"
 
 namespace sandflow {
@@ -346,7 +346,7 @@ std::optional<EmitterProblem> pack_bed_emitter(const EmitterConfig& e, const Mat
   region.r_hi = 0.5 * m.largest_diameter();
   region.seed = seed;
   region.max_grains = max_grains;
-  region.threads = threads > 0 ? threads : omp_get_num_procs();
+  region.threads = threads > 0 ? threads : default_thread_count();
   try {
     // a coarse look first (33 x 33 points), so that a bed far too large is refused at once
     Real coarse = 0;

@@ -1,5 +1,6 @@
 // The sandflow command end to end: exit codes, what it writes, and what it refuses.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -51,6 +52,29 @@ TEST(Cli, RunWritesStatsSummaryAndFrames) {
   EXPECT_EQ(sandflow::read_ply((out / "frames" / "0003.ply").string()).size(), 200u);
   // measure reads it again
   EXPECT_EQ(sandflow("measure " + out.string(), &log), 0) << log;
+}
+
+// Without --threads or the scene's simulation.threads, a run takes OMP_NUM_THREADS when it holds a
+// count (how a user or a scheduler shares the cores out among jobs), else every core
+TEST(Cli, ThreadsComeFromTheOptionTheSceneOmpNumThreadsThenTheCores) {
+  Sandbox box;
+  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto threads_of = [&](const std::string& env, const std::string& args) {
+    const auto out = box.dir / "out";
+    std::string log;
+    EXPECT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 1 --force --out " +
+                           out.string() + args,
+                       &log, env),
+              0)
+        << log;
+    return nlohmann::json::parse(std::ifstream(out / "summary.json"))["threads"].get<int>();
+  };
+  EXPECT_EQ(threads_of("env OMP_NUM_THREADS=3", ""), 3);
+  EXPECT_EQ(threads_of("env OMP_NUM_THREADS=3,1", ""), 3);  // (nested levels: the outer one)
+  EXPECT_EQ(threads_of("env OMP_NUM_THREADS=3", " --threads 1"), 1);
+  EXPECT_EQ(threads_of("env OMP_NUM_THREADS=3", " --set simulation.threads=2"), 2);
+  EXPECT_EQ(threads_of("env -u OMP_NUM_THREADS", ""), omp_get_num_procs());
+  EXPECT_EQ(threads_of("env OMP_NUM_THREADS=many", ""), omp_get_num_procs());  // not a count
 }
 
 TEST(Cli, BadSceneExitsTwoNamingThePlaceAndWritesNothing) {
