@@ -389,7 +389,7 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
     r.up_axis = record.at("start").at("up_axis").get<std::string>();
     const auto max_frames = static_cast<std::int64_t>(kMaxFrames);
     r.frames = static_cast<int>(whole(record.at("frames"), "frames", 0, max_frames));
-    r.threads = static_cast<int>(whole(record.at("threads"), "threads", 0, 1024));
+    r.threads = static_cast<int>(whole(record.at("threads"), "threads", 0, kMaxThreads));
     r.checkpoint_every =
         static_cast<int>(whole(record.at("checkpoint_every"), "checkpoint_every", 0, max_frames));
     if (record.contains("run_to_frame"))

@@ -14,6 +14,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/threads.hpp"
 #include "sim/world.hpp"
 
 using namespace sandflow;
@@ -83,7 +84,7 @@ void add_scene_options(CLI::App* cmd, RunOptions& o, const std::string& out_help
       ->check(whole(1, 2000000000));
   cmd->add_option("--threads", o.threads,
                   "OpenMP threads (default: OMP_NUM_THREADS when set, else all cores)")
-      ->check(whole(1, 1024));
+      ->check(whole(1, kMaxThreads));
   cmd->add_option("--set", o.sets, set_help);
   cmd->add_option("--export", o.exports,
                   "files written each frame, comma-separated: ply, vtk, geo, geo_gz, pov, csv, "
@@ -148,7 +149,7 @@ int main(int argc, char** argv) {
   calibrate
       ->add_option("--threads", cao.threads,
                    "OpenMP threads (default: OMP_NUM_THREADS when set, else all cores)")
-      ->check(whole(1, 1024));
+      ->check(whole(1, kMaxThreads));
   calibrate->add_option("--trials", calibration_trials, "seeds measured (default 3)")
       ->check(whole(1, 100));
   calibrate->add_flag("--again", calibrate_again, "measure even when the cache holds the result");
@@ -225,7 +226,7 @@ int main(int argc, char** argv) {
   table1
       ->add_option("--threads", to.threads,
                    "OpenMP threads (default: OMP_NUM_THREADS when set, else all cores)")
-      ->check(whole(1, 1024));
+      ->check(whole(1, kMaxThreads));
   table1->add_flag("--force", to.force,
                    "write into a non-empty output folder, replacing its table and the folders of "
                    "the scenes run");
@@ -277,7 +278,7 @@ int main(int argc, char** argv) {
   render
       ->add_option("--jobs", rdo.jobs,
                    "frames rendered at once (default: one per core, or OMP_NUM_THREADS)")
-      ->check(whole(1, 1024));
+      ->check(whole(1, kMaxThreads));
   render->add_flag("--movie", rdo.movie,
                    "also encode the frames to DIR/render/movie.mp4 (H.264) with ffmpeg");
   render->add_flag("--keep-pov", rdo.keep_pov,

@@ -7,6 +7,9 @@
 
 namespace sandflow {
 
+/// The most threads a job takes, from any of `--threads`, `simulation.threads` and OMP_NUM_THREADS
+inline constexpr int kMaxThreads = 4096;
+
 /// OMP_NUM_THREADS when it holds a positive count (the first of a list, as OpenMP reads it), else
 /// one per core this process may run on. OMP_NUM_THREADS is how a user or a job scheduler gives
 /// each of several jobs its share of the cores: OpenMP's threads wait by spinning, so jobs that
@@ -17,7 +20,7 @@ inline int default_thread_count() {
     char* end = nullptr;
     const long n = std::strtol(text, &end, 10);
     while (end != text && (*end == ' ' || *end == '\t')) ++end;
-    if (end != text && n > 0 && n <= 4096 && (*end == '\0' || *end == ','))
+    if (end != text && n > 0 && n <= kMaxThreads && (*end == '\0' || *end == ','))
       return static_cast<int>(n);
   }
   return omp_get_num_procs();

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "core/threads.hpp"
 #include "dem/contact.hpp"
 #include "io/export_formats.hpp"
 #include "scene/scene_tables.hpp"
@@ -61,7 +62,7 @@ void read_simulation(TableReader r, SimulationConfig& s) {
   r.read("skin_max", s.skin_max, closed(0, 2));
   r.read("sort_every", s.sort_every, kNonNegative);  // 0: never re-sort
   r.read("seed", s.seed, kNonNegative);
-  r.read("threads", s.threads, closed(0, 4096));
+  r.read("threads", s.threads, closed(0, kMaxThreads));
   r.read("max_overlap_stop", s.max_overlap_stop, open_closed(0, 1));
   r.read("domain", s.domain);
   r.read("on_leave", s.on_leave, kOnLeave);

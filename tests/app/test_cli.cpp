@@ -75,6 +75,14 @@ TEST(Cli, ThreadsComeFromTheOptionTheSceneOmpNumThreadsThenTheCores) {
   EXPECT_EQ(threads_of("env OMP_NUM_THREADS=3", " --set simulation.threads=2"), 2);
   EXPECT_EQ(threads_of("env -u OMP_NUM_THREADS", ""), omp_get_num_procs());
   EXPECT_EQ(threads_of("env OMP_NUM_THREADS=many", ""), omp_get_num_procs());  // not a count
+  // the option and the scene key end at the same count (OMP_NUM_THREADS too: src/core/threads.hpp)
+  std::string log;
+  for (const std::string args : {" --threads 4097", " --set simulation.threads=4097"}) {
+    EXPECT_EQ(
+        sandflow("run " + scene.string() + " --out " + (box.dir / "big").string() + args, &log), 2)
+        << args;
+    EXPECT_NE(log.find("4096"), std::string::npos) << log;
+  }
 }
 
 TEST(Cli, BadSceneExitsTwoNamingThePlaceAndWritesNothing) {
