@@ -1,5 +1,6 @@
 #include "report/report.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -25,6 +26,64 @@ constexpr const char* kDash = "\u2014";  // a value the file does not hold
 
 // ---- reading the summary's values without ever throwing: a missing key shows as a dash ----
 
+/// The values a page reads as numbers that its files hold as something else (a hand-edited or
+/// foreign file): each shows as a dash, and a note at the top of the page names it, so that a
+/// dash never hides a value the file does hold. One per page being written, on its thread.
+class WrongTypes {
+ public:
+  explicit WrongTypes(std::vector<std::pair<const json*, std::string>> files)
+      : files_(std::move(files)), outer_(current_) {
+    current_ = this;
+  }
+  ~WrongTypes() { current_ = outer_; }
+  WrongTypes(const WrongTypes&) = delete;
+  WrongTypes& operator=(const WrongTypes&) = delete;
+
+  /// `value`, read as `expected`, is not that: named by its file and its place in it.
+  static void found(const json& value, const char* expected) {
+    if (!current_) return;
+    std::string where = "a value";
+    for (const auto& [root, name] : current_->files_)
+      if (std::string key; locate(*root, &value, key)) {
+        where = fmt::format("{}: '{}'", name, key);
+        break;
+      }
+    const std::string what = fmt::format("{} is {} {}, not {}; shown as {}", where,
+                                         value.is_array() || value.is_object() ? "an" : "a",
+                                         value.type_name(), expected, kDash);
+    auto& seen = current_->found_;
+    if (std::find(seen.begin(), seen.end(), what) == seen.end()) seen.push_back(what);
+  }
+  const std::vector<std::string>& list() const { return found_; }
+
+ private:
+  static thread_local WrongTypes* current_;
+  std::vector<std::pair<const json*, std::string>> files_;
+  WrongTypes* outer_;
+  std::vector<std::string> found_;
+
+  /// The key path of `target` within `tree` ("heap.height", "emitters[0].count").
+  static bool locate(const json& tree, const json* target, std::string& key) {
+    if (&tree == target) return true;
+    const std::size_t mark = key.size();
+    if (tree.is_object()) {
+      for (const auto& [k, v] : tree.items()) {
+        key += (mark ? "." : "") + k;
+        if (locate(v, target, key)) return true;
+        key.resize(mark);
+      }
+    } else if (tree.is_array()) {
+      for (std::size_t n = 0; n < tree.size(); ++n) {
+        key += fmt::format("[{}]", n);
+        if (locate(tree[n], target, key)) return true;
+        key.resize(mark);
+      }
+    }
+    return false;
+  }
+};
+thread_local WrongTypes* WrongTypes::current_ = nullptr;
+
 const json* find(const json& j, std::initializer_list<const char*> path) {
   const json* p = &j;
   for (const char* k : path) {
@@ -36,6 +95,7 @@ const json* find(const json& j, std::initializer_list<const char*> path) {
 
 std::optional<double> number(const json& j, std::initializer_list<const char*> path) {
   const json* p = find(j, path);
+  if (p && !p->is_number() && !p->is_null()) WrongTypes::found(*p, "a number");
   if (!p || !p->is_number()) return std::nullopt;
   return p->get<double>();
 }
@@ -222,7 +282,8 @@ std::vector<std::pair<std::string, std::string>> run_rows(const json& s) {
       v += st->get<bool>() ? " (from the load: [stiffness] from_load)" : " (set in the scene)";
     rows.push_back({"normal stiffness k_n", v});
   }
-  if (const json* a = find(s, {"repose_angle_deg"}); a && a->is_number())
+  const std::optional<double> angle = number(s, {"repose_angle_deg"});
+  if (const json* a = find(s, {"repose_angle_deg"}); angle && a)
     rows.push_back({"angle of repose", fmt::format("{:.1f}\u00b0 (heap height {}, base radius {})",
                                                    a->get<double>(), fixed(s, {"heap", "height"}, 3, " m"),
                                                    fixed(s, {"heap", "base_radius"}, 3, " m"))});
@@ -256,7 +317,10 @@ std::vector<std::pair<std::string, std::string>> run_rows(const json& s) {
   if (const json* st = find(s, {"stage_seconds"}); st && st->is_object()) {
     std::string v;
     for (const auto& [k, x] : st->items())
-      if (x.is_number()) v += fmt::format("{}{} {:.2f} s", v.empty() ? "" : ", ", k, x.get<double>());
+      if (x.is_number())
+        v += fmt::format("{}{} {:.2f} s", v.empty() ? "" : ", ", k, x.get<double>());
+      else
+        WrongTypes::found(x, "a number");
     rows.push_back({"seconds per stage", v});
   }
   rows.push_back({"state hash", text(s, {"state_hash"})});
@@ -359,6 +423,16 @@ std::string notes_of(const RunReportData& run) {
   return o;
 }
 
+std::string notes_of(const WrongTypes& wrong) {
+  std::string o;
+  for (const std::string& n : wrong.list()) o += note(n);
+  return o;
+}
+
+std::string summary_path(const RunReportData& run) {
+  return (fs::path(run.dir) / "summary.json").string();
+}
+
 std::string section(const std::string& id, const std::string& title, const std::string& body) {
   return "<section id=\"" + html_escape(id) + "\">\n<h2>" + html_escape(title) + "</h2>\n" + body +
          "</section>\n";
@@ -442,8 +516,9 @@ Table1ReportData load_table1_report_data(const std::string& dir) {
 
 std::string run_report_html(const RunReportData& run) {
   const json& s = run.summary;
+  const WrongTypes wrong({{&s, summary_path(run)}});
   const std::string mode = text(s, {"mode"});
-  std::string body = notes_of(run);
+  std::string body;
   body += section("summary", "Summary",
                   s.is_null() ? note("No summary.json: the run did not finish.") : table(run_rows(s)));
   body += section("plots", "Statistics per frame (stats.csv)", plots({{&run, mode_title(mode)}}));
@@ -452,6 +527,7 @@ std::string run_report_html(const RunReportData& run) {
                                                                           : text(s, {"scene"}));
   const std::string sub = fmt::format("{}, {} grains, {} frames", mode_title(mode),
                                       count(s, {"n_total"}), count(double(run.stats.frames())));
+  body = notes_of(run) + notes_of(wrong) + body;
   return page(title, sub,
               {{"summary", "Summary"}, {"plots", "Plots"}, {"contact-sheet", "Contact sheet"}}, body,
               run.dir);
@@ -460,7 +536,10 @@ std::string run_report_html(const RunReportData& run) {
 std::string compare_report_html(const CompareReportData& c) {
   const json& j = c.compare;
   const json &ss = c.surface.summary, &sd = c.dem.summary;
-  std::string body = notes_of(c.surface) + notes_of(c.dem);
+  const WrongTypes wrong({{&j, (fs::path(c.dir) / "compare.json").string()},
+                          {&ss, summary_path(c.surface)},
+                          {&sd, summary_path(c.dem)}});
+  std::string body;
 
   // summary: the two modes side by side
   auto row = [](const std::string& what, const std::string& dem, const std::string& surf) {
@@ -545,6 +624,7 @@ std::string compare_report_html(const CompareReportData& c) {
   if (crater) {
     auto within = [&](const char* key) {
       const json* w = find(j, {key});
+      if (w && !w->is_boolean() && !w->is_null()) WrongTypes::found(*w, "true or false");
       return w && w->is_boolean() ? (w->get<bool>() ? "yes" : "no") : kDash;
     };
     kv("crater depth, difference of the means", fixed(j, {"crater_depth_diff"}, 4, " m"));
@@ -585,9 +665,10 @@ std::string compare_report_html(const CompareReportData& c) {
   body += section("contact-sheet", "Contact sheets",
                   "<h3>Surface flow</h3>\n" + contact_sheet(c.surface, "") +
                       "<h3>Plain DEM</h3>\n" + contact_sheet(c.dem, ""));
-  return page("sandflow comparison: " + text(j, {"scene"}),
-              fmt::format("plain DEM against surface flow, {} grains, {} frames",
-                          count(j, {"n_total"}), count(j, {"frames"})),
+  const std::string sub = fmt::format("plain DEM against surface flow, {} grains, {} frames",
+                                      count(j, {"n_total"}), count(j, {"frames"}));
+  body = notes_of(c.surface) + notes_of(c.dem) + notes_of(wrong) + body;
+  return page("sandflow comparison: " + text(j, {"scene"}), sub,
               {{"summary", "Summary"},
                {"speedup", "Speed-up"},
                {"plots", "Plots"},

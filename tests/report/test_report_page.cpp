@@ -229,3 +229,41 @@ TEST(ReportPage, CompareOfABedSceneShowsTheCraterNotAnAngle) {
   EXPECT_NE(sp.find("not measured in a scene with a bed"), std::string::npos);
   EXPECT_EQ(sp.find("angles of repose"), std::string::npos);
 }
+
+// A value of the wrong type (a hand-edited or foreign file) shows as a dash, and a note names its
+// file and its place in it; a missing value shows as a dash with no note.
+TEST(ReportPage, AValueOfTheWrongTypeIsNamedNotOnlyDashed) {
+  TempDir t;
+  write_run(t.dir() / "surface", "surface", 3);
+  write_run(t.dir() / "dem", "dem", 3);
+  const fs::path summary = t.dir() / "surface" / "summary.json";
+  nlohmann::json s = nlohmann::json::parse(std::ifstream(summary));
+  s["repose_angle_deg"] = "31.5";
+  s["k_n"] = nlohmann::json::array({1207.0});
+  s["stage_seconds"] = {{"forces+integration", true}};
+  std::ofstream(summary) << s.dump(2);
+  const std::string run = run_report_html(load_run_report_data((t.dir() / "surface").string()));
+  EXPECT_EQ(html_problem(run), "");
+  for (const std::string key : {"'repose_angle_deg' is a string", "'k_n' is an array",
+                                "'stage_seconds.forces+integration' is a boolean"})
+    EXPECT_NE(run.find(html_escape(summary.string() + ": " + key + ", not a number")),
+              std::string::npos)
+        << key;
+  // the correct file beside it: no note
+  const std::string dem = run_report_html(load_run_report_data((t.dir() / "dem").string()));
+  EXPECT_EQ(dem.find("not a number"), std::string::npos);
+
+  // in a comparison: compare.json's own values, and the runs' summaries, by file
+  const nlohmann::json c = {{"scene", "tiny"},
+                            {"frames", 3},
+                            {"n_total", 400},
+                            {"speedup", "fast"},
+                            {"emitters", nullptr}};
+  std::ofstream(t.dir() / "compare.json") << c.dump();
+  const std::string cmp = compare_report_html(load_compare_report_data(t.dir().string()));
+  EXPECT_EQ(html_problem(cmp), "");
+  EXPECT_NE(cmp.find(html_escape((t.dir() / "compare.json").string() +
+                                 ": 'speedup' is a string, not a number")),
+            std::string::npos);
+  EXPECT_EQ(occurrences(cmp, "not a number"), 1u);  // (the summaries' angle is not on this page)
+}
