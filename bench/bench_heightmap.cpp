@@ -16,21 +16,15 @@
 #include "core/rng.hpp"
 #include "core/timer.hpp"
 #include "geometry/heightmap.hpp"
+#include "support/random_grid.hpp"  // (tests/support: the grids the tests query)
 
 using namespace sandflow;
+using sandflow::test::random_grid;
 
 namespace {
 
 constexpr std::array<Real, 4> kExtent{-0.8, -0.8, 0.8, 0.8};
 constexpr Real kReach = 0.011;
-
-HeightGrid random_grid(int side, Real amplitude, std::uint64_t seed) {
-  HeightGrid g;
-  g.nx = g.ny = side;
-  Rng rng(seed);
-  for (int k = 0; k < side * side; ++k) g.z.push_back(rng.uniform(0.0, amplitude));
-  return g;
-}
 
 void run(const std::string& name, const HeightGrid& grid, std::size_t queries) {
   Stopwatch build;

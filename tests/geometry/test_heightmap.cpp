@@ -11,10 +11,12 @@
 #include "geometry/heightmap.hpp"
 #include "sdf_check.hpp"
 #include "sim/world.hpp"
+#include "support/random_grid.hpp"
 
 namespace sandflow {
 namespace {
 
+using test::random_grid;  // (101 samples over 0.2 m: every 2 mm, rough to a 1 cm grain)
 using testing::expect_tracing_never_crosses;
 using testing::nearest_sample;
 using testing::random_points;
@@ -166,11 +168,7 @@ TEST(Heightmap, BoundsHoldTheSurface) {
 TEST(Heightmap, SphereTracingNeverStepsAcrossTheSurface) {
   // a rough terrain too (random samples, slopes up to ~4), where the local plane alone would step
   // through the next peak
-  HeightGrid rough;
-  rough.nx = 21;
-  rough.ny = 16;
-  Rng rng(9);
-  for (int k = 0; k < rough.nx * rough.ny; ++k) rough.z.push_back(rng.uniform(0.0, 0.08));
+  const HeightGrid rough = random_grid(21, 16, 0.08, 9);
   for (const HeightGrid& g : {smooth_grid(), rough}) {
     const SolidHeightmap terrain(g, kExtent, kBase);
     Vec3 lo, hi;
@@ -182,11 +180,7 @@ TEST(Heightmap, SphereTracingNeverStepsAcrossTheSurface) {
 }
 
 TEST(Heightmap, RoughTerrainDistanceIsConservative) {
-  HeightGrid g;
-  g.nx = 21;
-  g.ny = 16;
-  Rng rng(21);
-  for (int k = 0; k < g.nx * g.ny; ++k) g.z.push_back(rng.uniform(0.0, 0.08));
+  const HeightGrid g = random_grid(21, 16, 0.08, 21);
   const SolidHeightmap terrain(g, kExtent, kBase);
   const std::vector<Vec3> surface = terrain_surface(g, 1e-3);
   Vec3 lo, hi;
@@ -298,16 +292,6 @@ Real grid_height(const HeightGrid& g, const std::array<Real, 4>& extent, Real x,
   const auto z = [&](int a, int b) { return g.z[static_cast<std::size_t>(b) * g.nx + a]; };
   return (1 - s) * (1 - t) * z(i, j) + s * (1 - t) * z(i + 1, j) + (1 - s) * t * z(i, j + 1) +
          s * t * z(i + 1, j + 1);
-}
-
-// Random heights in [0, amplitude] on a side x side grid (101, 1 cm over 0.2 m: every 2 mm, rough
-// to a grain of 1 cm).
-HeightGrid random_grid(int side, Real amplitude, std::uint64_t seed) {
-  HeightGrid g;
-  g.nx = g.ny = side;
-  Rng rng(seed);
-  for (int k = 0; k < side * side; ++k) g.z.push_back(rng.uniform(0.0, amplitude));
-  return g;
 }
 
 // Within reach of the surface (1 cm, a grain's), above it, touching it and below it, closest() is
