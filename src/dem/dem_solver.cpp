@@ -124,10 +124,16 @@ void DemSolver::contacts_of(const Grains& grains, const Geometry& geometry,
   out.assign(grains.size(), 0);
   const std::size_t n = std::min(grains.size(), pairs_.start.empty() ? 0 : pairs_.start.size() - 1);
   std::vector<std::uint8_t> touching(out.size(), 0);  // grain contacts, up to kSeatContacts
-  // each thread flags and counts into its own copies, then the copies are joined: an or and a
-  // sum, so the result does not depend on the thread count
+  // each thread flags and counts into its own copies, then the copies are joined grain by grain:
+  // an or and a sum, so the result does not depend on the thread count
+  std::vector<std::vector<std::uint8_t>> flags_of, counts_of;  // (a thread's copies)
 #pragma omp parallel if (n >= kParallelMinGrains)
   {
+#pragma omp single
+    {
+      flags_of.resize(static_cast<std::size_t>(omp_get_num_threads()));
+      counts_of.resize(flags_of.size());
+    }
     std::vector<std::uint8_t> mine(out.size(), 0), count(out.size(), 0);
     auto add = [&](std::size_t k) { count[k] += count[k] < kSeatContacts; };
 #pragma omp for schedule(static) nowait
@@ -146,12 +152,18 @@ void DemSolver::contacts_of(const Grains& grains, const Geometry& geometry,
         add(j);
       }
     }
-#pragma omp critical
-    for (std::size_t i = 0; i < out.size(); ++i) {
-      out[i] |= mine[i];
-      touching[i] = static_cast<std::uint8_t>(std::min<int>(touching[i] + count[i], kSeatContacts));
-    }
+    flags_of[static_cast<std::size_t>(omp_get_thread_num())] = std::move(mine);
+    counts_of[static_cast<std::size_t>(omp_get_thread_num())] = std::move(count);
 #pragma omp barrier
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      int c = 0;
+      for (std::size_t t = 0; t < flags_of.size(); ++t) {
+        out[i] |= flags_of[t][i];
+        c += counts_of[t][i];
+      }
+      touching[i] = static_cast<std::uint8_t>(std::min<int>(c, kSeatContacts));
+    }
     // the geometry: a grain touching it is seated (a plane, a wall's face, a mesh's particles)
 #pragma omp for schedule(static)
     for (std::size_t i = 0; i < n; ++i) {
@@ -367,6 +379,7 @@ void DemSolver::allowances(const Grains& grains, Real dt, std::vector<Real>& out
   // the partners' maxima are atomic integer maxima: the same for any thread count and order.
   std::vector<std::uint64_t> speed2(n, 0);
   std::vector<Real> own2(n, 0);
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i)
     if (grains.state[i] == GrainState::Active) {
       own2[i] = norm2(grains.v[i]);
@@ -377,7 +390,8 @@ void DemSolver::allowances(const Grains& grains, Real dt, std::vector<Real>& out
     // a partner faster than this would get more than a_min of its own: slower ones change nothing
     const Real fast2 = (a_min / horizon) * (a_min / horizon);
     std::vector<std::uint32_t> now(listed, kNoSlot);  // slot at the last rebuild -> index now
-    for (std::size_t i = 0; i < n; ++i) {
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
+    for (std::size_t i = 0; i < n; ++i) {  // (ids are unique: each slot is written once)
       const GrainId id = grains.id[i];
       const std::uint32_t o = id < slot_of_id_.size() ? slot_of_id_[id] : kNoSlot;
       if (o < listed) now[o] = static_cast<std::uint32_t>(i);
@@ -406,6 +420,7 @@ void DemSolver::allowances(const Grains& grains, Real dt, std::vector<Real>& out
     }
   }
   out.resize(n);
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i)
     out[i] = grains.state[i] != GrainState::Active
                  ? 0

@@ -14,8 +14,15 @@ void CellGrid::build(const std::vector<Vec3>& x, Real min_cell) {
   const std::size_t max_cells = std::max<std::size_t>(4096, 4 * n);
   Vec3 lo{0, 0, 0}, hi{0, 0, 0};
   if (n > 0) {
-    lo = hi = x[0];
-    for (const Vec3& p : x) lo = min(lo, p), hi = max(hi, p);
+    Real lx = x[0].x, ly = x[0].y, lz = x[0].z, hx = lx, hy = ly, hz = lz;
+    // (minima and maxima: the same for any thread count)
+    const bool many = n >= kParallelMinGrains;
+#pragma omp parallel for reduction(min : lx, ly, lz) reduction(max : hx, hy, hz) if (many)
+    for (std::size_t i = 0; i < n; ++i) {
+      lx = std::min(lx, x[i].x), ly = std::min(ly, x[i].y), lz = std::min(lz, x[i].z);
+      hx = std::max(hx, x[i].x), hy = std::max(hy, x[i].y), hz = std::max(hz, x[i].z);
+    }
+    lo = {lx, ly, lz}, hi = {hx, hy, hz};
   }
   auto cells_for = [&](const Vec3& l, const Vec3& h, Real c) {
     double cells = 1;
@@ -54,11 +61,11 @@ void CellGrid::build(const std::vector<Vec3>& x, Real min_cell) {
   // counting sort of the grains by cell
   const std::size_t cells = static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2];
   std::vector<std::uint32_t> c(n);
-  cell_start_.assign(cells + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) {
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
+  for (std::size_t i = 0; i < n; ++i)
     c[i] = static_cast<std::uint32_t>(index(coord(x[i].x, 0), coord(x[i].y, 1), coord(x[i].z, 2)));
-    ++cell_start_[c[i] + 1];
-  }
+  cell_start_.assign(cells + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) ++cell_start_[c[i] + 1];
   for (std::size_t k = 0; k < cells; ++k) cell_start_[k + 1] += cell_start_[k];
   items_.resize(n);
   std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
@@ -91,6 +98,9 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   const auto& r = grains.r;
   constexpr Real kNone = std::numeric_limits<Real>::infinity();
   Real r_max = 0, a_min_active = kNone;
+  // (maxima and minima: the same for any thread count)
+  const bool many = n >= kParallelMinGrains;
+#pragma omp parallel for reduction(max : r_max) reduction(min : a_min_active) if (many)
   for (std::size_t i = 0; i < n; ++i) {
     r_max = std::max(r_max, r[i]);
     if (grains.state[i] == GrainState::Active) a_min_active = std::min(a_min_active, allow[i]);
@@ -100,6 +110,7 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
     return grains.state[i] == GrainState::Active || !(allow[i] < a_min_active);
   };
   Real a_min = kNone;
+#pragma omp parallel for schedule(static) reduction(min : a_min) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i)
     if (searches(i)) a_min = std::min(a_min, allow[i]);
   if (a_min == kNone) a_min = 0;
@@ -134,6 +145,7 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
     const std::uint64_t k = reach[i];
     return k == 0 ? 0 : (2 * k + 1) * (2 * k + 1) * (2 * k + 1);
   };
+#pragma omp parallel for schedule(static) reduction(+ : work) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i) {
     const int k = std::max(1, static_cast<int>(std::ceil((r[i] + r_max + 2 * allow[i]) * inv_cell)));
     reach[i] = searches(i) ? static_cast<std::uint8_t>(std::min(k, 255)) : 0;  // 0: no search
@@ -190,11 +202,10 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   std::vector<std::uint32_t> own_start(std::move(own_count));
   for (std::size_t i = 0; i < n; ++i) own_start[i + 1] += own_start[i];
   std::vector<std::uint32_t> own(own_start[n]);
-  std::size_t offset = 0;
-  for (const auto& buf : buffers) {
-    std::copy(buf.begin(), buf.end(), own.begin() + offset);
-    offset += buf.size();
-  }
+  // (each buffer holds the rows of its range of grains: it goes where the first of them starts)
+#pragma omp parallel for schedule(static, 1) if (n >= kParallelMinGrains)
+  for (std::size_t t = 0; t < buffers.size(); ++t)
+    std::copy(buffers[t].begin(), buffers[t].end(), own.begin() + own_start[range_start[t]]);
   std::vector<std::pair<std::uint32_t, std::uint32_t>> side;
   for (const auto& sb : side_buffers) side.insert(side.end(), sb.begin(), sb.end());
 
@@ -205,28 +216,28 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
     // rows = own pairs merged with the side pairs of the same grain, both ascending: the side
     // pairs come in ascending order of their finder b, so filing them by a (a stable counting
     // sort) leaves each row's ascending
+    std::vector<std::uint32_t> side_start(n + 1, 0);
+    for (const auto& [a, b] : side) ++side_start[a + 1];
+    for (std::size_t i = 0; i < n; ++i) side_start[i + 1] += side_start[i];
     {
-      std::vector<std::uint32_t> at(n + 1, 0);
-      for (const auto& [a, b] : side) ++at[a + 1];
-      for (std::size_t i = 0; i < n; ++i) at[i + 1] += at[i];
+      std::vector<std::uint32_t> at(side_start.begin(), side_start.end() - 1);
       std::vector<std::pair<std::uint32_t, std::uint32_t>> filed(side.size());
       for (const auto& p : side) filed[at[p.first]++] = p;
       side = std::move(filed);
     }
     out.start.assign(n + 1, 0);
-    for (const auto& [a, b] : side) ++out.start[a + 1];
     for (std::size_t i = 0; i < n; ++i)
-      out.start[i + 1] += out.start[i] + (own_start[i + 1] - own_start[i]);
+      out.start[i + 1] =
+          out.start[i] + (side_start[i + 1] - side_start[i]) + (own_start[i + 1] - own_start[i]);
     out.j.resize(out.start[n]);
-    std::size_t q = 0;
+    // (each row from its own and its side pairs alone: the threads take shares of the rows)
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
     for (std::size_t i = 0; i < n; ++i) {
-      const auto side_begin = side.begin() + static_cast<std::ptrdiff_t>(q);
-      while (q < side.size() && side[q].first == i) ++q;
       auto dst = out.j.begin() + out.start[i];
       auto o = own.begin() + own_start[i], o_end = own.begin() + own_start[i + 1];
-      for (auto s = side_begin; s != side.begin() + static_cast<std::ptrdiff_t>(q); ++s) {
-        while (o != o_end && *o < s->second) *dst++ = *o++;
-        *dst++ = s->second;
+      for (std::uint32_t q = side_start[i]; q < side_start[i + 1]; ++q) {
+        while (o != o_end && *o < side[q].second) *dst++ = *o++;
+        *dst++ = side[q].second;
       }
       std::copy(o, o_end, dst);
     }

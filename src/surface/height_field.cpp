@@ -327,6 +327,8 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
   auto fall = [&](std::size_t c, std::size_t n) { return (h_[c] - top_across(c, n, h_)) / dx; };
   const std::size_t row = static_cast<std::size_t>(nx);
   h_new_.resize(todo.size());
+  // (each column's new top from the old tops around it: the threads take shares of the columns)
+#pragma omp parallel for schedule(static) if (todo.size() >= 1024)
   for (std::size_t w = 0; w < todo.size(); ++w) {
     const std::size_t c = todo[w];
     const int i = static_cast<int>(c % nx), j = static_cast<int>(c / nx);

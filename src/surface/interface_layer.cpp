@@ -104,27 +104,21 @@ Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticS
   const Real T = p_.thickness;
   const Real m = p_.margin;
 
-  // 1. the hot grains: trap, dislodge, sleep
-  std::vector<std::uint32_t> keep;
-  keep.reserve(hot.size());
-  for (std::uint32_t i = 0; i < hot.size(); ++i) {
-    if (!list_changes && hot.state[i] != GrainState::Active) {  // only a trap keeps the list
-      keep.push_back(i);
-      continue;
-    }
+  // 1. the hot grains: trap, dislodge, sleep. Each grain's fate depends on its own state and the
+  // height field only, so the threads decide them; the changes are made in grain order below, so
+  // the stores, the change list and the energy's sum do not depend on the threads.
+  const std::size_t nh = hot.size();
+  fate_.resize(nh);
+#pragma omp parallel for schedule(static) if (nh >= kParallelMinGrains)
+  for (std::size_t i = 0; i < nh; ++i) {
+    fate_[i] = Fate::Stays;
+    // (between updates only traps: they keep the pair list)
+    if (!list_changes && hot.state[i] != GrainState::Active) continue;
     const Vec3& x = hot.x[i];
     const std::int64_t c = hf.column_of(x.x, x.y);
-    if (c < 0) {  // outside the grid a grain is always simulated
-      keep.push_back(i);
-      continue;
-    }
+    if (c < 0) continue;  // outside the grid a grain is always simulated
     if (x.z < hf.terrain()[static_cast<std::size_t>(c)]) {  // below the column's level
-      if (hot.state[i] != GrainState::Active) {
-        hot.state[i] = GrainState::Active;
-        changes.push_back({hot.id[i], GrainState::Interface, GrainState::Active});
-        ++n.dislodged;
-      }
-      keep.push_back(i);
+      if (hot.state[i] != GrainState::Active) fate_[i] = Fate::Freed;
       continue;
     }
     const Real h = hf.static_top_at(x.x, x.y);
@@ -132,7 +126,30 @@ Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticS
       // (a slow grain at the top of a bounce, or one sliding over the bed, stays free)
       if (x.z < h &&
           (held(p_.seat, hot, i, contacts[i]) ||
-           (hf.closed(static_cast<std::size_t>(c)) && at_rest(p_.seat, hot, i, contacts[i])))) {
+           (hf.closed(static_cast<std::size_t>(c)) && at_rest(p_.seat, hot, i, contacts[i]))))
+        fate_[i] = Fate::Trapped;
+    } else if (x.z > h + m) {
+      fate_[i] = Fate::Dislodged;
+    } else if ((x.z < h - vertical_band(T, hf.slope()[static_cast<std::size_t>(c)]) - m ||
+                hf.closed(static_cast<std::size_t>(c))) &&
+               !(contacts[i] & DemSolver::kNearActive)) {
+      // (an active grain within reach would sink into it: static grains push nothing; in a
+      // closed column no grain moves, and the invariant wakes what one comes near)
+      fate_[i] = Fate::Sleeps;
+    }
+  }
+  std::vector<std::uint32_t> keep;
+  keep.reserve(nh);
+  for (std::uint32_t i = 0; i < nh; ++i) {
+    switch (fate_[i]) {
+      case Fate::Stays:
+        break;
+      case Fate::Freed:  // below its column's level it moves on its own
+        hot.state[i] = GrainState::Active;
+        changes.push_back({hot.id[i], GrainState::Interface, GrainState::Active});
+        ++n.dislodged;
+        break;
+      case Fate::Trapped:
         // frozen where it is; its contacts with other frozen grains go inert at the next step,
         // while those with active grains keep their springs, so that the grains resting on it do
         // not lose their friction
@@ -141,31 +158,31 @@ Transitions InterfaceLayer::transfer(const HeightField& hf, Grains& hot, StaticS
         hot.v[i] = hot.w[i] = {};
         changes.push_back({hot.id[i], GrainState::Active, GrainState::Interface});
         ++n.trapped;
+        break;
+      case Fate::Dislodged:
+        hot.state[i] = GrainState::Active;
+        hot.v[i] = hot.w[i] = {};
+        // (its pairs with interface grains enter the list)
+        changes.push_back({hot.id[i], GrainState::Interface, GrainState::Active});
+        ++n.dislodged;
+        break;
+      case Fate::Sleeps: {
+        const Vec3& x = hot.x[i];
+        const auto c = static_cast<std::uint32_t>(hf.column_of(x.x, x.y));
+        const bool follow = tops_follow(st);
+        // the tops follow the grain as stored (within the store's bound of where it slept)
+        const StaticGrain g = st.grain(st.add(hot.id[i], x, hot.r[i], c));
+        if (follow) {
+          hf.for_each_ray_hit(g.x, g.r, [&](std::size_t cc, Real, Real top) {
+            set_top(cc, std::max(tops_[cc], top));
+          });
+          tops_r_max_ = std::max(tops_r_max_, g.r);
+          ++tops_of_;
+        }
+        changes.push_back({hot.id[i], GrainState::Interface, GrainState::Static});
+        ++n.slept;
+        continue;
       }
-    } else if (x.z > h + m) {
-      hot.state[i] = GrainState::Active;
-      hot.v[i] = hot.w[i] = {};
-      // (its pairs with interface grains enter the list)
-      changes.push_back({hot.id[i], GrainState::Interface, GrainState::Active});
-      ++n.dislodged;
-    } else if ((x.z < h - vertical_band(T, hf.slope()[static_cast<std::size_t>(c)]) - m ||
-                hf.closed(static_cast<std::size_t>(c))) &&
-               !(contacts[i] & DemSolver::kNearActive)) {
-      // (an active grain within reach would sink into it: static grains push nothing; in a
-      // closed column no grain moves, and the invariant wakes what one comes near)
-      const bool follow = tops_follow(st);
-      // the tops follow the grain as stored (within the store's bound of where it slept)
-      const StaticGrain g = st.grain(st.add(hot.id[i], x, hot.r[i], static_cast<std::uint32_t>(c)));
-      if (follow) {
-        hf.for_each_ray_hit(g.x, g.r, [&](std::size_t cc, Real, Real top) {
-          set_top(cc, std::max(tops_[cc], top));
-        });
-        tops_r_max_ = std::max(tops_r_max_, g.r);
-        ++tops_of_;
-      }
-      changes.push_back({hot.id[i], GrainState::Interface, GrainState::Static});
-      ++n.slept;
-      continue;
     }
     keep.push_back(i);
   }

@@ -145,6 +145,9 @@ class InterfaceLayer {
     if (!tops_all_changed_) tops_changed_.add(static_cast<std::uint32_t>(c));
   }
   ColumnSet fell_, dirty_, scan_;  ///< scratch of transfer(), wake(), recompute_tops()
+  /// what transfer() does to each hot grain, decided before any is done
+  enum class Fate : std::uint8_t { Stays, Freed, Trapped, Dislodged, Sleeps };
+  std::vector<Fate> fate_;
   /// Whether the tops follow the store (before it changes).
   bool tops_follow(const StaticStore& st) const { return tops_of_ == st.size(); }
   /// Recomputes the tops of the marked columns from the static grains (filed by column).

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dem/neighbor_list.hpp"  // kParallelMinGrains
+
 namespace sandflow {
 
 SurfaceFlow::SurfaceFlow(const SurfaceParams& params, const Geometry& geometry)
@@ -20,8 +22,10 @@ void SurfaceFlow::update_height_field(const Grains& hot, const StaticStore& st,
   // a grain in flight touches nothing: only grains of the pile (and the interface) make H, and
   // those frozen or at rest on it even above a void
   dem.contacts_of(hot, geometry, contacts_);
-  counts_.resize(hot.size());
-  for (std::size_t i = 0; i < hot.size(); ++i)
+  const std::size_t n = hot.size();
+  counts_.resize(n);
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
+  for (std::size_t i = 0; i < n; ++i)
     counts_[i] =
         hot.state[i] != GrainState::Active || at_rest(p_.interface.seat, hot, i, contacts_[i])
             ? HeightField::kHeldOnPile
@@ -41,10 +45,14 @@ void SurfaceFlow::update_height_field(const Grains& hot, const StaticStore& st,
   if (flowing_.columns() != hf_.columns()) flowing_.resize(hf_.columns());
   flowing_.clear();
   fast_.clear();
-  for (std::size_t i = 0; i < hot.size(); ++i) {
-    if (hot.state[i] != GrainState::Active ||
-        !moves_pile(p_.interface.seat, hot, i, contacts_[i]) || below_level(hot.x[i]))
-      continue;
+  // (the threads flag the grains, which are then taken in grain order)
+  moving_.resize(n);
+#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
+  for (std::size_t i = 0; i < n; ++i)
+    moving_[i] = hot.state[i] == GrainState::Active &&
+                 moves_pile(p_.interface.seat, hot, i, contacts_[i]) && !below_level(hot.x[i]);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!moving_[i]) continue;
     fast_.push_back(static_cast<std::uint32_t>(i));
     hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) {
       flowing_.add(static_cast<std::uint32_t>(c));

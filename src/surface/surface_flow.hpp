@@ -110,7 +110,7 @@ class SurfaceFlow {
   /// may have).
   const std::vector<std::uint32_t>* take_moved();
 
-  std::vector<std::uint8_t> contacts_, counts_;
+  std::vector<std::uint8_t> contacts_, counts_, moving_;
   ColumnSet flowing_;                 ///< the columns where grains move the pile
   std::vector<std::uint32_t> moved_;  ///< scratch of take_moved()
   std::vector<std::uint32_t> fast_;  ///< the hot grains that move the pile, at the last update
