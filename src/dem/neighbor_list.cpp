@@ -110,7 +110,7 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
     return grains.state[i] == GrainState::Active || !(allow[i] < a_min_active);
   };
   Real a_min = kNone;
-#pragma omp parallel for schedule(static) reduction(min : a_min) if (n >= kParallelMinGrains)
+#pragma omp parallel for schedule(static) reduction(min : a_min) if (many)
   for (std::size_t i = 0; i < n; ++i)
     if (searches(i)) a_min = std::min(a_min, allow[i]);
   if (a_min == kNone) a_min = 0;
@@ -145,7 +145,7 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
     const std::uint64_t k = reach[i];
     return k == 0 ? 0 : (2 * k + 1) * (2 * k + 1) * (2 * k + 1);
   };
-#pragma omp parallel for schedule(static) reduction(+ : work) if (n >= kParallelMinGrains)
+#pragma omp parallel for schedule(static) reduction(+ : work) if (many)
   for (std::size_t i = 0; i < n; ++i) {
     const int k = std::max(1, static_cast<int>(std::ceil((r[i] + r_max + 2 * allow[i]) * inv_cell)));
     reach[i] = searches(i) ? static_cast<std::uint8_t>(std::min(k, 255)) : 0;  // 0: no search

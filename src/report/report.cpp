@@ -282,10 +282,9 @@ std::vector<std::pair<std::string, std::string>> run_rows(const json& s) {
       v += st->get<bool>() ? " (from the load: [stiffness] from_load)" : " (set in the scene)";
     rows.push_back({"normal stiffness k_n", v});
   }
-  const std::optional<double> angle = number(s, {"repose_angle_deg"});
-  if (const json* a = find(s, {"repose_angle_deg"}); angle && a)
+  if (const std::optional<double> angle = number(s, {"repose_angle_deg"}))
     rows.push_back({"angle of repose", fmt::format("{:.1f}\u00b0 (heap height {}, base radius {})",
-                                                   a->get<double>(), fixed(s, {"heap", "height"}, 3, " m"),
+                                                   *angle, fixed(s, {"heap", "height"}, 3, " m"),
                                                    fixed(s, {"heap", "base_radius"}, 3, " m"))});
   else
     rows.push_back({"angle of repose", "n/a (" + text(s, {"heap", "reason"}) + ")"});
@@ -447,7 +446,7 @@ RunReportData load_run_report_data(const std::string& dir) {
   r.dir = dir;
   r.stats = read_stats_csv((fs::path(dir) / "stats.csv").string());
   if (!r.stats.note.empty()) r.notes.push_back(r.stats.note);
-  const std::string summary = (fs::path(dir) / "summary.json").string();
+  const std::string summary = summary_path(r);
   std::error_code ec;
   if (fs::exists(summary, ec))
     r.summary = read_json_object(summary);
