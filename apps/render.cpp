@@ -204,9 +204,19 @@ std::optional<SceneConfig> scene_the_run_ran(const std::string& run,
   return recorded_scene(r, text, record);
 }
 
+/// Whether two [[geometry]] tables make the same solid for the grains: everything but its name
+/// and how it is drawn, and a heightmap's samples rather than the path of the PNG they came from.
+bool same_solid(GeometryConfig a, GeometryConfig b) {
+  a.name = b.name;
+  a.render = b.render;
+  a.file = b.file;
+  return a == b;
+}
+
 /// A --scene other than the one the run ran draws geometry the grains never met: say so when its
-/// name or its geometry's entries differ from the run's record (run.json). A run.json that cannot
-/// be read is not an error here: --scene is how such a run is drawn.
+/// name differs from the run's record (run.json), or any solid (one moved, resized, another
+/// type, one more or fewer). A run.json that cannot be read is not an error here: --scene is how
+/// such a run is drawn.
 void warn_if_not_the_runs_scene(const SceneConfig& given, const std::string& run) {
   std::optional<SceneConfig> ran;
   try {
@@ -215,10 +225,7 @@ void warn_if_not_the_runs_scene(const SceneConfig& given, const std::string& run
     return;
   }
   if (!ran) return;
-  bool same = ran->name == given.name && ran->geometry.size() == given.geometry.size();
-  for (std::size_t k = 0; same && k < given.geometry.size(); ++k)
-    same = ran->geometry[k].type == given.geometry[k].type;
-  if (!same)
+  if (ran->name != given.name || ran->geometry.size() != given.geometry.size()) {
     fmt::print(stderr,
                "warning: --scene {} is the scene '{}' with {}; {} ran '{}' with {} (its run.json): "
                "the geometry drawn is not what its grains met\n",
@@ -226,6 +233,16 @@ void warn_if_not_the_runs_scene(const SceneConfig& given, const std::string& run
                counted(static_cast<std::int64_t>(given.geometry.size()), "[[geometry]] table"), run,
                ran->name,
                counted(static_cast<std::int64_t>(ran->geometry.size()), "[[geometry]] table"));
+    return;
+  }
+  for (std::size_t k = 0; k < given.geometry.size(); ++k)
+    if (!same_solid(given.geometry[k], ran->geometry[k])) {
+      fmt::print(stderr,
+                 "warning: --scene {}: [[geometry]] table {} ('{}') is not the solid {} ran "
+                 "(its run.json): the geometry drawn is not what its grains met\n",
+                 given.path, k, given.geometry[k].name, run);
+      return;
+    }
 }
 
 /// The scene from --scene, else the one the first run ran (its run.json: the scene text with its

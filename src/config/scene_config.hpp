@@ -136,6 +136,7 @@ struct HeightGrid {
   int nx = 0;
   int ny = 0;
   std::vector<Real> z;  ///< [m]
+  bool operator==(const HeightGrid&) const = default;
 };
 
 struct GeometryConfig {
@@ -176,6 +177,7 @@ struct GeometryConfig {
   bool fallback_box = false;        ///< a missing file gives a box of fallback_size (warned)
   Vec3 fallback_size{0.3, 0.3, 0.3};  ///< [m]
   std::optional<Real> particle_radius;  ///< boundary particles [m]; unset: half the smallest d
+  bool operator==(const GeometryConfig&) const = default;
 };
 
 enum class EmitterType { Pour, Block, Lattice, Bed };

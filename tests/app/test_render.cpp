@@ -260,7 +260,8 @@ TEST_F(Render, SceneCameraIsUsed) {
 }
 
 // --scene draws another scene file's geometry and camera: one that is not the scene the run ran
-// (another name, other geometry) is warned of, the same scene moved or with a new camera is not.
+// (another name, other geometry, a solid moved) is warned of, the same scene moved, with a new
+// camera or drawn otherwise is not.
 TEST_F(Render, ASceneOtherThanTheRunsIsWarnedOf) {
   const fs::path run = tiny_run(1);
   std::string other = kTinyScene;
@@ -277,6 +278,20 @@ TEST_F(Render, ASceneOtherThanTheRunsIsWarnedOf) {
       kTinyScene + "[camera]\nposition = [0.4, -0.5, 0.3]\nlook_at = [0, 0, 0.05]\n";
   ASSERT_EQ(sandflow(base + "--scene " + box.write("moved.toml", camera).string(), &log), 0) << log;
   EXPECT_EQ(log.find("warning"), std::string::npos) << log;
+  // the same scene with its floor drawn as glass is the same solid; raised by a centimetre, not
+  std::string glass = kTinyScene;
+  glass.replace(glass.find("type = \"plane\""), 14, "type = \"plane\"\nrender = \"glass\"");
+  ASSERT_EQ(sandflow(base + "--scene " + box.write("glass.toml", glass).string(), &log), 0) << log;
+  EXPECT_EQ(log.find("warning"), std::string::npos) << log;
+  std::string raised = kTinyScene;
+  raised.replace(raised.find("type = \"plane\""), 14, "type = \"plane\"\npoint = [0, 0, 0.01]");
+  const fs::path raised_file = box.write("raised.toml", raised);
+  ASSERT_EQ(sandflow(base + "--scene " + raised_file.string(), &log), 0) << log;
+  EXPECT_NE(log.find("warning: --scene " + raised_file.string() +
+                     ": [[geometry]] table 0 ('geometry 0') is not the solid " + run.string() +
+                     " ran (its run.json)"),
+            std::string::npos)
+      << log;
 }
 
 TEST_F(Render, SetChangesTheLookOnly) {
