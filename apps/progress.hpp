@@ -45,6 +45,14 @@ class Progress {
     std::fflush(stderr);
   }
 
+  /// A line of its own (a warning) while the progress line runs: on a terminal it takes the
+  /// progress line's place, which the next update() draws again below it.
+  void note(const std::string& text) {
+    if (tty_) std::fputs("\r\033[K", stderr);
+    std::fprintf(stderr, "%s\n", text.c_str());
+    std::fflush(stderr);
+  }
+
   static std::string format_duration(double s) {
     const auto t = static_cast<std::int64_t>(s + 0.5);
     if (t >= 3600) return fmt::format("{}h{:02d}m", t / 3600, (t % 3600) / 60);
