@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -31,6 +32,7 @@
 #include "core/file_kind.hpp"
 #include "core/process.hpp"
 #include "core/threads.hpp"
+#include "geometry/mesh.hpp"
 #include "geometry/shapes.hpp"
 #include "io/ply.hpp"
 #include "io/png_gray.hpp"
@@ -206,18 +208,49 @@ std::optional<SceneConfig> scene_the_run_ran(const std::string& run,
 
 /// Whether two [[geometry]] tables make the same solid for the grains: everything but its name
 /// and how it is drawn, and a heightmap's samples rather than the path of the PNG they came from.
-bool same_solid(GeometryConfig a, GeometryConfig b) {
+/// `by_digest`: the run's summary.json has its meshes' digests, which say whether a mesh file is
+/// the one it ran (warn_if_meshes_differ), whatever its name.
+bool same_solid(GeometryConfig a, GeometryConfig b, bool by_digest) {
   a.name = b.name;
   a.render = b.render;
   a.file = b.file;
+  if (by_digest) a.mesh_file = b.mesh_file;
   return a == b;
+}
+
+/// The digests of the meshes the run's grains met, by [[geometry]] table (its summary.json's
+/// mesh_digests); nothing for an unfinished run or one of a sandflow before them.
+std::map<int, std::string> run_mesh_digests(const nlohmann::json& summary) {
+  std::map<int, std::string> out;
+  if (!summary.contains("mesh_digests") || !summary["mesh_digests"].is_array()) return out;
+  for (const nlohmann::json& d : summary["mesh_digests"])
+    if (d.is_object() && d.contains("geometry") && d["geometry"].is_number_integer() &&
+        d.contains("digest") && d["digest"].is_string())
+      out[d["geometry"].get<int>()] = d["digest"].get<std::string>();
+  return out;
+}
+
+/// A mesh drawn that is not the one the grains met: its file edited since the run, or --scene
+/// naming another.
+void warn_if_meshes_differ(const Geometry& solids, const std::vector<GeometryConfig>& geometry,
+                           const std::map<int, std::string>& ran, const std::string& run) {
+  for (const MeshObstacle& m : solids.meshes()) {
+    const auto it = ran.find(m.source);
+    if (it == ran.end() || it->second == fmt::format("{:016x}", mesh_digest(m.mesh))) continue;
+    fmt::print(stderr,
+               "warning: [[geometry]] table {} ('{}'): its mesh {} is not the one {} ran "
+               "(summary.json's mesh_digests): its file was changed since, or another was "
+               "named; the geometry drawn is not what its grains met\n",
+               m.source, m.name, geometry[static_cast<std::size_t>(m.source)].mesh_file, run);
+  }
 }
 
 /// A --scene other than the one the run ran draws geometry the grains never met: say so when its
 /// name differs from the run's record (run.json), or any solid (one moved, resized, another
 /// type, one more or fewer). A run.json that cannot be read is not an error here: --scene is how
 /// such a run is drawn.
-void warn_if_not_the_runs_scene(const SceneConfig& given, const std::string& run) {
+void warn_if_not_the_runs_scene(const SceneConfig& given, const std::string& run,
+                                bool meshes_by_digest) {
   std::optional<SceneConfig> ran;
   try {
     ran = scene_the_run_ran(run, {});
@@ -236,7 +269,7 @@ void warn_if_not_the_runs_scene(const SceneConfig& given, const std::string& run
     return;
   }
   for (std::size_t k = 0; k < given.geometry.size(); ++k)
-    if (!same_solid(given.geometry[k], ran->geometry[k])) {
+    if (!same_solid(given.geometry[k], ran->geometry[k], meshes_by_digest)) {
       fmt::print(stderr,
                  "warning: --scene {}: [[geometry]] table {} ('{}') is not the solid {} ran "
                  "(its run.json): the geometry drawn is not what its grains met\n",
@@ -281,9 +314,11 @@ RenderScene load_render_scene(const std::string& scene_option, const std::vector
     }
   }
   const SceneConfig scene = recorded ? *recorded : load_scene(file, overrides);
-  if (!recorded) warn_if_not_the_runs_scene(scene, run);
+  const std::map<int, std::string> mesh_digests = run_mesh_digests(summary);
+  if (!recorded) warn_if_not_the_runs_scene(scene, run, !mesh_digests.empty());
   rs.geometry = scene.geometry;
   rs.solids = Geometry::from_config(scene.geometry, scene.material, scene.path);
+  warn_if_meshes_differ(*rs.solids, scene.geometry, mesh_digests, run);
   rs.diameter = scene.material.diameter;
   rs.camera = scene.camera;
   if (!rs.fps) rs.fps = scene.output.fps;

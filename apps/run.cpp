@@ -277,6 +277,12 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
       {"peak_memory_bytes", peak_memory_bytes()},
       {"exports", exporter.summary()},
   };
+  // what `render` checks the meshes it draws against (a mesh file edited since the run)
+  nlohmann::json mesh_digests = nlohmann::json::array();
+  for (const MeshObstacle& m : world.geometry().meshes())
+    mesh_digests.push_back(
+        {{"geometry", m.source}, {"digest", fmt::format("{:016x}", mesh_digest(m.mesh))}});
+  summary["mesh_digests"] = std::move(mesh_digests);
   if (const SurfaceFlow* sf = world.surface()) {
     const HeightField& hf = sf->height_field();
     Real r_sum = 0, r_max = 0;

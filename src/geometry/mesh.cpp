@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/hash.hpp"
+
 namespace sandflow {
 
 void transform(TriangleMesh& mesh, Real scale, const Vec3& rotation_deg, const Vec3& translation) {
@@ -19,6 +21,15 @@ Aabb mesh_bounds(const TriangleMesh& mesh) {
   for (const auto& t : mesh.triangles)
     for (std::uint32_t i : t) box.grow(mesh.vertices[i]);
   return box;
+}
+
+std::uint64_t mesh_digest(const TriangleMesh& mesh) {
+  Hasher h;
+  h.add(mesh.vertices.size());
+  for (const Vec3& v : mesh.vertices) h.add(v);
+  h.add(mesh.triangles.size());
+  for (const auto& t : mesh.triangles) h.add(t);
+  return h.value();
 }
 
 Real triangle_area(const TriangleMesh& mesh, std::size_t triangle) {

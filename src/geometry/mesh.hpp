@@ -60,6 +60,10 @@ MeshQuality mesh_quality(const TriangleMesh& mesh);
 /// True when the triangle has a repeated vertex or (numerically) zero area.
 bool is_degenerate(const TriangleMesh& mesh, std::size_t triangle);
 
+/// A hash of the vertices and triangles, bit for bit: tells a mesh drawn later from the one a
+/// run's grains met (the same file edited since gives another digest).
+std::uint64_t mesh_digest(const TriangleMesh& mesh);
+
 /// Area of a triangle [m^2].
 Real triangle_area(const TriangleMesh& mesh, std::size_t triangle);
 

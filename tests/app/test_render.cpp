@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "cli_runner.hpp"
 #include "core/process.hpp"
 #include "io/ply.hpp"
@@ -290,6 +292,48 @@ TEST_F(Render, ASceneOtherThanTheRunsIsWarnedOf) {
   EXPECT_NE(log.find("warning: --scene " + raised_file.string() +
                      ": [[geometry]] table 0 ('geometry 0') is not the solid " + run.string() +
                      " ran (its run.json)"),
+            std::string::npos)
+      << log;
+}
+
+// A tetrahedron as an ASCII STL, its apex at height `apex` [m].
+std::string tetrahedron_stl(double apex) {
+  const std::string v[4] = {"0 0 0", "0.1 0 0", "0 0.1 0", fmt::format("0.03 0.03 {}", apex)};
+  const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}};
+  std::string s = "solid tet\n";
+  for (const auto& f : faces)
+    s += fmt::format(
+        "facet normal 0 0 0\nouter loop\nvertex {}\nvertex {}\nvertex {}\nendloop\n"
+        "endfacet\n",
+        v[f[0]], v[f[1]], v[f[2]]);
+  return s + "endsolid tet\n";
+}
+
+// The mesh drawn is the one the grains met (summary.json's mesh_digests): its file edited since
+// the run is warned of; the same mesh beside another scene file, under another name, is not.
+TEST_F(Render, AMeshFileEditedSinceTheRunIsWarnedOf) {
+  box.write("tet.stl", tetrahedron_stl(0.1));
+  const std::string mesh =
+      "[[geometry]]\ntype = \"mesh\"\nname = \"tet\"\nfile = \"tet.stl\"\n"
+      "position = [0.3, 0.0, 0.0]\n";
+  const fs::path run = tiny_run(1, kTinyScene + mesh);
+  const std::string base = "render " + run.string() + " --width 32 --height 24 --quality draft";
+  std::string log;
+  ASSERT_EQ(sandflow(base, &log), 0) << log;
+  EXPECT_EQ(log.find("warning"), std::string::npos) << log;
+  // the same mesh elsewhere, named otherwise, drawn by --scene: the same solid
+  fs::create_directories(box.dir / "elsewhere");
+  box.write("elsewhere/copy.stl", tetrahedron_stl(0.1));
+  std::string moved = kTinyScene + mesh;
+  moved.replace(moved.find("tet.stl"), 7, "copy.stl");
+  const fs::path moved_scene = box.write("elsewhere/tiny.toml", moved);
+  ASSERT_EQ(sandflow(base + " --scene " + moved_scene.string(), &log), 0) << log;
+  EXPECT_EQ(log.find("warning"), std::string::npos) << log;
+  // the run's own mesh file edited: its apex 2 cm higher
+  box.write("tet.stl", tetrahedron_stl(0.12));
+  ASSERT_EQ(sandflow(base, &log), 0) << log;
+  EXPECT_NE(log.find("warning: [[geometry]] table 1 ('tet'): its mesh tet.stl is not the one " +
+                     run.string() + " ran (summary.json's mesh_digests)"),
             std::string::npos)
       << log;
 }
