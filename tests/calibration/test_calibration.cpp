@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "core/error.hpp"
+#include "support/sanitizers.hpp"
 
 namespace sandflow {
 namespace {
@@ -48,6 +49,8 @@ TEST(Calibration, ATinyHeapGivesTheSameAnglesEveryTimeAndFailsAboveWhereItStood)
 }
 
 TEST(Calibration, LessFrictionGivesALowerHeap) {
+  // (61 s under the sanitizers; ATinyHeapGivesTheSameAnglesEveryTime... runs the same rig)
+  if constexpr (test::kSanitizers) GTEST_SKIP() << "two heaps, left to the Release suite";
   SceneConfig slippery = sand();
   slippery.material.friction = 0.2;
   slippery.material.rolling_friction = 0.02;

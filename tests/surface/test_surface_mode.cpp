@@ -151,6 +151,9 @@ TEST(SurfaceMode, ADomainTooTallForTheStaticStoreIsRefusedAtConstruction) {
 }
 
 TEST(SurfaceMode, OneAndTwoThreadsGiveTheSameState) {
+  // (77 s under the sanitizers, which check no sum's order; the surface runs of tests/app and of
+  // BinScene take the same parallel loops there)
+  if constexpr (test::kSanitizers) GTEST_SKIP() << "two runs, left to the Release suite";
   const SurfaceRun one = surface_run(1), two = surface_run(2);
   EXPECT_EQ(one.hash, two.hash);
   EXPECT_EQ(one.trapped, two.trapped);
