@@ -170,9 +170,11 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
     c.frames = res.frames;
     write_file_atomic(checkpoint_path, encode_checkpoint(c));
   };
-  // (only when threads spin: passive ones share the cores out as any program does)
+  // (only when threads spin: passive ones share the cores out as any program does, and libgomp
+  // spins briefly by itself when given more threads than cores)
   std::optional<CoreShareWatch> core_share;
-  if (threads > 1 && openmp_threads_spin()) core_share.emplace(threads, kCoreShareWindow);
+  if (threads > 1 && threads <= omp_get_num_procs() && openmp_threads_spin())
+    core_share.emplace(threads, kCoreShareWindow);
   for (int f = world.frame(); f < frames; ++f) {
     FrameStats st = world.advance_frame();
     Stopwatch io;
