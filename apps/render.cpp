@@ -208,7 +208,7 @@ std::optional<SceneConfig> scene_the_run_ran(const std::string& run,
 
 /// Whether two [[geometry]] tables make the same solid for the grains: everything but its name
 /// and how it is drawn, and a heightmap's samples rather than the path of the PNG they came from.
-/// `by_digest`: the run's summary.json has its meshes' digests, which say whether a mesh file is
+/// `by_digest`: the run recorded its meshes' digests, which say whether a mesh file is
 /// the one it ran (warn_if_meshes_differ), whatever its name.
 bool same_solid(GeometryConfig a, GeometryConfig b, bool by_digest) {
   a.name = b.name;
@@ -218,12 +218,28 @@ bool same_solid(GeometryConfig a, GeometryConfig b, bool by_digest) {
   return a == b;
 }
 
-/// The digests of the meshes the run's grains met, by [[geometry]] table (its summary.json's
-/// mesh_digests); nothing for an unfinished run or one of a sandflow before them.
-std::map<int, std::string> run_mesh_digests(const nlohmann::json& summary) {
+/// The digests of the meshes the run's grains met, by [[geometry]] table: its summary.json's
+/// mesh_digests, else its run.json's (a run not finished); nothing for a run of a sandflow before
+/// them, or one whose run.json cannot be read.
+std::map<int, std::string> run_mesh_digests(const nlohmann::json& summary, const std::string& run) {
+  nlohmann::json digests = summary.is_object() && summary.contains("mesh_digests")
+                               ? summary["mesh_digests"]
+                               : nlohmann::json();
+  if (!digests.is_array()) {
+    std::error_code ec;
+    if (!fs::exists(fs::path(run) / "run.json", ec)) return {};
+    try {
+      nlohmann::json record;
+      std::string text;
+      read_run_record(run, record, text);
+      if (record.contains("mesh_digests")) digests = record["mesh_digests"];
+    } catch (const InputError&) {
+      return {};
+    }
+  }
   std::map<int, std::string> out;
-  if (!summary.contains("mesh_digests") || !summary["mesh_digests"].is_array()) return out;
-  for (const nlohmann::json& d : summary["mesh_digests"])
+  if (!digests.is_array()) return out;
+  for (const nlohmann::json& d : digests)
     if (d.is_object() && d.contains("geometry") && d["geometry"].is_number_integer() &&
         d.contains("digest") && d["digest"].is_string())
       out[d["geometry"].get<int>()] = d["digest"].get<std::string>();
@@ -239,7 +255,7 @@ void warn_if_meshes_differ(const Geometry& solids, const std::vector<GeometryCon
     if (it == ran.end() || it->second == fmt::format("{:016x}", mesh_digest(m.mesh))) continue;
     fmt::print(stderr,
                "warning: [[geometry]] table {} ('{}'): its mesh {} is not the one {} ran "
-               "(summary.json's mesh_digests): its file was changed since, or another was "
+               "(its record of the meshes it ran): its file was changed since, or another was "
                "named; the geometry drawn is not what its grains met\n",
                m.source, m.name, geometry[static_cast<std::size_t>(m.source)].mesh_file, run);
   }
@@ -314,7 +330,7 @@ RenderScene load_render_scene(const std::string& scene_option, const std::vector
     }
   }
   const SceneConfig scene = recorded ? *recorded : load_scene(file, overrides);
-  const std::map<int, std::string> mesh_digests = run_mesh_digests(summary);
+  const std::map<int, std::string> mesh_digests = run_mesh_digests(summary, run);
   if (!recorded) warn_if_not_the_runs_scene(scene, run, !mesh_digests.empty());
   rs.geometry = scene.geometry;
   rs.solids = Geometry::from_config(scene.geometry, scene.material, scene.path);

@@ -103,6 +103,32 @@ nlohmann::json stiffness_json(const Stiffness& s) {
   return j;
 }
 
+/// What `render` checks the meshes it draws against (a mesh file edited since the run): a digest
+/// of each mesh as placed, by [[geometry]] table.
+nlohmann::json mesh_digests(const Geometry& geometry) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const MeshObstacle& m : geometry.meshes())
+    out.push_back(
+        {{"geometry", m.source}, {"digest", fmt::format("{:016x}", mesh_digest(m.mesh))}});
+  return out;
+}
+
+/// Adds the meshes' digests to a new run's run.json, so that `render` can check its meshes
+/// before the run has a summary.json (a run stopped, killed or still going).
+void record_mesh_digests(const std::string& out, const Geometry& geometry) {
+  if (geometry.meshes().empty()) return;
+  const std::string path = (fs::path(out) / "run.json").string();
+  nlohmann::json record;
+  try {
+    std::ifstream in(path);
+    record = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw OutputError(fmt::format("{}: cannot be read back ({})", path, e.what()));
+  }
+  record["mesh_digests"] = mesh_digests(geometry);
+  write_file_atomic(path, record.dump(2) + "\n");
+}
+
 }  // namespace
 
 void warn_once(const std::string& text) {
@@ -144,6 +170,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
                                    checkpoint_path, world.frame(), frames));
   }
   if (control.resumed) prepare_resumed_dir(out, world.frame());
+  if (resumable && !control.resume) record_mesh_digests(out, world.geometry());
   StatsWriter stats(fs::path(out) / "stats.csv", res.frames);
   FrameExporter exporter(world, out);  // the per-frame files of --export
   for (const std::string& w : exporter.warnings()) warn_once(w);
@@ -279,12 +306,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
       {"peak_memory_bytes", peak_memory_bytes()},
       {"exports", exporter.summary()},
   };
-  // what `render` checks the meshes it draws against (a mesh file edited since the run)
-  nlohmann::json mesh_digests = nlohmann::json::array();
-  for (const MeshObstacle& m : world.geometry().meshes())
-    mesh_digests.push_back(
-        {{"geometry", m.source}, {"digest", fmt::format("{:016x}", mesh_digest(m.mesh))}});
-  summary["mesh_digests"] = std::move(mesh_digests);
+  summary["mesh_digests"] = mesh_digests(world.geometry());
   if (const SurfaceFlow* sf = world.surface()) {
     const HeightField& hf = sf->height_field();
     Real r_sum = 0, r_max = 0;

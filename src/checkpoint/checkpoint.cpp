@@ -17,6 +17,7 @@
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
 #include "core/hash.hpp"
+#include "geometry/mesh.hpp"
 
 namespace sandflow {
 namespace {
@@ -565,6 +566,8 @@ std::uint64_t scene_hash(const World& world, std::string_view start_record) {
   h.add(b.radius);
   h.add(b.size());
   for (const Vec3& p : b.x) h.add(p);
+  // a mesh edited since the start: its particles may be the same, its inside test is not
+  for (const MeshObstacle& m : world.geometry().meshes()) h.add(mesh_digest(m.mesh));
   for (const GeometryConfig& g : world.scene().geometry)
     for (Real z : g.heights.z) h.add(z);
   h.add(world.emitters().size());
