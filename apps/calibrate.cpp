@@ -6,7 +6,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
+#include <string>
 
 #include <fmt/format.h>
 
@@ -15,6 +17,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
+#include "progress.hpp"
 #include "scene/scene_loader.hpp"
 
 namespace sandflow {
@@ -100,9 +103,12 @@ nlohmann::json measure_calibration(const SceneConfig& scene, int trials, const R
   // on a terminal one line redrawn; in a log, a line per phase of each trial
   const bool tty = isatty(STDERR_FILENO) != 0;
   std::string last;
+  CoreShareWarning core_share(omp_get_max_threads());
   const Calibration c = calibrate(
       scene, trials,
       [&](int trial, const char* phase, double t) {
+        if (const std::optional<std::string> warning = core_share.poll())
+          fmt::print(stderr, "{}{}\n", tty ? "\r\033[K" : "", *warning);
         const std::string now =
             fmt::format("calibrating: trial {} of {}, {}", trial + 1, trials, phase);
         if (tty)

@@ -2,15 +2,18 @@
 // on a pipe or a file, one plain line every 5 % of the frames instead.
 #pragma once
 
+#include <omp.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <string>
-
-#include <unistd.h>
 
 #include <fmt/format.h>
 
+#include "core/core_share.hpp"
 #include "core/timer.hpp"
 
 namespace sandflow {
@@ -67,6 +70,43 @@ class Progress {
   bool tty_;
   Stopwatch clock_;
   int plain_every_;  ///< frames between plain lines (stderr not a terminal)
+};
+
+/// Says once, while it happens, that a job's threads wait for cores another job holds
+/// (core/core_share.hpp). Only when its OpenMP threads spin (idle passive threads share the cores
+/// as any program does), with 2 or more threads and no more than the cores (libgomp throttles its
+/// own spinning beyond that).
+class CoreShareWarning {
+ public:
+  /// Wall time over which the wait is measured before it may warn [s]: long enough that a compile
+  /// or a backup of a few seconds beside the job says nothing.
+  static constexpr double kWindow = 10.0;
+  /// The share of the threads' time spent waiting that is worth a warning: two jobs that each
+  /// take both cores wait half of it.
+  static constexpr double kShare = 0.25;
+
+  explicit CoreShareWarning(int threads) : threads_(threads) {
+    if (threads > 1 && threads <= omp_get_num_procs() && openmp_threads_spin())
+      watch_.emplace(threads, kWindow);
+  }
+
+  /// Between frames: the warning, the first time a window's share reaches kShare.
+  std::optional<std::string> poll() {
+    if (!watch_) return std::nullopt;
+    const std::optional<double> waited = watch_->poll();
+    if (!waited || *waited < kShare) return std::nullopt;
+    watch_.reset();  // said once
+    return fmt::format(
+        "warning: this job's {} threads waited for a core {:.0f} % of the last {:.0f} s: other "
+        "work shares this machine's {} cores, and OpenMP's threads, which spin while they wait, "
+        "then slow every job several times; give each job its share (--threads, or "
+        "OMP_NUM_THREADS) or set GOMP_SPINCOUNT=1000 (docs/usage.md, --threads)",
+        threads_, 100 * *waited, kWindow, omp_get_num_procs());
+  }
+
+ private:
+  int threads_;
+  std::optional<CoreShareWatch> watch_;
 };
 
 }  // namespace sandflow

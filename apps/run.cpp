@@ -22,7 +22,6 @@
 #include "calibration/calibration.hpp"
 #include "commands.hpp"
 #include "core/atomic_file.hpp"
-#include "core/core_share.hpp"
 #include "core/counted.hpp"
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
@@ -73,10 +72,6 @@ SceneConfig load_for_run(const RunOptions& o) {
 }
 
 namespace {
-
-/// Wall time over which a run's wait for cores is measured before it may warn [s]: long enough that
-/// a compile or a backup of a few seconds beside it says nothing.
-constexpr double kCoreShareWindow = 10.0;
 
 nlohmann::json heap_json(const HeapFit& fit) {
   return {
@@ -197,11 +192,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
     c.frames = res.frames;
     write_file_atomic(checkpoint_path, encode_checkpoint(c));
   };
-  // (only when threads spin: passive ones share the cores out as any program does, and libgomp
-  // spins briefly by itself when given more threads than cores)
-  std::optional<CoreShareWatch> core_share;
-  if (threads > 1 && threads <= omp_get_num_procs() && openmp_threads_spin())
-    core_share.emplace(threads, kCoreShareWindow);
+  CoreShareWarning core_share(threads);
   for (int f = world.frame(); f < frames; ++f) {
     FrameStats st = world.advance_frame();
     Stopwatch io;
@@ -211,16 +202,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
     stats.write(st);
     res.frames.push_back(st);
     progress.update(st.frame, st.n_total, st.n_active + st.n_interface);
-    if (core_share)
-      if (const std::optional<double> waited = core_share->poll(); waited && *waited >= 0.25) {
-        progress.note(fmt::format(
-            "warning: this run's {} threads waited for a core {:.0f} % of the last {:.0f} s: other "
-            "work shares this machine's {} cores, and OpenMP's threads, which spin while they "
-            "wait, then slow every job several times; give each job its share (--threads, or "
-            "OMP_NUM_THREADS) or set GOMP_SPINCOUNT=1000 (docs/usage.md, --threads)",
-            threads, 100 * *waited, core_share->window_seconds(), omp_get_num_procs()));
-        core_share.reset();  // said once a run
-      }
+    if (const std::optional<std::string> warning = core_share.poll()) progress.note(*warning);
     const bool stop = control.stop && *control.stop != 0;
     const int every = control.checkpoint_every;
     if (resumable && (stop || (every > 0 && (st.frame % every == 0 || st.frame == frames))))
