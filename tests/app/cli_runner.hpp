@@ -93,4 +93,18 @@ size = [0.1, 0.1, {}]
                      fps, count, z, height);
 }
 
+/// A tetrahedron as an ASCII STL, 0.1 m across, its apex at height `apex` [m]; `face_twice`
+/// gives one of its faces twice (the same surface, another mesh).
+inline std::string tetrahedron_stl(double apex, bool face_twice = false) {
+  const std::string v[4] = {"0 0 0", "0.1 0 0", "0 0.1 0", fmt::format("0.03 0.03 {}", apex)};
+  const int faces[5][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}, {0, 1, 3}};
+  std::string s = "solid tet\n";
+  for (int k = 0; k < (face_twice ? 5 : 4); ++k)
+    s += fmt::format(
+        "facet normal 0 0 0\nouter loop\nvertex {}\nvertex {}\nvertex {}\nendloop\n"
+        "endfacet\n",
+        v[faces[k][0]], v[faces[k][1]], v[faces[k][2]]);
+  return s + "endsolid tet\n";
+}
+
 }  // namespace sandflow_test

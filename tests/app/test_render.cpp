@@ -25,6 +25,7 @@ namespace {
 using sandflow_test::read_text;
 using sandflow_test::Sandbox;
 using sandflow_test::sandflow;
+using sandflow_test::tetrahedron_stl;
 
 // 300 grains in a block resting on a floor: three frames take a fraction of a second.
 const std::string kTinyScene = sandflow_test::tiny_block_scene(300, 24, 0.08, 0.08);
@@ -294,19 +295,6 @@ TEST_F(Render, ASceneOtherThanTheRunsIsWarnedOf) {
                      " ran (its run.json)"),
             std::string::npos)
       << log;
-}
-
-// A tetrahedron as an ASCII STL, its apex at height `apex` [m].
-std::string tetrahedron_stl(double apex) {
-  const std::string v[4] = {"0 0 0", "0.1 0 0", "0 0.1 0", fmt::format("0.03 0.03 {}", apex)};
-  const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}};
-  std::string s = "solid tet\n";
-  for (const auto& f : faces)
-    s += fmt::format(
-        "facet normal 0 0 0\nouter loop\nvertex {}\nvertex {}\nvertex {}\nendloop\n"
-        "endfacet\n",
-        v[f[0]], v[f[1]], v[f[2]]);
-  return s + "endsolid tet\n";
 }
 
 // The mesh drawn is the one the grains met (its record of the meshes it ran): its file edited since

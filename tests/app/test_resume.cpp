@@ -9,7 +9,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
 #include <cctype>
 #include <chrono>
 #include <filesystem>
@@ -33,6 +32,7 @@ namespace {
 using sandflow_test::read_text;
 using sandflow_test::Sandbox;
 using sandflow_test::sandflow;
+using sandflow_test::tetrahedron_stl;
 
 // A pour onto a floor in surface mode: ~1 s for 40 frames in Release.
 const char* kPourScene = R"(
@@ -532,19 +532,7 @@ TEST(Resume, RefusesWhatItCannotContinueAndSaysWhy) {
 // another inside test for the emitters).
 TEST(Resume, AMeshEditedSinceTheStartIsRefused) {
   Sandbox box;
-  const auto stl = [](bool face_twice) {
-    const std::string v[4] = {"0 0 0", "0.1 0 0", "0 0.1 0", "0.03 0.03 0.1"};
-    std::vector<std::array<int, 3>> faces = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}};
-    if (face_twice) faces.push_back(faces[1]);
-    std::string s = "solid tet\n";
-    for (const auto& f : faces)
-      s += fmt::format(
-          "facet normal 0 0 0\nouter loop\nvertex {}\nvertex {}\nvertex {}\nendloop\n"
-          "endfacet\n",
-          v[f[0]], v[f[1]], v[f[2]]);
-    return s + "endsolid tet\n";
-  };
-  box.write("tet.stl", stl(false));
+  box.write("tet.stl", tetrahedron_stl(0.1));
   const std::string scene =
       box.write("pour.toml", std::string(kPourScene) +
                                  "[[geometry]]\ntype = \"mesh\"\nname = \"tet\"\n"
@@ -564,11 +552,11 @@ TEST(Resume, AMeshEditedSinceTheStartIsRefused) {
     return check.substr(0, check.find(" boundary particles"));
   };
   const std::string before = particles();
-  box.write("tet.stl", stl(true));
+  box.write("tet.stl", tetrahedron_stl(0.1, true));
   ASSERT_EQ(particles(), before);  // (the edit this test is about: the particles stay)
   EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2) << log;
   EXPECT_NE(log.find("written for another scene"), std::string::npos) << log;
-  box.write("tet.stl", stl(false));
+  box.write("tet.stl", tetrahedron_stl(0.1));
   EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
 }
 
