@@ -4,6 +4,7 @@
 // Exit status: 0 done, 1 unexpected failure, 2 bad input (scene, option, file),
 // 3 the simulation blew up, 4 an output could not be written, 128 + N stopped by signal N.
 #include <charconv>
+#include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <string>
@@ -53,6 +54,24 @@ CLI::Validator whole(std::int64_t lo, std::int64_t hi) {
         return std::string();
       },
       fmt::format("INT in [{} - {}]", lo, hi));
+}
+
+/// A number from lo to hi. CLI11's Range lets "nan" through (no comparison with it is true), and
+/// calls "abc" out of range rather than no number.
+CLI::Validator real_in(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& v) {
+        double x = 0;
+        const char* end = v.data() + v.size();
+        const char* begin = v.data() + (v.size() > 1 && v[0] == '+');
+        const auto [p, ec] = std::from_chars(begin, end, x);
+        if (v.empty() || p != end || ec == std::errc::invalid_argument)
+          return fmt::format("{} is not a number", v.empty() ? "''" : v);
+        if (ec == std::errc::result_out_of_range || !std::isfinite(x) || x < lo || x > hi)
+          return fmt::format("{} is not in range {:g} to {:g}", v, lo, hi);
+        return std::string();
+      },
+      fmt::format("NUMBER in [{:g} - {:g}]", lo, hi));
 }
 
 /// CLI11 words an option given twice as a count of values ("--grains: At Most 1 required but
@@ -158,11 +177,11 @@ int main(int argc, char** argv) {
       ->add_option("--base", rig.base_diameters,
                    "radius of the rig's base in grain diameters (default 10; what surface "
                    "runs use. A smaller base reads the angles low, a larger one costs more)")
-      ->check(CLI::Range(4.0, 40.0));
+      ->check(real_in(4.0, 40.0));
   calibrate
       ->add_option("--tilt-rate", rig.tilt_rate,
                    "how fast gravity tilts, deg/s (default 2: what surface runs use)")
-      ->check(CLI::Range(0.1, 30.0));
+      ->check(real_in(0.1, 30.0));
   calibrate->footer(
       "A heap is poured onto a rough disk 10 grain diameters in radius until it overflows; its\n"
       "flank gives theta0 (where a flow stops). Gravity is then tilted slowly until the heap\n"

@@ -12,6 +12,7 @@
 #include <string>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include "cli_runner.hpp"
 #include "core/error.hpp"
@@ -426,7 +427,8 @@ TEST(HostileInputs, ARunRecordWithCountsOutOfRangeIsRefused) {
 
 // A VDB voxel finer than d / 200 is refused at load: OpenVDB drops a sphere wider than 100 voxels
 // from the level set, which left it empty with exit 0. Frame counts out of range say the range,
-// counts that are not whole numbers say so, and an empty --out is refused.
+// counts that are not whole numbers say so, calibrate's rig numbers are numbers in range, and an
+// empty --out is refused.
 TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
   Sandbox box;
   const fs::path scene = box.write("fine.toml", sandflow_test::tiny_block_scene(20));
@@ -451,6 +453,18 @@ TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
   EXPECT_EQ(bounded("run " + scene.string() + " --check --grains 99999999999999999999", &log), 2)
       << log;
   EXPECT_TRUE(has(log, "is not in range 1 to 2000000000")) << log;
+  // calibrate's rig numbers: nan and inf are out of range (CLI11's Range let nan through, and a
+  // calibration on a base of nan grains began), a word is no number (Range called it out of range)
+  for (const auto& [option, message] : std::vector<std::pair<std::string, std::string>>{
+           {"--base nan", "--base: nan is not in range 4 to 40"},
+           {"--base inf", "--base: inf is not in range 4 to 40"},
+           {"--base 3.9", "--base: 3.9 is not in range 4 to 40"},
+           {"--base ten", "--base: ten is not a number"},
+           {"--tilt-rate nan", "--tilt-rate: nan is not in range 0.1 to 30"},
+           {"--tilt-rate 2x", "--tilt-rate: 2x is not a number"}}) {
+    EXPECT_EQ(bounded("calibrate " + scene.string() + " " + option, &log), 2) << option << log;
+    EXPECT_TRUE(has(log, message)) << log;
+  }
   // an option given twice is named so, not "At Most 1 required" (which reads like a missing value)
   EXPECT_EQ(bounded("run " + scene.string() + " --check --grains 5 --grains 6", &log), 2) << log;
   EXPECT_TRUE(has(log, "--grains is given 2 times: give it once")) << log;
