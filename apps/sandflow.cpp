@@ -3,10 +3,13 @@
 //
 // Exit status: 0 done, 1 unexpected failure, 2 bad input (scene, option, file),
 // 3 the simulation blew up, 4 an output could not be written, 128 + N stopped by signal N.
+#include <omp.h>
+
 #include <charconv>
 #include <cmath>
 #include <csignal>
 #include <cstdint>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -122,6 +125,15 @@ int main(int argc, char** argv) {
   // A file past the size limit (ulimit -f) then fails to write with EFBIG, reported as an
   // OutputError like a full disk, instead of the signal killing the process mid-write.
   std::signal(SIGXFSZ, SIG_IGN);
+  // libgomp takes OMP_NUM_THREADS as it stands for every parallel region until told otherwise,
+  // and one it cannot start crashes it (100,000 on this machine: a segmentation fault while the
+  // World was built): every region gets the count sandflow takes, at most kMaxThreads
+  if (const char* omp = std::getenv("OMP_NUM_THREADS"); omp && *omp && !omp_num_threads())
+    fmt::print(stderr,
+               "warning: OMP_NUM_THREADS={} is not a count of threads from 1 to {}: ignored, "
+               "{} (one per core) unless --threads or simulation.threads says\n",
+               omp, kMaxThreads, omp_get_num_procs());
+  omp_set_num_threads(default_thread_count());
   CLI::App app{
       "sandflow: sand animated as a surface flow (Zhu & Yang 2010), with plain DEM beside it"};
   app.require_subcommand(1);

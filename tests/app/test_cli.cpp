@@ -77,6 +77,16 @@ TEST(Cli, ThreadsComeFromTheOptionTheSceneOmpNumThreadsThenTheCores) {
   EXPECT_EQ(threads_of("env OMP_NUM_THREADS=many", ""), omp_get_num_procs());  // not a count
   // the option and the scene key end at the same count (OMP_NUM_THREADS too: src/core/threads.hpp)
   std::string log;
+  // and OpenMP is never handed more: 100,000 threads crashed libgomp while the World was built
+  // (a segmentation fault on a machine that can start 96,364 processes), where it takes the count
+  // in OMP_NUM_THREADS as it stands
+  EXPECT_EQ(threads_of("env OMP_NUM_THREADS=100000", ""), omp_get_num_procs());
+  EXPECT_EQ(sandflow("run " + scene.string() + " --check", &log, "env OMP_NUM_THREADS=100000"), 0)
+      << log;
+  EXPECT_NE(log.find("warning: OMP_NUM_THREADS=100000 is not a count of threads from 1 to 4096: "
+                     "ignored"),
+            std::string::npos)
+      << log;
   for (const std::string args : {" --threads 4097", " --set simulation.threads=4097"}) {
     EXPECT_EQ(
         sandflow("run " + scene.string() + " --out " + (box.dir / "big").string() + args, &log), 2)
