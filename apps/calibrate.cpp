@@ -15,6 +15,7 @@
 #include "calibration/calibration.hpp"
 #include "commands.hpp"
 #include "core/atomic_file.hpp"
+#include "core/counted.hpp"
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
 #include "progress.hpp"
@@ -120,6 +121,7 @@ nlohmann::json measure_calibration(const SceneConfig& scene, int trials, const R
       rig);
   if (tty) fmt::print(stderr, "\n");
   nlohmann::json j = calibration_json(c);
+  j["threads"] = omp_get_max_threads();  // (what `seconds` took; the angles do not depend on it)
   store_calibration(j);
   return j;
 }
@@ -151,6 +153,7 @@ nlohmann::json resolve_surface_angles(SceneConfig& scene) {
                  "{}: surface.repose_angle or max_angle unset: measuring the material's angles "
                  "(sandflow calibrate, once for this material: about a minute)\n",
                  scene.path);
+      omp_set_num_threads(thread_count(scene));  // the run's --threads: its share of the cores
       j = measure_calibration(scene, kDefaultCalibrationTrials);
     }
     const Real theta0 = deg_to_rad((*j)["theta0_deg"].get<double>());
@@ -244,7 +247,9 @@ int calibrate_command(const RunOptions& o, int trials, bool again, const RigSett
   fmt::print("{}", text);
   fmt::print("{}        {}\n", cached ? "cached" : "stored",
              (fs::path(calibration_cache_dir()) / (key + ".json")).string());
-  if (!cached) fmt::print("time             {:.0f} s\n", j->at("seconds").get<double>());
+  if (!cached)
+    fmt::print("time             {:.0f} s on {}\n", j->at("seconds").get<double>(),
+               counted(j->value("threads", 0), "thread"));
   // A smaller base holds a lower heap whose flank stands lower (the floor's sand, seeds 1 and 2:
   // base 4 gave 9.6-16.3 deg, 6: 23.2-25.5, 7: 27.4-28.7, 10: 31.2-34.9, 14: 35.0-35.3;
   // docs/performance.md, forty-seventh); surface runs use the default rig's key, never these.

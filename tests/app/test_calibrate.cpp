@@ -48,7 +48,8 @@ TEST(Calibrate, MeasuresOnceThenReadsTheCache) {
   std::string out;
   // a small, fast rig: the default one takes a minute
   const std::string cmd = "calibrate " + scene.string() + " --trials 1 --base 7 --tilt-rate 6";
-  ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
+  ASSERT_EQ(sandflow(cmd + " --threads 1", &out, calibrating(box)), 0) << out;
+  EXPECT_NE(out.find("s on 1 thread\n"), std::string::npos) << out;  // (--threads taken)
   // one trial: the standard deviation is 0
   const std::string theta0 = word_after(out, "\ntheta0 ");
   ASSERT_FALSE(theta0.empty()) << out;
@@ -64,6 +65,7 @@ TEST(Calibrate, MeasuresOnceThenReadsTheCache) {
   const auto j = nlohmann::json::parse(read_text(cached));
   EXPECT_NEAR(j["theta0_deg"].get<double>(), std::stod(theta0), 0.005);
   EXPECT_GT(j["theta_max_deg"].get<double>(), j["theta0_deg"].get<double>());
+  EXPECT_EQ(j["threads"], 1);
 
   // the second time costs nothing and says where the result came from
   ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
