@@ -3,7 +3,9 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -91,16 +93,32 @@ nlohmann::json calibration_json(const Calibration& c) {
 }
 
 void store_calibration(const nlohmann::json& j) {
+  if (const std::string problem = calibration_cache_problem(); !problem.empty())
+    throw OutputError(problem);
+  write_file_atomic(
+      (fs::path(calibration_cache_dir()) / (j["key"].get<std::string>() + ".json")).string(),
+      j.dump(2) + "\n");
+}
+
+std::string calibration_cache_problem() {
   const fs::path dir = calibration_cache_dir();
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec)
-    throw OutputError(fmt::format("{}: cannot make the calibration cache folder: {}", dir.string(),
-                                  ec.message()));
-  write_file_atomic((dir / (j["key"].get<std::string>() + ".json")).string(), j.dump(2) + "\n");
+    return fmt::format("{}: cannot make the calibration cache folder: {}", dir.string(),
+                       ec.message());
+  if (access(dir.c_str(), W_OK | X_OK) != 0)
+    return fmt::format("{}: cannot write in the calibration cache folder: {}", dir.string(),
+                       std::strerror(errno));
+  return "";
 }
 
-nlohmann::json measure_calibration(const SceneConfig& scene, int trials, const RigSettings& rig) {
+/// What to do about a cache folder that cannot be written (the variables that move it).
+constexpr const char* kCacheAdvice =
+    "set SANDFLOW_CACHE_DIR (or XDG_CACHE_HOME) to a folder that can be written";
+
+nlohmann::json measure_calibration(const SceneConfig& scene, int trials, const RigSettings& rig,
+                                   bool keep) {
   // on a terminal one line redrawn; in a log, a line per phase of each trial
   const bool tty = isatty(STDERR_FILENO) != 0;
   std::string last;
@@ -122,7 +140,7 @@ nlohmann::json measure_calibration(const SceneConfig& scene, int trials, const R
   if (tty) fmt::print(stderr, "\n");
   nlohmann::json j = calibration_json(c);
   j["threads"] = omp_get_max_threads();  // (what `seconds` took; the angles do not depend on it)
-  store_calibration(j);
+  if (keep) store_calibration(j);
   return j;
 }
 
@@ -153,8 +171,13 @@ nlohmann::json resolve_surface_angles(SceneConfig& scene) {
                  "{}: surface.repose_angle or max_angle unset: measuring the material's angles "
                  "(sandflow calibrate, once for this material: about a minute)\n",
                  scene.path);
+      // a folder that cannot be written costs this run nothing, the next one the measurement
+      const std::string problem = calibration_cache_problem();
+      if (!problem.empty())
+        warn_once(fmt::format("{}: the angles measured now serve this run and are not kept; {}",
+                              problem, kCacheAdvice));
       omp_set_num_threads(thread_count(scene));  // the run's --threads: its share of the cores
-      j = measure_calibration(scene, kDefaultCalibrationTrials);
+      j = measure_calibration(scene, kDefaultCalibrationTrials, {}, problem.empty());
     }
     const Real theta0 = deg_to_rad((*j)["theta0_deg"].get<double>());
     const Real theta_max = deg_to_rad((*j)["theta_max_deg"].get<double>());
@@ -239,6 +262,9 @@ int calibrate_command(const RunOptions& o, int trials, bool again, const RigSett
   }
   const bool cached = j.has_value();
   if (!j) {
+    // (before the minutes of measuring, not after them)
+    if (const std::string problem = calibration_cache_problem(); !problem.empty())
+      throw OutputError(fmt::format("{}; {}", problem, kCacheAdvice));
     j = measure_calibration(scene, trials, rig);
     text = describe(*j);
   }

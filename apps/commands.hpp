@@ -102,9 +102,13 @@ int calibrate_command(const RunOptions& o, int trials, bool again, const RigSett
 std::string calibration_cache_dir();
 /// The cached calibration of `key` (calibration_key), if a valid one is there.
 std::optional<nlohmann::json> cached_calibration(const std::string& key);
-/// Measures the scene's material with `trials` seeds, printing progress, and caches the result.
+/// Why measured calibrations cannot be kept (the cache folder cannot be made or written), or ""
+/// when they can; makes the folder.
+std::string calibration_cache_problem();
+/// Measures the scene's material with `trials` seeds, printing progress, and caches the result
+/// when `keep`.
 nlohmann::json measure_calibration(const SceneConfig& scene, int trials,
-                                   const RigSettings& rig = {});
+                                   const RigSettings& rig = {}, bool keep = true);
 /// Trials of a calibration measured for a run (and by `sandflow calibrate` by default).
 constexpr int kDefaultCalibrationTrials = 3;
 /// True when SANDFLOW_NO_CALIBRATION is set (and not "0"): a surface run whose scene leaves the

@@ -107,6 +107,25 @@ std::string key_of(const Sandbox& box, const fs::path& scene) {
   return key;
 }
 
+// A cache folder that cannot be made stops `calibrate` before it measures, not after (the minutes
+// of a calibration were lost), and says how to move the folder.
+TEST(Calibrate, ACacheFolderThatCannotBeMadeStopsItBeforeItMeasures) {
+  Sandbox box;
+  const fs::path scene = box.write("t.toml", sand_scene());
+  const fs::path file = box.write("a-file", "");
+  std::string out;
+  EXPECT_EQ(sandflow("calibrate " + scene.string() + " --trials 1 --base 7 --tilt-rate 6", &out,
+                     "env -u SANDFLOW_NO_CALIBRATION SANDFLOW_CACHE_DIR=" + file.string() +
+                         " timeout 300"),
+            4)
+      << out;
+  EXPECT_NE(out.find(file.string() + "/calibration: cannot make the calibration cache folder"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("set SANDFLOW_CACHE_DIR"), std::string::npos) << out;
+  EXPECT_EQ(out.find("calibrating:"), std::string::npos) << out;  // nothing measured
+}
+
 TEST(Calibrate, ASurfaceRunTakesTheAnglesItsSceneLeavesUnsetFromTheCalibration) {
   Sandbox box;
   const fs::path scene = box.write("t.toml", sand_scene());
