@@ -13,11 +13,26 @@ namespace sandflow {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+/// Whether the folder `dir` holds anything but what a start stopped before its run.json leaves
+/// (an empty frames/: a run interrupted while it calibrated, say), which no --force need replace.
+bool holds_something(const std::string& dir) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (e.path().filename() != "frames" || !fs::is_directory(e.path(), ec) ||
+        !fs::is_empty(e.path(), ec))
+      return true;
+  return static_cast<bool>(ec);
+}
+
+}  // namespace
+
 void prepare_output_dir(const std::string& dir, bool force) {
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
     throw InputError(fmt::format("{}: the output path exists and is not a folder", dir));
-  if (fs::exists(dir, ec) && !fs::is_empty(dir, ec)) {
+  if (fs::exists(dir, ec) && holds_something(dir)) {
     if (!force)
       throw InputError(fmt::format(
           "{}: the output folder is not empty; pass --force to replace its run (or --resume {} "

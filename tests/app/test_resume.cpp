@@ -527,6 +527,24 @@ TEST(Resume, RefusesWhatItCannotContinueAndSaysWhy) {
   EXPECT_FALSE(fs::exists(out / "frames" / "0005.ply"));
 }
 
+// A start stopped before its run.json (Ctrl-C while the run measured its material's angles) leaves
+// an empty frames/ folder, which the same command may fill without --force; anything more it may
+// not.
+TEST(Resume, AStartStoppedBeforeItsRecordNeedsNoForce) {
+  Sandbox box;
+  const std::string scene = box.write("pour.toml", kPourScene).string();
+  const fs::path out = box.dir / "run";
+  fs::create_directories(out / "frames");
+  const std::string cmd = fmt::format("run {} --frames 1 --out {}", scene, out.string());
+  std::string log;
+  EXPECT_EQ(sandflow(cmd, &log), 0) << log;
+  fs::remove_all(out);
+  fs::create_directories(out / "frames");
+  box.write("run/frames/0001.ply", "not a frame");
+  EXPECT_EQ(sandflow(cmd, &log), 2) << log;
+  EXPECT_NE(log.find("the output folder is not empty"), std::string::npos) << log;
+}
+
 // A mesh file edited since the run started is not the run's mesh: the checkpoint is refused, even
 // when the edit leaves the mesh's particles as they were (a face given twice: the same samples,
 // another inside test for the emitters).
