@@ -88,6 +88,13 @@ TEST(ReportCli, TinyCompareReportHasBothModes) {
   EXPECT_EQ(html_problem(read_text(out / "surface" / "report.html")), "");
   EXPECT_EQ(html_problem(read_text(out / "dem" / "report.html")), "");
   EXPECT_NE(html.find("href=\"dem/report.html\""), std::string::npos);
+  // a run of the comparison deleted since: named as the comparison's, with the way back
+  fs::remove_all(out / "dem");
+  EXPECT_EQ(sandflow("report " + out.string() + " --no-render", &log), 2) << log;
+  EXPECT_NE(log.find(out.string() + ": the comparison's plain-DEM run is missing"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("sandflow compare --resume " + out.string()), std::string::npos) << log;
 }
 
 TEST(ReportCli, MissingOrBrokenInputsExitTwoNamingTheFile) {
