@@ -79,12 +79,36 @@ CLI::Validator real_in(double lo, double hi) {
 
 /// CLI11 words an option given twice as a count of values ("--grains: At Most 1 required but
 /// received 2"), which sends the user looking for a missing value; say that it was repeated.
-std::string failure_message(const CLI::App* /*app*/, const CLI::Error& e) {
+/// And it lists words it did not expect last first ("not expected: dem --mode" for `compare
+/// --mode dem`), without the command: name them in order, and where to find what it takes.
+std::string failure_message(const CLI::App* app, const CLI::Error& e) {
   std::string what = e.what();
   const std::string repeated = ": At Most 1 required but received ";
   if (const std::size_t at = what.find(repeated); at != std::string::npos)
     what = fmt::format("{} is given {} times: give it once", what.substr(0, at),
                        what.substr(at + repeated.size()));
+  if (app && app->get_subcommands().empty() && !app->remaining().empty()) {
+    std::vector<std::string> names;
+    for (const CLI::App* c : app->get_subcommands([](const CLI::App*) { return true; }))
+      names.push_back(c->get_name());
+    return fmt::format(
+        "{}: sandflow has no such command; its commands: {}\nRun sandflow --help "
+        "for what each does.\n",
+        app->remaining().front(), fmt::join(names, ", "));
+  }
+  if (dynamic_cast<const CLI::ExtrasError*>(&e) && app) {
+    const std::vector<CLI::App*> commands = app->get_subcommands();
+    const CLI::App* command = commands.empty() ? app : commands.front();
+    const std::vector<std::string> extra = command->remaining();
+    if (!extra.empty()) {
+      const std::string name = command == app ? "sandflow" : "sandflow " + command->get_name();
+      what = fmt::format(
+          "`{}` takes no {} {}{}", name, extra.front().rfind("-", 0) == 0 ? "option" : "argument",
+          extra.front(),
+          extra.size() > 1 ? fmt::format(" (given: {})", fmt::join(extra, " ")) : std::string());
+      return fmt::format("{}\nRun {} --help for what it takes.\n", what, name);
+    }
+  }
   return fmt::format("{}\nRun with --help for more information.\n", what);
 }
 

@@ -427,8 +427,8 @@ TEST(HostileInputs, ARunRecordWithCountsOutOfRangeIsRefused) {
 
 // A VDB voxel finer than d / 200 is refused at load: OpenVDB drops a sphere wider than 100 voxels
 // from the level set, which left it empty with exit 0. Frame counts out of range say the range,
-// counts that are not whole numbers say so, calibrate's rig numbers are numbers in range, and an
-// empty --out is refused.
+// counts that are not whole numbers say so, calibrate's rig numbers are numbers in range, words a
+// command does not take are named with it, and an empty --out is refused.
 TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
   Sandbox box;
   const fs::path scene = box.write("fine.toml", sandflow_test::tiny_block_scene(20));
@@ -468,6 +468,13 @@ TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
   // an option given twice is named so, not "At Most 1 required" (which reads like a missing value)
   EXPECT_EQ(bounded("run " + scene.string() + " --check --grains 5 --grains 6", &log), 2) << log;
   EXPECT_TRUE(has(log, "--grains is given 2 times: give it once")) << log;
+  // words a command does not take are named in order, with the command (CLI11: "The following
+  // arguments were not expected: dem --mode")
+  EXPECT_EQ(bounded("compare " + scene.string() + " --mode dem", &log), 2) << log;
+  EXPECT_TRUE(has(log, "`sandflow compare` takes no option --mode (given: --mode dem)")) << log;
+  EXPECT_TRUE(has(log, "Run sandflow compare --help for what it takes.")) << log;
+  EXPECT_EQ(bounded("frobnicate", &log), 2) << log;
+  EXPECT_TRUE(has(log, "frobnicate: sandflow has no such command; its commands: run,")) << log;
   // an empty output folder is not the default one
   EXPECT_EQ(bounded("run " + scene.string() + " --frames 1 --out ''", &log), 2) << log;
   EXPECT_TRUE(has(log, "--out: an empty folder name")) << log;
