@@ -4,6 +4,7 @@
 // has a report.
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -137,12 +138,13 @@ std::string write_run_report(const std::string& dir, const ReportOptions& o) {
 }
 
 std::string write_compare_report(const std::string& dir, const ReportOptions& o) {
-  for (const char* run : {"surface", "dem"})
-    if (const fs::path stats = fs::path(dir) / run / "stats.csv"; !file_exists(stats))
+  for (const auto& [folder, mode] :
+       {std::pair{"surface", "surface"}, std::pair{"dem", "plain-DEM"}})
+    if (const fs::path stats = fs::path(dir) / folder / "stats.csv"; !file_exists(stats))
       throw InputError(fmt::format(
           "{}: the comparison's {} run is missing ({}: moved or deleted?); sandflow compare "
           "--resume {} runs it again",
-          dir, run == std::string("dem") ? "plain-DEM" : "surface", stats.string(), dir));
+          dir, mode, stats.string(), dir));
   CompareReportData c = load_compare_report_data(dir);
   fill_final_frames(c, o.render);
   fill_contact_sheet(c.surface, o.contact_sheet, o.render, dir);

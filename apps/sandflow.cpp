@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include <fmt/format.h>
@@ -40,17 +41,24 @@ std::string command_line(int argc, char** argv) {
   return s;
 }
 
+/// Reads all of `v` into `x` (a leading + allowed, as CLI11 reads it): from_chars' error, and
+/// invalid_argument also for nothing or for characters left over.
+template <class T>
+std::errc read_all(const std::string& v, T& x) {
+  const char* end = v.data() + v.size();
+  const char* begin = v.data() + (v.size() > 1 && v[0] == '+');
+  const auto [p, ec] = std::from_chars(begin, end, x);
+  return v.empty() || p != end ? std::errc::invalid_argument : ec;
+}
+
 /// A count from lo to hi, written as a whole number: CLI11's Range alone calls "2e2" or "1.0"
 /// out of range, which sends the user looking for the wrong mistake.
 CLI::Validator whole(std::int64_t lo, std::int64_t hi) {
   return CLI::Validator(
       [lo, hi](std::string& v) {
         std::int64_t n = 0;
-        const char* end = v.data() + v.size();
-        const char* begin =
-            v.data() + (v.size() > 1 && v[0] == '+');  // (+5 is 5, as CLI11 reads it)
-        const auto [p, ec] = std::from_chars(begin, end, n);
-        if (v.empty() || p != end || ec == std::errc::invalid_argument)
+        const std::errc ec = read_all(v, n);
+        if (ec == std::errc::invalid_argument)
           return fmt::format("{} is not a whole number", v.empty() ? "''" : v);
         if (ec == std::errc::result_out_of_range || n < lo || n > hi)
           return fmt::format("{} is not in range {} to {}", v, lo, hi);
@@ -65,10 +73,8 @@ CLI::Validator real_in(double lo, double hi) {
   return CLI::Validator(
       [lo, hi](std::string& v) {
         double x = 0;
-        const char* end = v.data() + v.size();
-        const char* begin = v.data() + (v.size() > 1 && v[0] == '+');
-        const auto [p, ec] = std::from_chars(begin, end, x);
-        if (v.empty() || p != end || ec == std::errc::invalid_argument)
+        const std::errc ec = read_all(v, x);
+        if (ec == std::errc::invalid_argument)
           return fmt::format("{} is not a number", v.empty() ? "''" : v);
         if (ec == std::errc::result_out_of_range || !std::isfinite(x) || x < lo || x > hi)
           return fmt::format("{} is not in range {:g} to {:g}", v, lo, hi);
@@ -96,12 +102,12 @@ std::string failure_message(const CLI::App* app, const CLI::Error& e) {
         "for what each does.\n",
         app->remaining().front(), fmt::join(names, ", "));
   }
-  if (dynamic_cast<const CLI::ExtrasError*>(&e) && app) {
-    const std::vector<CLI::App*> commands = app->get_subcommands();
-    const CLI::App* command = commands.empty() ? app : commands.front();
+  // (a command was read: words before any went to the branch above)
+  if (dynamic_cast<const CLI::ExtrasError*>(&e) && app && !app->get_subcommands().empty()) {
+    const CLI::App* command = app->get_subcommands().front();
     const std::vector<std::string> extra = command->remaining();
     if (!extra.empty()) {
-      const std::string name = command == app ? "sandflow" : "sandflow " + command->get_name();
+      const std::string name = "sandflow " + command->get_name();
       what = fmt::format(
           "`{}` takes no {} {}{}", name, extra.front().rfind("-", 0) == 0 ? "option" : "argument",
           extra.front(),

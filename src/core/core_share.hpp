@@ -29,8 +29,6 @@ class CoreShareWatch {
   /// job had its cores, 0.5: half of it waited). nullopt between windows and without the count.
   std::optional<double> poll();
 
-  double window_seconds() const { return window_; }
-
  private:
   int threads_;
   double window_;
