@@ -22,6 +22,7 @@
 #include "core/file_kind.hpp"
 #include "progress.hpp"
 #include "scene/scene_loader.hpp"
+#include "stop_signals.hpp"
 
 namespace sandflow {
 
@@ -123,9 +124,14 @@ nlohmann::json measure_calibration(const SceneConfig& scene, int trials, const R
   const bool tty = isatty(STDERR_FILENO) != 0;
   std::string last;
   CoreShareWarning core_share(omp_get_max_threads());
+  const StopSignals signals;
   const Calibration c = calibrate(
       scene, trials,
       [&](int trial, const char* phase, double t) {
+        if (g_stop_signal != 0) {
+          if (tty) fmt::print(stderr, "\n");
+          throw CalibrationInterrupted{g_stop_signal};
+        }
         if (const std::optional<std::string> warning = core_share.poll())
           fmt::print(stderr, "{}{}\n", tty ? "\r\033[K" : "", *warning);
         const std::string now =
@@ -265,7 +271,12 @@ int calibrate_command(const RunOptions& o, int trials, bool again, const RigSett
     // (before the minutes of measuring, not after them)
     if (const std::string problem = calibration_cache_problem(); !problem.empty())
       throw OutputError(fmt::format("{}; {}", problem, kCacheAdvice));
-    j = measure_calibration(scene, trials, rig);
+    try {
+      j = measure_calibration(scene, trials, rig);
+    } catch (const CalibrationInterrupted& e) {
+      fmt::print(stderr, "\ninterrupted: nothing measured was kept\n");
+      return 128 + e.signal;
+    }
     text = describe(*j);
   }
   fmt::print("scene            {} ({})\n", scene.name, scene.path);

@@ -105,8 +105,12 @@ std::optional<nlohmann::json> cached_calibration(const std::string& key);
 /// Why measured calibrations cannot be kept (the cache folder cannot be made or written), or ""
 /// when they can; makes the folder.
 std::string calibration_cache_problem();
+/// Thrown by measure_calibration when SIGINT or SIGTERM asked it to stop: nothing is kept.
+struct CalibrationInterrupted {
+  int signal;
+};
 /// Measures the scene's material with `trials` seeds, printing progress, and caches the result
-/// when `keep`.
+/// when `keep`; SIGINT or SIGTERM stops it within a frame of the rig (CalibrationInterrupted).
 nlohmann::json measure_calibration(const SceneConfig& scene, int trials,
                                    const RigSettings& rig = {}, bool keep = true);
 /// Trials of a calibration measured for a run (and by `sandflow calibrate` by default).

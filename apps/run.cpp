@@ -1,16 +1,13 @@
 // `sandflow run` and `sandflow measure`, and the run driver that `compare` and `table1` share.
 #include <omp.h>
 
-#include <signal.h>
-
 #include <algorithm>
-#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -38,6 +35,7 @@
 #include "scene/scene_loader.hpp"
 #include "sim/emitters.hpp"
 #include "sim/world.hpp"
+#include "stop_signals.hpp"
 
 namespace fs = std::filesystem;
 
@@ -458,36 +456,6 @@ namespace {
 
 // ---- Resumable runs (docs/checkpoints.md) -------------------------------------------------------
 
-volatile std::sig_atomic_t g_stop_signal = 0;
-
-extern "C" void on_stop_signal(int sig) {
-  g_stop_signal = sig;
-}
-
-/// SIGINT and SIGTERM, for the life of a run, ask it to stop after the frame; a second one has
-/// the default effect (SA_RESETHAND): the process ends at once and the last checkpoint stays.
-class StopSignals {
- public:
-  StopSignals() {
-    g_stop_signal = 0;
-    struct sigaction sa {};
-    sa.sa_handler = on_stop_signal;
-    sigemptyset(&sa.sa_mask);
-    sa.sa_flags = SA_RESTART | SA_RESETHAND;
-    sigaction(SIGINT, &sa, &old_int_);
-    sigaction(SIGTERM, &sa, &old_term_);
-  }
-  ~StopSignals() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
-  StopSignals(const StopSignals&) = delete;
-  StopSignals& operator=(const StopSignals&) = delete;
-
- private:
-  struct sigaction old_int_ {}, old_term_ {};
-};
-
 std::string resume_command(const std::string& dir) {
   return "sandflow run --resume " + shell_quote(dir);
 }
@@ -759,7 +727,15 @@ int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
     RunOptions n = o;
     n.force = true;  // the caller's folder, empty or left by a start that never got going
     if (n.checkpoint_every < 0) n.checkpoint_every = kDefaultCheckpointEvery;
-    run = start_new(n, text);
+    try {
+      run = start_new(n, text);
+    } catch (const CalibrationInterrupted& e) {
+      fmt::print(stderr,
+                 "\ninterrupted while measuring the material's angles: nothing measured was "
+                 "kept; resume with: {}\n",
+                 resume_with);
+      return 128 + e.signal;
+    }
     if (run_to > 0) {  // as if started, then run on to run_to
       run.record["run_to_frame"] = run_to;
       write_file_atomic((fs::path(run.out) / "run.json").string(), run.record.dump(2) + "\n");
@@ -774,7 +750,16 @@ int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
 int run_command(const RunOptions& o) {
   if (o.resume.empty() && o.scene.empty())
     throw InputError("run: give a scene file (sandflow run SCENE), or --resume DIR to continue a run");
-  Started run = o.resume.empty() ? start_new(o, read_scene_file(o.scene)) : start_resumed(o);
+  Started run;
+  try {
+    run = o.resume.empty() ? start_new(o, read_scene_file(o.scene)) : start_resumed(o);
+  } catch (const CalibrationInterrupted& e) {
+    // (before run.json: the folder holds an empty frames/, which the same command takes as empty)
+    fmt::print(stderr,
+               "\ninterrupted while measuring the material's angles, before the run's first "
+               "frame: nothing measured was kept; the same command starts it again\n");
+    return 128 + e.signal;
+  }
   if (run.done) return 0;
   const SceneConfig& scene = run.scene;
   const std::string& out = run.out;

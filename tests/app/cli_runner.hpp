@@ -2,10 +2,13 @@
 // with its output, and a tiny scene. Shared by the tests of the command's subcommands.
 #pragma once
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -61,6 +64,35 @@ inline int sandflow(const std::string& args, std::string* output = nullptr,
   std::error_code ec;
   fs::remove(log, ec);  // leave nothing behind in the system's temporary folder
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+/// Starts the binary with `args` (output to `log`), with files limited to `max_file_bytes`;
+/// `env` ("env -u X Y=1") sets its environment. Its pid is the binary's: signals reach it.
+inline pid_t spawn(const std::string& args, const fs::path& log,
+                   rlim_t max_file_bytes = RLIM_INFINITY, const std::string& env = "") {
+  const std::string command = "exec " + env + " " + SANDFLOW_BINARY + " " + args;
+  const std::string log_path = log.string();
+  const pid_t pid = fork();
+  if (pid == 0) {  // (only async-signal-safe calls until exec)
+    const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(fd, 1);
+    dup2(fd, 2);
+    if (max_file_bytes != RLIM_INFINITY) {
+      const rlimit rl{max_file_bytes, max_file_bytes};
+      setrlimit(RLIMIT_FSIZE, &rl);
+    }
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+/// Waits for `pid`; its exit status, or 128 + the signal that ended it.
+inline int wait_for(pid_t pid) {
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 /// The whole text of a file ("" when it cannot be read).

@@ -2,9 +2,13 @@
 // cached, recorded in run.json (so a resumed run uses the same) and in summary.json with their
 // source. The ctest environment sets SANDFLOW_NO_CALIBRATION; these tests unset it.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 
+#include <chrono>
 #include <fstream>
 #include <string>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -124,6 +128,70 @@ TEST(Calibrate, ACacheFolderThatCannotBeMadeStopsItBeforeItMeasures) {
       << out;
   EXPECT_NE(out.find("set SANDFLOW_CACHE_DIR"), std::string::npos) << out;
   EXPECT_EQ(out.find("calibrating:"), std::string::npos) << out;  // nothing measured
+}
+
+/// Starts `args` with the calibration on, waits until it measures, then sends SIGINT; its exit
+/// status, with its output in `out`.
+int interrupt_while_calibrating(const Sandbox& box, const std::string& args, std::string& out) {
+  const fs::path log = box.dir / "interrupted.log";
+  fs::remove(log);  // (not the last call's words, read before this one's start)
+  const pid_t pid =
+      spawn(args, log, RLIM_INFINITY,
+            "env -u SANDFLOW_NO_CALIBRATION SANDFLOW_CACHE_DIR=" + (box.dir / "cache").string());
+  while (read_text(log).find("calibrating:") == std::string::npos &&
+         waitpid(pid, nullptr, WNOHANG) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  kill(pid, SIGINT);
+  const int status = wait_for(pid);
+  out = read_text(log);
+  return status;
+}
+
+// Ctrl-C while the angles are measured stops the measuring within a frame of the rig and says so;
+// nothing half-measured is cached. (Without the handler the process died of the signal, also 130,
+// without a word; so the words are checked.)
+TEST(Calibrate, CtrlCWhileMeasuringStopsItSaysSoAndKeepsNothing) {
+  Sandbox box;
+  const fs::path scene = box.write("t.toml", sand_scene());
+  std::string out;
+  EXPECT_EQ(interrupt_while_calibrating(
+                box, "calibrate " + scene.string() + " --trials 1 --base 7 --tilt-rate 6", out),
+            130)
+      << out;
+  EXPECT_NE(out.find("interrupted: nothing measured was kept"), std::string::npos) << out;
+  const auto cached = [&] {
+    std::error_code ec;
+    return fs::exists(box.dir / "cache" / "calibration", ec) &&
+           !fs::is_empty(box.dir / "cache" / "calibration", ec);
+  };
+  EXPECT_FALSE(cached());
+
+  // a run that measures first: stopped before its first frame, its folder is taken again without
+  // --force by the same command
+  const fs::path run = box.dir / "run";
+  const std::string run_args = "run " + scene.string() + " --frames 2 --out " + run.string();
+  EXPECT_EQ(interrupt_while_calibrating(box, run_args, out), 130) << out;
+  EXPECT_NE(out.find("interrupted while measuring the material's angles, before the run's first "
+                     "frame: nothing measured was kept; the same command starts it again"),
+            std::string::npos)
+      << out;
+  EXPECT_FALSE(cached());
+  EXPECT_FALSE(fs::exists(run / "run.json"));
+  EXPECT_EQ(sandflow(run_args, &out, "env SANDFLOW_NO_CALIBRATION=1"), 0) << out;
+
+  // a comparison: its own way on
+  const fs::path cmp = box.dir / "cmp";
+  EXPECT_EQ(
+      interrupt_while_calibrating(
+          box, "compare " + scene.string() + " --seeds 1 --frames 2 --out " + cmp.string(), out),
+      130)
+      << out;
+  EXPECT_NE(out.find("interrupted while measuring the material's angles: nothing measured was "
+                     "kept; resume with: sandflow compare --resume " +
+                     cmp.string()),
+            std::string::npos)
+      << out;
+  EXPECT_FALSE(cached());
 }
 
 TEST(Calibrate, ASurfaceRunTakesTheAnglesItsSceneLeavesUnsetFromTheCalibration) {

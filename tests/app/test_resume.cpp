@@ -32,7 +32,9 @@ namespace {
 using sandflow_test::read_text;
 using sandflow_test::Sandbox;
 using sandflow_test::sandflow;
+using sandflow_test::spawn;
 using sandflow_test::tetrahedron_stl;
+using sandflow_test::wait_for;
 
 // A pour onto a floor in surface mode: ~1 s for 40 frames in Release.
 const char* kPourScene = R"(
@@ -59,25 +61,6 @@ velocity = [0, 0, -1]
 
 constexpr int kFrames = 40;
 
-/// Starts the binary with `args` (output to `log`), with files limited to `max_file_bytes`.
-pid_t spawn(const std::string& args, const fs::path& log, rlim_t max_file_bytes = RLIM_INFINITY) {
-  const std::string command = std::string("exec ") + SANDFLOW_BINARY + " " + args;
-  const std::string log_path = log.string();
-  const pid_t pid = fork();
-  if (pid == 0) {  // (only async-signal-safe calls until exec)
-    const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(fd, 1);
-    dup2(fd, 2);
-    if (max_file_bytes != RLIM_INFINITY) {
-      const rlimit rl{max_file_bytes, max_file_bytes};
-      setrlimit(RLIMIT_FSIZE, &rl);
-    }
-    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  return pid;
-}
-
 /// Waits until `file` appears (or `pid` ends), then sends `pid` SIGINT, stopped first: on a
 /// loaded machine a run of 40 short frames could otherwise finish between the file and the signal
 /// (it did once). The SIGINT waits, pending, until the run goes on.
@@ -87,14 +70,6 @@ void interrupt_once_written(pid_t pid, const fs::path& file) {
   kill(pid, SIGSTOP);
   kill(pid, SIGINT);
   kill(pid, SIGCONT);
-}
-
-/// Waits for `pid`; its exit status, or 128 + the signal that ended it.
-int wait_for(pid_t pid) {
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 /// The whole number that follows the first `prefix` in `text` (-1 when there is none). (No

@@ -1,0 +1,43 @@
+// SIGINT and SIGTERM while a command works: a flag its loop reads between frames, so that it can
+// stop cleanly (a run writes a checkpoint; a calibration says that nothing was kept).
+#pragma once
+
+#include <signal.h>
+
+#include <csignal>
+
+namespace sandflow {
+
+/// The signal that asked the command to stop, 0 while none has.
+inline volatile std::sig_atomic_t g_stop_signal = 0;
+
+extern "C" inline void on_stop_signal(int sig) {
+  g_stop_signal = sig;
+}
+
+/// For its lifetime, SIGINT and SIGTERM set g_stop_signal; a second one has the default effect
+/// (SA_RESETHAND): the process ends at once.
+class StopSignals {
+ public:
+  StopSignals() {
+    g_stop_signal = 0;
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART | SA_RESETHAND;
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~StopSignals() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+
+ private:
+  struct sigaction old_int_ {
+  }, old_term_{};
+};
+
+}  // namespace sandflow
