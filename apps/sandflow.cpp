@@ -164,6 +164,8 @@ int main(int argc, char** argv) {
                "{} (one per core) unless --threads or simulation.threads says\n",
                omp, kMaxThreads, omp_get_num_procs());
   omp_set_num_threads(default_thread_count());
+  // a region gets the threads the job says it runs on (OMP_DYNAMIC=true let libgomp give fewer)
+  omp_set_dynamic(0);
   CLI::App app{
       "sandflow: sand animated as a surface flow (Zhu & Yang 2010), with plain DEM beside it"};
   app.require_subcommand(1);

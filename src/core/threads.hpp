@@ -3,6 +3,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <optional>
 
@@ -25,12 +26,13 @@ inline std::optional<int> omp_num_threads() {
 }
 
 /// OMP_NUM_THREADS when it holds a count (omp_num_threads), else one per core this process may
-/// run on. OMP_NUM_THREADS is how a user or a job scheduler gives each of several jobs its share
-/// of the cores: OpenMP's threads wait by spinning, so jobs that each take every core slow each
-/// other about fivefold (docs/known-issues.md). Read from the environment, not from
-/// omp_get_max_threads(), which the last omp_set_num_threads() changes.
+/// run on; at most OMP_THREAD_LIMIT (OpenMP gives no region more). OMP_NUM_THREADS is how a user or
+/// a job scheduler gives each of several jobs its share of the cores: OpenMP's threads wait by
+/// spinning, so jobs that each take every core slow each other about fivefold
+/// (docs/known-issues.md). Read from the environment, not from omp_get_max_threads(), which the
+/// last omp_set_num_threads() changes.
 inline int default_thread_count() {
-  return omp_num_threads().value_or(omp_get_num_procs());
+  return std::min(omp_num_threads().value_or(omp_get_num_procs()), omp_get_thread_limit());
 }
 
 }  // namespace sandflow

@@ -87,6 +87,16 @@ TEST(Cli, ThreadsComeFromTheOptionTheSceneOmpNumThreadsThenTheCores) {
                      "ignored"),
             std::string::npos)
       << log;
+  // OMP_THREAD_LIMIT caps what OpenMP gives a region: the run says the count it runs on
+  EXPECT_EQ(threads_of("env OMP_THREAD_LIMIT=2", " --threads 3"), 2);
+  EXPECT_EQ(threads_of("env OMP_THREAD_LIMIT=1 OMP_NUM_THREADS=3", ""), 1);
+  EXPECT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 1 --threads 3 --out " +
+                         (box.dir / "limited").string(),
+                     &log, "env OMP_THREAD_LIMIT=2"),
+            0);
+  EXPECT_NE(log.find("warning: OMP_THREAD_LIMIT=2 holds this job to 2 threads (3 asked)"),
+            std::string::npos)
+      << log;
   for (const std::string args : {" --threads 4097", " --set simulation.threads=4097"}) {
     EXPECT_EQ(
         sandflow("run " + scene.string() + " --out " + (box.dir / "big").string() + args, &log), 2)
