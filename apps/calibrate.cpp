@@ -16,6 +16,7 @@
 
 #include "calibration/calibration.hpp"
 #include "commands.hpp"
+#include "console.hpp"
 #include "core/atomic_file.hpp"
 #include "core/counted.hpp"
 #include "core/error.hpp"
@@ -129,21 +130,21 @@ nlohmann::json measure_calibration(const SceneConfig& scene, int trials, const R
       scene, trials,
       [&](int trial, const char* phase, double t) {
         if (g_stop_signal != 0) {
-          if (tty) fmt::print(stderr, "\n");
+          if (tty) print_to_stderr("\n");
           throw CalibrationInterrupted{g_stop_signal};
         }
         if (const std::optional<std::string> warning = core_share.poll())
-          fmt::print(stderr, "{}{}\n", tty ? "\r\033[K" : "", *warning);
+          print_to_stderr("{}{}\n", tty ? "\r\033[K" : "", *warning);
         const std::string now =
             fmt::format("calibrating: trial {} of {}, {}", trial + 1, trials, phase);
         if (tty)
-          fmt::print(stderr, "\r{} (t = {:.2f} s)\033[K", now, t);
+          print_to_stderr("\r{} (t = {:.2f} s)\033[K", now, t);
         else if (now != last)
-          fmt::print(stderr, "{}\n", now);
+          print_to_stderr("{}\n", now);
         last = now;
       },
       rig);
-  if (tty) fmt::print(stderr, "\n");
+  if (tty) print_to_stderr("\n");
   nlohmann::json j = calibration_json(c);
   j["threads"] = omp_get_max_threads();  // (what `seconds` took; the angles do not depend on it)
   if (keep) store_calibration(j);
@@ -173,10 +174,10 @@ nlohmann::json resolve_surface_angles(SceneConfig& scene) {
     std::optional<nlohmann::json> j = cached_calibration(key);
     const bool cached = j.has_value();
     if (!cached) {
-      fmt::print(stderr,
-                 "{}: surface.repose_angle or max_angle unset: measuring the material's angles "
-                 "(sandflow calibrate, once for this material: about a minute)\n",
-                 scene.path);
+      print_to_stderr(
+          "{}: surface.repose_angle or max_angle unset: measuring the material's angles "
+          "(sandflow calibrate, once for this material: about a minute)\n",
+          scene.path);
       // a folder that cannot be written costs this run nothing, the next one the measurement
       const std::string problem = calibration_cache_problem();
       if (!problem.empty())
@@ -274,7 +275,7 @@ int calibrate_command(const RunOptions& o, int trials, bool again, const RigSett
     try {
       j = measure_calibration(scene, trials, rig);
     } catch (const CalibrationInterrupted& e) {
-      fmt::print(stderr, "\ninterrupted: nothing measured was kept\n");
+      print_to_stderr("\ninterrupted: nothing measured was kept\n");
       return 128 + e.signal;
     }
     text = describe(*j);
@@ -291,11 +292,11 @@ int calibrate_command(const RunOptions& o, int trials, bool again, const RigSett
   // base 4 gave 9.6-16.3 deg, 6: 23.2-25.5, 7: 27.4-28.7, 10: 31.2-34.9, 14: 35.0-35.3;
   // docs/performance.md, forty-seventh); surface runs use the default rig's key, never these.
   if (rig.base_diameters < RigSettings{}.base_diameters)
-    fmt::print(stderr,
-               "warning: a base of {:g} diameters measures the angles low (the floor's sand: "
-               "theta0 9.6-16.3 deg at 4, 27.4-28.7 at 7, 31.2-34.9 at 10); surface runs use the "
-               "default rig's, not these\n",
-               rig.base_diameters);
+    print_to_stderr(
+        "warning: a base of {:g} diameters measures the angles low (the floor's sand: "
+        "theta0 9.6-16.3 deg at 4, 27.4-28.7 at 7, 31.2-34.9 at 10); surface runs use the "
+        "default rig's, not these\n",
+        rig.base_diameters);
   return 0;
 }
 

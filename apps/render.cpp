@@ -27,6 +27,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "console.hpp"
 #include "core/counted.hpp"
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
@@ -127,10 +128,10 @@ std::vector<std::string> run_folders(const std::string& dir) {
         "a comparison (sandflow compare, with surface/ and dem/)",
         dir));
   if (runs.size() == 1)
-    fmt::print(stderr,
-               "warning: {}: a comparison with frames in {} only: it alone is rendered, and no "
-               "side-by-side movie is made\n",
-               dir, runs.front());
+    print_to_stderr(
+        "warning: {}: a comparison with frames in {} only: it alone is rendered, and no "
+        "side-by-side movie is made\n",
+        dir, runs.front());
   return runs;
 }
 
@@ -253,11 +254,11 @@ void warn_if_meshes_differ(const Geometry& solids, const std::vector<GeometryCon
   for (const MeshObstacle& m : solids.meshes()) {
     const auto it = ran.find(m.source);
     if (it == ran.end() || it->second == fmt::format("{:016x}", mesh_digest(m.mesh))) continue;
-    fmt::print(stderr,
-               "warning: [[geometry]] table {} ('{}'): its mesh {} is not the one {} ran "
-               "(its record of the meshes it ran): its file was changed since, or another was "
-               "named; the geometry drawn is not what its grains met\n",
-               m.source, m.name, geometry[static_cast<std::size_t>(m.source)].mesh_file, run);
+    print_to_stderr(
+        "warning: [[geometry]] table {} ('{}'): its mesh {} is not the one {} ran "
+        "(its record of the meshes it ran): its file was changed since, or another was "
+        "named; the geometry drawn is not what its grains met\n",
+        m.source, m.name, geometry[static_cast<std::size_t>(m.source)].mesh_file, run);
   }
 }
 
@@ -275,21 +276,20 @@ void warn_if_not_the_runs_scene(const SceneConfig& given, const std::string& run
   }
   if (!ran) return;
   if (ran->name != given.name || ran->geometry.size() != given.geometry.size()) {
-    fmt::print(stderr,
-               "warning: --scene {} is the scene '{}' with {}; {} ran '{}' with {} (its run.json): "
-               "the geometry drawn is not what its grains met\n",
-               given.path, given.name,
-               counted(static_cast<std::int64_t>(given.geometry.size()), "[[geometry]] table"), run,
-               ran->name,
-               counted(static_cast<std::int64_t>(ran->geometry.size()), "[[geometry]] table"));
+    print_to_stderr(
+        "warning: --scene {} is the scene '{}' with {}; {} ran '{}' with {} (its run.json): "
+        "the geometry drawn is not what its grains met\n",
+        given.path, given.name,
+        counted(static_cast<std::int64_t>(given.geometry.size()), "[[geometry]] table"), run,
+        ran->name, counted(static_cast<std::int64_t>(ran->geometry.size()), "[[geometry]] table"));
     return;
   }
   for (std::size_t k = 0; k < given.geometry.size(); ++k)
     if (!same_solid(given.geometry[k], ran->geometry[k], meshes_by_digest)) {
-      fmt::print(stderr,
-                 "warning: --scene {}: [[geometry]] table {} ('{}') is not the solid {} ran "
-                 "(its run.json): the geometry drawn is not what its grains met\n",
-                 given.path, k, given.geometry[k].name, run);
+      print_to_stderr(
+          "warning: --scene {}: [[geometry]] table {} ('{}') is not the solid {} ran "
+          "(its run.json): the geometry drawn is not what its grains met\n",
+          given.path, k, given.geometry[k].name, run);
       return;
     }
 }
@@ -322,10 +322,10 @@ RenderScene load_render_scene(const std::string& scene_option, const std::vector
             fmt::format("--set {}={}: {} is missing or names no scene file: pass "
                         "--scene FILE",
                         overrides.front().key, overrides.front().value, summary_path));
-      fmt::print(stderr,
-                 "warning: {} is missing or names no scene file (an unfinished run?): drawing "
-                 "the grains without the geometry; pass --scene FILE to draw it\n",
-                 summary_path);
+      print_to_stderr(
+          "warning: {} is missing or names no scene file (an unfinished run?): drawing "
+          "the grains without the geometry; pass --scene FILE to draw it\n",
+          summary_path);
       return rs;
     }
   }
@@ -348,7 +348,7 @@ RenderScene load_render_scene(const std::string& scene_option, const std::vector
     rs.placed.push_back(place_mesh(g, scene.material, scene.path, warnings));
     rs.meshes.push_back(&rs.placed.back().mesh);
   }
-  for (const std::string& w : warnings) fmt::print(stderr, "warning: {}\n", w);
+  for (const std::string& w : warnings) print_to_stderr("warning: {}\n", w);
   return rs;
 }
 
@@ -439,7 +439,7 @@ ViewBounds run_bounds(const std::vector<std::string>& runs,
   for (std::size_t k = 0; k < runs.size(); ++k)
     for (int f : numbers[k]) files.push_back(frame_path(runs[k], f));
   if (files.size() > 30)  // seconds for a large run: say what the wait is for
-    fmt::print(stderr, "framing the camera: reading the grains of {} frames\n", files.size());
+    print_to_stderr("framing the camera: reading the grains of {} frames\n", files.size());
   std::vector<ViewBounds> part(files.size());
   std::vector<std::string> errors(files.size());
   parallel_tasks(static_cast<int>(files.size()), jobs, [&](int i) {
@@ -515,17 +515,17 @@ int render_command(const RenderOptions& o) {
   }
 
   if (runs.size() > 1 && (spans[0].first != spans[1].first || spans[0].last != spans[1].last))
-    fmt::print(stderr,
-               "warning: {}: its runs' frames differ ({} {}-{}, {} {}-{}: frames were deleted, or "
-               "a run was run on alone): each is rendered on its own{}\n",
-               o.dir, runs[0], spans[0].first, spans[0].last, runs[1], spans[1].first,
-               spans[1].last, o.movie ? ", and no side-by-side movie is made" : "");
+    print_to_stderr(
+        "warning: {}: its runs' frames differ ({} {}-{}, {} {}-{}: frames were deleted, or "
+        "a run was run on alone): each is rendered on its own{}\n",
+        o.dir, runs[0], spans[0].first, spans[0].last, runs[1], spans[1].first, spans[1].last,
+        o.movie ? ", and no side-by-side movie is made" : "");
   if (find_povray().empty())
     throw InputError("povray is not installed: sudo apt-get install povray");
   if (!movie_tool)
-    fmt::print(stderr,
-               "warning: ffmpeg is not installed: the frames will be rendered, but no movie made "
-               "(sudo apt-get install ffmpeg)\n");
+    print_to_stderr(
+        "warning: ffmpeg is not installed: the frames will be rendered, but no movie made "
+        "(sudo apt-get install ffmpeg)\n");
 
   const RenderScene scene = load_render_scene(o.scene, o.sets, overrides, runs.front());
   const int cores = std::max(1, default_thread_count());  // the cores this job may take
@@ -564,11 +564,11 @@ int render_command(const RenderOptions& o) {
     const nlohmann::json statics = field("n_static_final");
     if (!heights.back() && field("mode") == "surface" && statics.is_number_integer() &&
         statics.get<std::int64_t>() > 0)
-      fmt::print(stderr,
-                 "warning: {}: its static layer ({} at the end) is not drawn: "
-                 "heightfield/heightfield.json is missing or not one sandflow wrote (a run "
-                 "exports it with --export height)\n",
-                 runs[k], counted(statics.get<std::int64_t>(), "grain"));
+      print_to_stderr(
+          "warning: {}: its static layer ({} at the end) is not drawn: "
+          "heightfield/heightfield.json is missing or not one sandflow wrote (a run "
+          "exports it with --export height)\n",
+          runs[k], counted(statics.get<std::int64_t>(), "grain"));
     if (!heights.back() || !still) continue;  // (in an animation the grains cover it)
     for (int f : framed[k]) {
       const SandSurface sf = static_layer(runs[k], f, *heights.back(), scene);
@@ -652,8 +652,8 @@ int render_command(const RenderOptions& o) {
   if (!o.movie) return 0;
   const double fps = scene.fps.value_or(30.0);
   if (!scene.fps)
-    fmt::print(stderr, "warning: the run's fps is unknown (no summary.json): the movie is at {}\n",
-               fps);
+    print_to_stderr("warning: the run's fps is unknown (no summary.json): the movie is at {}\n",
+                    fps);
   // each run's movie, and a comparison's two runs side by side (surface left, DEM right)
   struct Movie {
     std::vector<std::string> folders;

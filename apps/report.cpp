@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include "console.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/pov_writer.hpp"
@@ -34,7 +35,7 @@ bool file_exists(const fs::path& p) {
 /// Renders frame `frame` of `dir` unless its PNG exists; "" on success, else why it failed.
 std::string render_missing(const std::string& dir, int frame, int width, int height) {
   if (file_exists(render_path(dir, frame))) return "";
-  fmt::print(stderr, "report: rendering {} frame {} at {}x{}\n", dir, frame, width, height);
+  print_to_stderr("report: rendering {} frame {} at {}x{}\n", dir, frame, width, height);
   try {
     RenderOptions r;
     r.dir = dir;
@@ -43,8 +44,8 @@ std::string render_missing(const std::string& dir, int frame, int width, int hei
     r.frame = frame;
     render_command(r);
   } catch (const std::exception& e) {
-    fmt::print(stderr, "warning: report: {} frame {} could not be rendered: {}\n", dir, frame,
-               e.what());
+    print_to_stderr("warning: report: {} frame {} could not be rendered: {}\n", dir, frame,
+                    e.what());
     return e.what();
   }
   return file_exists(render_path(dir, frame)) ? "" : "POV-Ray wrote no picture";
@@ -173,11 +174,11 @@ std::string write_report(const ReportOptions& o) {
     for (const auto& row : t.rows) {
       const fs::path scene = d / row[0];
       if (!file_exists(scene / "compare.json")) {
-        fmt::print(stderr, "report: {} has no compare.json (not run, or not finished): left out\n",
-                   scene.string());
+        print_to_stderr("report: {} has no compare.json (not run, or not finished): left out\n",
+                        scene.string());
         continue;
       }
-      fmt::print(stderr, "report: {}\n", scene.string());
+      print_to_stderr("report: {}\n", scene.string());
       write_compare_report(scene.string(), o);
       t.linked.push_back(row[0]);
     }

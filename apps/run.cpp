@@ -18,6 +18,7 @@
 #include "analysis/crater.hpp"
 #include "calibration/calibration.hpp"
 #include "commands.hpp"
+#include "console.hpp"
 #include "core/atomic_file.hpp"
 #include "core/counted.hpp"
 #include "core/error.hpp"
@@ -126,7 +127,7 @@ void record_mesh_digests(const std::string& out, const Geometry& geometry) {
 
 void warn_once(const std::string& text) {
   static std::set<std::string> printed;
-  if (printed.insert(text).second) fmt::print(stderr, "warning: {}\n", text);
+  if (printed.insert(text).second) print_to_stderr("warning: {}\n", text);
 }
 
 int thread_count(const SceneConfig& scene) {
@@ -152,11 +153,10 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
   const TimeStep& ts = world.time_step();
   const int threads = thread_count(scene);
   omp_set_num_threads(threads);
-  fmt::print(stderr,
-             "sandflow {}: {} ({}, mode {}), {}, k_n = {:.4g} N/m, dt = {:.3g} s, {} -> {}\n",
-             SANDFLOW_VERSION, scene.path, counted(scene.total_grains(), "grain"),
-             mode_name(scene.simulation.mode), counted(frames, "frame"), world.scene().material.k_n,
-             ts.dt, counted(threads, "thread"), out);
+  print_to_stderr("sandflow {}: {} ({}, mode {}), {}, k_n = {:.4g} N/m, dt = {:.3g} s, {} -> {}\n",
+                  SANDFLOW_VERSION, scene.path, counted(scene.total_grains(), "grain"),
+                  mode_name(scene.simulation.mode), counted(frames, "frame"),
+                  world.scene().material.k_n, ts.dt, counted(threads, "thread"), out);
 
   RunResult res;
   // a resumable run: checkpoints carry the hash of its scene; a resumed one starts from one
@@ -532,7 +532,7 @@ int run_resumable(Started& run, RunResult& res, const std::string& resume_with,
     const StopSignals signals;
     res = run_scene(run.scene, run.out, label, control);
   } catch (const RunInterrupted& e) {
-    fmt::print(stderr, "\ninterrupted at frame {}; resume with: {}\n", e.frame, resume_with);
+    print_to_stderr("\ninterrupted at frame {}; resume with: {}\n", e.frame, resume_with);
     return 128 + e.signal;
   } catch (const SimulationError& e) {
     throw SimulationError(fmt::format("{}\n  reproduce it from {}: {}", e.what(),
@@ -570,8 +570,8 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
     return summary.is_object() && summary.contains("frames") && summary.contains("state_hash");
   }();
   if (finished && !reload_finished && o.frames == 0) {
-    fmt::print(stderr, "{}: this run is finished (its summary.json is written); nothing to resume\n",
-               dir);
+    print_to_stderr("{}: this run is finished (its summary.json is written); nothing to resume\n",
+                    dir);
     run.done = true;
     return run;
   }
@@ -598,14 +598,14 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
     for (int f = 1; f <= frame; ++f)
       if (!fs::exists(frame_path(dir, f), ec)) missing.push_back(f);
     if (!missing.empty())
-      fmt::print(stderr,
-                 "warning: {}: {} of its {} before the checkpoint {} missing from frames/ ({}): "
-                 "the run goes on from frame {} and cannot write {} again\n",
-                 dir, missing.size(), counted(frame, "frame"), missing.size() == 1 ? "is" : "are",
-                 missing.size() == 1
-                     ? fmt::format("frame {}", missing.front())
-                     : fmt::format("the first {}, the last {}", missing.front(), missing.back()),
-                 frame + 1, missing.size() == 1 ? "it" : "them");
+      print_to_stderr(
+          "warning: {}: {} of its {} before the checkpoint {} missing from frames/ ({}): "
+          "the run goes on from frame {} and cannot write {} again\n",
+          dir, missing.size(), counted(frame, "frame"), missing.size() == 1 ? "is" : "are",
+          missing.size() == 1
+              ? fmt::format("frame {}", missing.front())
+              : fmt::format("the first {}, the last {}", missing.front(), missing.back()),
+          frame + 1, missing.size() == 1 ? "it" : "them");
   }
   if (o.frames > 0) {
     // another last frame: the run goes on from its checkpoint, so not one before it. The summary
@@ -621,18 +621,18 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
     record["run_to_frame"] = o.frames;
     write_file_atomic((fs::path(dir) / "run.json").string(), record.dump(2) + "\n");
     run.scene.output.frames = o.frames;
-    fmt::print(stderr, "{}: running on to frame {}\n", dir, o.frames);
+    print_to_stderr("{}: running on to frame {}\n", dir, o.frames);
   }
   // (for this sitting only: run.json keeps the run's own)
   if (o.checkpoint_every >= 0) record["checkpoint_every"] = o.checkpoint_every;
   run.record = record;
   if (finished && run.checkpoint && o.frames == 0)
-    fmt::print(stderr, "{} is finished: reading it back from its checkpoint at frame {}\n", dir,
-               frame);
+    print_to_stderr("{} is finished: reading it back from its checkpoint at frame {}\n", dir,
+                    frame);
   else if (run.checkpoint)
-    fmt::print(stderr, "resuming {} from its checkpoint at frame {}\n", dir, frame);
+    print_to_stderr("resuming {} from its checkpoint at frame {}\n", dir, frame);
   else
-    fmt::print(stderr, "{} has no checkpoint yet: running it again from the start\n", dir);
+    print_to_stderr("{} has no checkpoint yet: running it again from the start\n", dir);
   return run;
 }
 
@@ -738,10 +738,10 @@ int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
     try {
       run = start_new(n, text);
     } catch (const CalibrationInterrupted& e) {
-      fmt::print(stderr,
-                 "\ninterrupted while measuring the material's angles: nothing measured was "
-                 "kept; resume with: {}\n",
-                 resume_with);
+      print_to_stderr(
+          "\ninterrupted while measuring the material's angles: nothing measured was "
+          "kept; resume with: {}\n",
+          resume_with);
       return 128 + e.signal;
     }
     if (run_to > 0) {  // as if started, then run on to run_to
@@ -763,9 +763,9 @@ int run_command(const RunOptions& o) {
     run = o.resume.empty() ? start_new(o, read_scene_file(o.scene)) : start_resumed(o);
   } catch (const CalibrationInterrupted& e) {
     // (before run.json: the folder holds an empty frames/, which the same command takes as empty)
-    fmt::print(stderr,
-               "\ninterrupted while measuring the material's angles, before the run's first "
-               "frame: nothing measured was kept; the same command starts it again\n");
+    print_to_stderr(
+        "\ninterrupted while measuring the material's angles, before the run's first "
+        "frame: nothing measured was kept; the same command starts it again\n");
     return 128 + e.signal;
   }
   if (run.done) return 0;
@@ -810,17 +810,17 @@ int run_command(const RunOptions& o) {
     const auto delayed = e["delayed_by_occupied_slots"].get<std::int64_t>();
     const auto left_out = e.value("left_out_by_occupied_slots", std::int64_t{0});
     if (left_out > 0)
-      fmt::print(stderr,
-                 "warning: emitter '{}' left out {} of its {}: grains already there took "
-                 "their places (start it earlier, or move it)\n",
-                 e["name"].get<std::string>(), left_out, counted(count, "grain"));
+      print_to_stderr(
+          "warning: emitter '{}' left out {} of its {}: grains already there took "
+          "their places (start it earlier, or move it)\n",
+          e["name"].get<std::string>(), left_out, counted(count, "grain"));
     if (emitted + left_out < count)
-      fmt::print(stderr, "warning: emitter '{}' emitted {} of its {} before the run ended{}\n",
-                 e["name"].get<std::string>(), emitted, counted(count, "grain"),
-                 delayed > 0 ? fmt::format("; {} waited for slots taken by grains below it: "
-                                           "raise it or add frames",
-                                           counted(delayed, "grain"))
-                             : std::string(": add frames"));
+      print_to_stderr("warning: emitter '{}' emitted {} of its {} before the run ended{}\n",
+                      e["name"].get<std::string>(), emitted, counted(count, "grain"),
+                      delayed > 0 ? fmt::format("; {} waited for slots taken by grains below it: "
+                                                "raise it or add frames",
+                                                counted(delayed, "grain"))
+                                  : std::string(": add frames"));
     else if (delayed > 0)
       fmt::print("emitter          '{}': {} waited for a free slot\n", e["name"].get<std::string>(),
                  counted(delayed, "grain"));
@@ -851,11 +851,11 @@ int run_command(const RunOptions& o) {
   // (the overlap guard sees a grain crossing a surface, not one that went right through a mesh's
   // particles: counted here on the final state, which is written either way)
   if (const auto inside = s["grains_inside_geometry"].get<std::int64_t>(); inside > 0) {
-    fmt::print(stderr,
-               "error: {}: {} ended inside the geometry: they went through its surface "
-               "(the contacts are too soft for the impacts, or the time step too long); the run "
-               "is written, but its result is not to be trusted\n",
-               scene.path, counted(inside, "grain"));
+    print_to_stderr(
+        "error: {}: {} ended inside the geometry: they went through its surface "
+        "(the contacts are too soft for the impacts, or the time step too long); the run "
+        "is written, but its result is not to be trusted\n",
+        scene.path, counted(inside, "grain"));
     return 3;
   }
   return 0;

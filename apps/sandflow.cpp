@@ -10,6 +10,7 @@
 #include <csignal>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -18,6 +19,7 @@
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
+#include "console.hpp"
 #include "core/error.hpp"
 #include "core/threads.hpp"
 #include "sim/world.hpp"
@@ -152,17 +154,20 @@ void add_scene_options(CLI::App* cmd, RunOptions& o, const std::string& out_help
 }  // namespace
 
 int main(int argc, char** argv) {
+  open_missing_standard_streams();
   // A file past the size limit (ulimit -f) then fails to write with EFBIG, reported as an
-  // OutputError like a full disk, instead of the signal killing the process mid-write.
+  // OutputError like a full disk, instead of the signal killing the process mid-write; a log
+  // whose reader went away (`| head`) loses its lines, not the run.
   std::signal(SIGXFSZ, SIG_IGN);
+  std::signal(SIGPIPE, SIG_IGN);
   // libgomp takes OMP_NUM_THREADS as it stands for every parallel region until told otherwise,
   // and one it cannot start crashes it (100,000 on this machine: a segmentation fault while the
   // World was built): every region gets the count sandflow takes, at most kMaxThreads
   if (const char* omp = std::getenv("OMP_NUM_THREADS"); omp && *omp && !omp_num_threads())
-    fmt::print(stderr,
-               "warning: OMP_NUM_THREADS={} is not a count of threads from 1 to {}: ignored, "
-               "{} (one per core) unless --threads or simulation.threads says\n",
-               omp, kMaxThreads, omp_get_num_procs());
+    print_to_stderr(
+        "warning: OMP_NUM_THREADS={} is not a count of threads from 1 to {}: ignored, "
+        "{} (one per core) unless --threads or simulation.threads says\n",
+        omp, kMaxThreads, omp_get_num_procs());
   omp_set_num_threads(default_thread_count());
   // a region gets the threads the job says it runs on (OMP_DYNAMIC=true let libgomp give fewer)
   omp_set_dynamic(0);
@@ -393,32 +398,47 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? 0 : 2;
   }
-  try {
-    if (*run) return run_command(ro);
-    if (*compare) {
-      cmp.plan_given = compare->count("--seeds") > 0 || compare->count("--equal-stiffness") > 0;
-      return compare_command(co, cmp);
+  const int status = [&] {
+    try {
+      if (*run) return run_command(ro);
+      if (*compare) {
+        cmp.plan_given = compare->count("--seeds") > 0 || compare->count("--equal-stiffness") > 0;
+        return compare_command(co, cmp);
+      }
+      if (*table1) return table1_command(to, command_line(argc, argv));
+      if (*measure) return measure_command(dir);
+      if (*calibrate) return calibrate_command(cao, calibration_trials, calibrate_again, rig);
+      if (*render) return render_command(rdo);
+      if (*report) {
+        rpo.render = !no_render;
+        return report_command(rpo);
+      }
+    } catch (const InputError& e) {
+      print_to_stderr("error: {}\n", e.what());
+      return 2;
+    } catch (const SimulationError& e) {
+      print_to_stderr("\nsimulation stopped: {}\n", e.what());
+      return 3;
+    } catch (const OutputError& e) {
+      print_to_stderr("\noutput error: {}\n", e.what());
+      return 4;
+    } catch (const std::exception& e) {
+      print_to_stderr("\nerror: {}\n", e.what());
+      return 1;
     }
-    if (*table1) return table1_command(to, command_line(argc, argv));
-    if (*measure) return measure_command(dir);
-    if (*calibrate) return calibrate_command(cao, calibration_trials, calibrate_again, rig);
-    if (*render) return render_command(rdo);
-    if (*report) {
-      rpo.render = !no_render;
-      return report_command(rpo);
-    }
-  } catch (const InputError& e) {
-    fmt::print(stderr, "error: {}\n", e.what());
-    return 2;
-  } catch (const SimulationError& e) {
-    fmt::print(stderr, "\nsimulation stopped: {}\n", e.what());
-    return 3;
-  } catch (const OutputError& e) {
-    fmt::print(stderr, "\noutput error: {}\n", e.what());
-    return 4;
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "\nerror: {}\n", e.what());
-    return 1;
+    return 0;
+  }();
+  // stdout is buffered in a pipe or a file: what did not reach it is known only now (a full disk,
+  // a reader gone), and a command whose summary is lost has not done what it was asked
+  const bool flushed = std::fflush(stdout) == 0;
+  const int flush_error = errno;
+  if (!flushed || std::ferror(stdout) != 0) {
+    print_to_stderr(
+        "\noutput error: the standard output could not be written{}: the command's printed "
+        "summary is lost{}\n",
+        flushed ? "" : fmt::format(" ({})", std::strerror(flush_error)),
+        *run || *compare || *table1 ? "; its files are written" : "");
+    return status != 0 ? status : 4;
   }
-  return 0;
+  return status;
 }

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include "console.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/threads.hpp"
@@ -186,7 +187,7 @@ int table1_command(const Table1Options& o, const std::string& command) {
     if (!fs::exists(file, ec)) {
       row.status = RowStatus::Missing;
       row.message = fmt::format("no scene file {}", file.string());
-      fmt::print(stderr, "table1: {}{} skipped: {}\n", label, p.name, row.message);
+      print_to_stderr("table1: {}{} skipped: {}\n", label, p.name, row.message);
       write_table();
       continue;
     }
@@ -195,23 +196,23 @@ int table1_command(const Table1Options& o, const std::string& command) {
       row.status = RowStatus::Failed;
       row.message = e.what();
       if (status == 0) status = code;
-      fmt::print(stderr, "\ntable1: {}{} failed: {}\n", label, p.name, row.message);
+      print_to_stderr("\ntable1: {}{} failed: {}\n", label, p.name, row.message);
     };
     try {
       const RunOptions ro = table1_run(o, p, file);
       const SceneConfig full = load_scene(ro.scene);
       if (full.total_grains() != p.total)
-        fmt::print(stderr,
-                   "warning: {} has {} grains, the paper's {} {}; table1 scales the paper's "
-                   "count\n",
-                   ro.scene, full.total_grains(), p.title, p.total);
+        print_to_stderr(
+            "warning: {} has {} grains, the paper's {} {}; table1 scales the paper's "
+            "count\n",
+            ro.scene, full.total_grains(), p.title, p.total);
       const SceneConfig scene = load_for_run(ro);
       if (scene.total_grains() != total)
         throw InputError(
             fmt::format("{}: cannot scale its emitters to {} grains", ro.scene, total));
       ctx.threads = thread_count(scene);
-      fmt::print(stderr, "table1: {}{}, {} grains ({} x {}), surface flow then plain DEM -> {}\n",
-                 label, p.name, total, o.scale, p.total, (fs::path(o.out) / p.name).string());
+      print_to_stderr("table1: {}{}, {} grains ({} x {}), surface flow then plain DEM -> {}\n",
+                      label, p.name, total, o.scale, p.total, (fs::path(o.out) / p.name).string());
       Comparison c;
       const std::string resume_with = table1_resume_command(command, o.resume);
       CompareOptions co;
@@ -243,7 +244,7 @@ int table1_command(const Table1Options& o, const std::string& command) {
       o.out);
   if (status != 0) return status;
   if (ran == 0) {
-    fmt::print(stderr, "error: no scene ran: none of the scene files was found in {}\n", scene_dir);
+    print_to_stderr("error: no scene ran: none of the scene files was found in {}\n", scene_dir);
     return 2;
   }
   return 0;

@@ -623,3 +623,29 @@ TEST(HostileInputs, ADamagedSummaryIsWrittenAgainByTheResume) {
 }
 
 }  // namespace
+
+// The standard streams are the user's to point anywhere: a log on a full disk loses its lines,
+// not the run (fmt threw at the first progress line, and again from main's error handler: abort,
+// 134); a summary that cannot be printed is an output error (it was lost with status 0); a stream
+// that was closed is /dev/null (else the next file opened takes its descriptor).
+TEST(HostileInputs, StandardStreamsOnAFullDiskOrClosedLoseLinesNotTheRun) {
+  Sandbox box;
+  const fs::path scene = box.write("s.toml", sandflow_test::tiny_block_scene(20));
+  const auto run_with = [&](const std::string& name, const std::string& streams) {
+    const fs::path out = box.dir / name;
+    const std::string command = "timeout 30 " + std::string(SANDFLOW_BINARY) + " run " +
+                                scene.string() + " --frames 2 --out " + out.string() + " " +
+                                streams;
+    const int rc = std::system(command.c_str());
+    EXPECT_TRUE(fs::exists(out / "summary.json")) << name;
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128 + WTERMSIG(rc);
+  };
+  EXPECT_EQ(run_with("stderr-full", "> /dev/null 2> /dev/full"), 0);
+  const fs::path log = box.dir / "stdout-full.log";
+  EXPECT_EQ(run_with("stdout-full", "> /dev/full 2> " + log.string()), 4);
+  EXPECT_TRUE(has(sandflow_test::read_text(log),
+                  "output error: the standard output could not be written (No space left on "
+                  "device): the command's printed summary is lost; its files are written"))
+      << sandflow_test::read_text(log);
+  EXPECT_EQ(run_with("closed", ">&- 2>&- <&-"), 0);
+}
