@@ -325,9 +325,9 @@ std::string read_file(const std::string& path) {
   FilePtr fp(std::fopen(path.c_str(), "rb"));
   if (!fp) throw InputError(path + ": cannot open: " + system_reason(errno));
   std::string data;
-  char buf[1 << 16];
+  std::vector<char> buf(1 << 16);  // (off the stack: it may be 64 KiB in all)
   std::size_t got = 0;
-  while ((got = std::fread(buf, 1, sizeof buf, fp.get())) > 0) data.append(buf, got);
+  while ((got = std::fread(buf.data(), 1, buf.size(), fp.get())) > 0) data.append(buf.data(), got);
   if (std::ferror(fp.get())) throw InputError(path + ": read error: " + system_reason(errno));
   return data;
 }

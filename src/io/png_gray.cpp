@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <string_view>
+#include <vector>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -217,16 +218,16 @@ GrayImage read_gray_png(const std::string& path, int max_side) {
   if (!fp) throw InputError(path + ": cannot open the image: " + system_reason(errno));
   // read in pieces up to the limit: a pipe or a device has no size to check first
   std::string bytes;
-  char buf[1 << 16];
+  std::vector<char> buf(1 << 16);  // (off the stack: it may be 64 KiB in all)
   std::size_t got = 0;
-  while ((got = std::fread(buf, 1, sizeof buf, fp)) > 0) {
+  while ((got = std::fread(buf.data(), 1, buf.size(), fp)) > 0) {
     if (bytes.size() + got > kMaxPngFileBytes) {
       std::fclose(fp);
       throw InputError(path + ": byte " + std::to_string(kMaxPngFileBytes) +
                        ": the file is larger than the limit of " +
                        std::to_string(kMaxPngFileBytes) + " bytes for a heightmap PNG");
     }
-    bytes.append(buf, got);
+    bytes.append(buf.data(), got);
   }
   const int read_errno = std::ferror(fp) ? (errno ? errno : EIO) : 0;
   std::fclose(fp);

@@ -5,6 +5,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
@@ -42,12 +44,12 @@ std::string read_scene_file(const std::string& path) {
   if (!in) throw InputError(path + ": cannot open scene file");
   // read in pieces up to the limit: a pipe or a device has no size to check first
   std::string text;
-  char buf[1 << 16];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+  std::vector<char> buf(1 << 16);  // (not on the stack: the command's whole stack may be 64 KiB)
+  while (in.read(buf.data(), static_cast<std::streamsize>(buf.size())) || in.gcount() > 0) {
     if (text.size() + static_cast<std::size_t>(in.gcount()) > kMaxSceneBytes)
       throw InputError(path + ": the scene file is larger than the limit of " +
                        std::to_string(kMaxSceneBytes) + " bytes");
-    text.append(buf, static_cast<std::size_t>(in.gcount()));
+    text.append(buf.data(), static_cast<std::size_t>(in.gcount()));
   }
   if (in.bad()) throw InputError(path + ": cannot read scene file");
   return text;

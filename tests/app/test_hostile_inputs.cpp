@@ -18,6 +18,7 @@
 #include "core/error.hpp"
 #include "io/folder_lock.hpp"
 #include "sim/world.hpp"
+#include "support/sanitizers.hpp"
 
 namespace fs = std::filesystem;
 
@@ -648,4 +649,24 @@ TEST(HostileInputs, StandardStreamsOnAFullDiskOrClosedLoseLinesNotTheRun) {
                   "device): the command's printed summary is lost; its files are written"))
       << sandflow_test::read_text(log);
   EXPECT_EQ(run_with("closed", ">&- 2>&- <&-"), 0);
+}
+
+// A small stack is the user's too: the readers of scenes, frames and images kept a 64 KiB buffer
+// on it (a segmentation fault reading the scene under `ulimit -s 64`).
+TEST(HostileInputs, ASmallStackRunsTheSceneAndReadsItsFrames) {
+  if (sandflow::test::kSanitizers) GTEST_SKIP() << "AddressSanitizer needs more stack than 64 KiB";
+  Sandbox box;
+  const fs::path scene = box.write("s.toml", sandflow_test::tiny_block_scene(20));
+  const fs::path out = box.dir / "run";
+  std::string log;
+  ASSERT_EQ(bounded("run " + scene.string() + " --frames 2 --out " + out.string(), &log), 0);
+  for (const std::string& command :
+       {"run " + scene.string() + " --frames 2 --force --out " + out.string(),
+        "measure " + out.string()}) {
+    const int rc = std::system(("ulimit -s 64 && timeout 30 " + std::string(SANDFLOW_BINARY) + " " +
+                                command + " > " + (box.dir / "log").string() + " 2>&1")
+                                   .c_str());
+    EXPECT_EQ(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, 0) << command << "\n"
+                                                       << sandflow_test::read_text(box.dir / "log");
+  }
 }
