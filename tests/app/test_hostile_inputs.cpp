@@ -670,3 +670,39 @@ TEST(HostileInputs, ASmallStackRunsTheSceneAndReadsItsFrames) {
                                                        << sandflow_test::read_text(box.dir / "log");
   }
 }
+
+// What the environment holds changes how a run goes (its threads, where its cache is), never what
+// it computes: under each setting a user or a job scheduler may leave, the run ends as it does
+// without it, to the bit (OMP_NUM_THREADS=100000 crashed libgomp). The threads a run reports are
+// checked in Cli.ThreadsComeFrom..., a small stack in ASmallStackRunsTheSceneAndReadsItsFrames.
+TEST(HostileInputs, TheEnvironmentChangesNoResult) {
+  Sandbox box;
+  const fs::path scene = box.write("s.toml", sandflow_test::tiny_block_scene(40));
+  const auto state_hash = [&](const std::string& name, const std::string& prefix) {
+    const fs::path out = box.dir / name;
+    const std::string command = prefix + " timeout 60 " + std::string(SANDFLOW_BINARY) + " run " +
+                                scene.string() + " --frames 3 --out " + out.string() + " > " +
+                                (box.dir / "log").string() + " 2>&1";
+    const int rc = std::system(command.c_str());
+    EXPECT_EQ(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, 0) << prefix << "\n"
+                                                       << sandflow_test::read_text(box.dir / "log");
+    const std::string summary = sandflow_test::read_text(out / "summary.json");
+    const std::size_t at = summary.find("\"state_hash\"");
+    return at == std::string::npos ? std::string("(none)") : summary.substr(at, 32);
+  };
+  const std::string want = state_hash("plain", "");
+  ASSERT_NE(want, "(none)");
+  const std::vector<std::string> settings = {
+      "OMP_DYNAMIC=true",          "OMP_THREAD_LIMIT=1",
+      "OMP_NUM_THREADS=2,2",       "OMP_NUM_THREADS=",
+      "OMP_NUM_THREADS=100000",    "OMP_NUM_THREADS=1",
+      "OMP_STACKSIZE=abc",         "OMP_PROC_BIND=true",
+      "OMP_SCHEDULE=static,1",     "OMP_WAIT_POLICY=active",
+      "GOMP_SPINCOUNT=0",          "OMP_MAX_ACTIVE_LEVELS=0",
+      "OMP_CANCELLATION=true",     "TMPDIR=/nonexistent",
+      "-u HOME -u XDG_CACHE_HOME", "LC_ALL=C.UTF-8 TZ=Pacific/Kiritimati"};
+  for (std::size_t k = 0; k < settings.size(); ++k)
+    EXPECT_EQ(state_hash("env" + std::to_string(k), "env " + settings[k]), want) << settings[k];
+  for (const std::string shell : {"umask 077 &&", "ulimit -n 20 &&"})
+    EXPECT_EQ(state_hash("shell" + std::to_string(shell.size()), shell), want) << shell;
+}
