@@ -5,6 +5,7 @@
 // 3 the simulation blew up, 4 an output could not be written, 128 + N stopped by signal N.
 #include <omp.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <csignal>
@@ -16,6 +17,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
@@ -169,6 +171,14 @@ int main(int argc, char** argv) {
         "{} (one per core) unless --threads or simulation.threads says\n",
         omp, kMaxThreads, omp_get_num_procs());
   omp_set_num_threads(default_thread_count());
+  if (const std::vector<long> cpus = absent_affinity_cpus(); !cpus.empty())
+    print_to_stderr(
+        "warning: GOMP_CPU_AFFINITY={} names {} this machine does not have online ({}{}): OpenMP "
+        "stops the program (\"Thread creation failed\") if it binds a thread to one; unset it or "
+        "name only CPUs of {}\n",
+        std::getenv("GOMP_CPU_AFFINITY"), cpus.size() == 1 ? "a CPU" : "CPUs",
+        fmt::join(cpus.begin(), cpus.begin() + std::min<std::size_t>(cpus.size(), 8), ", "),
+        cpus.size() > 8 ? ", ..." : "", online_cpus());
   // a region gets the threads the job says it runs on (OMP_DYNAMIC=true let libgomp give fewer)
   omp_set_dynamic(0);
   CLI::App app{

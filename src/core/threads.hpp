@@ -5,7 +5,10 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <fstream>
 #include <optional>
+#include <string>
+#include <vector>
 
 namespace sandflow {
 
@@ -33,6 +36,67 @@ inline std::optional<int> omp_num_threads() {
 /// last omp_set_num_threads() changes.
 inline int default_thread_count() {
   return std::min(omp_num_threads().value_or(omp_get_num_procs()), omp_get_thread_limit());
+}
+
+/// The CPUs of a list as libgomp and Linux write them ("0 3-5 8-14:2", spaces or commas), in
+/// order; nothing when it cannot be read.
+inline std::optional<std::vector<long>> cpu_list(const std::string& text) {
+  std::vector<long> cpus;
+  const char* p = text.c_str();
+  const auto number = [&](long& n) {
+    char* end = nullptr;
+    n = std::strtol(p, &end, 10);
+    const bool ok = end != p && n >= 0 && n < (1 << 20);
+    p = end;
+    return ok;
+  };
+  while (*p) {
+    if (*p == ' ' || *p == ',' || *p == '\t' || *p == '\n') {
+      ++p;
+      continue;
+    }
+    long first = 0, last = 0, stride = 1;
+    if (!number(first)) return std::nullopt;
+    last = first;
+    if (*p == '-') {
+      ++p;
+      if (!number(last) || last < first) return std::nullopt;
+      if (*p == ':') {
+        ++p;
+        if (!number(stride) || stride < 1) return std::nullopt;
+      }
+    }
+    for (long cpu = first; cpu <= last; cpu += stride) cpus.push_back(cpu);
+  }
+  return cpus;
+}
+
+/// The CPUs online on this machine as Linux lists them ("0-1"; "" when it cannot be read).
+inline std::string online_cpus() {
+  std::ifstream in("/sys/devices/system/cpu/online");
+  std::string text;
+  std::getline(in, text);
+  return text;
+}
+
+/// The CPUs in GOMP_CPU_AFFINITY that are not online here; empty when the variable is unset or
+/// cannot be read (libgomp then ignores it and says so). libgomp binds its k-th thread to the
+/// k-th CPU listed and stops the program ("Thread creation failed: Invalid argument", exit status
+/// 1) when there is no such CPU (a job script written for a larger machine): the caller warns
+/// first, naming the variable. (Not the process's affinity mask: libgomp has already bound the
+/// main thread to the first CPU listed when main() begins.)
+inline std::vector<long> absent_affinity_cpus() {
+  const char* text = std::getenv("GOMP_CPU_AFFINITY");
+  if (!text) return {};
+  const std::optional<std::vector<long>> listed = cpu_list(text);
+  const std::optional<std::vector<long>> online = cpu_list(online_cpus());
+  if (!listed || !online || online->empty()) return {};
+  std::vector<long> absent;
+  for (const long cpu : *listed)
+    if (std::find(online->begin(), online->end(), cpu) == online->end() &&
+        std::find(absent.begin(), absent.end(), cpu) == absent.end())
+      absent.push_back(cpu);
+  return absent;
 }
 
 }  // namespace sandflow

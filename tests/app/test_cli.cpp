@@ -97,6 +97,15 @@ TEST(Cli, ThreadsComeFromTheOptionTheSceneOmpNumThreadsThenTheCores) {
   EXPECT_NE(log.find("warning: OMP_THREAD_LIMIT=2 holds this job to 2 threads (3 asked)"),
             std::string::npos)
       << log;
+  // a CPU list for a larger machine: libgomp stops the program when it binds a thread there
+  // ("Thread creation failed: Invalid argument", status 1), so the variable is named first
+  sandflow("run " + scene.string() + " --mode dem --frames 1 --threads 2 --force --out " +
+               (box.dir / "bound").string(),
+           &log, "env GOMP_CPU_AFFINITY='0 100000'");
+  EXPECT_NE(log.find("warning: GOMP_CPU_AFFINITY=0 100000 names a CPU this machine does not have "
+                     "online (100000)"),
+            std::string::npos)
+      << log;
   for (const std::string args : {" --threads 4097", " --set simulation.threads=4097"}) {
     EXPECT_EQ(
         sandflow("run " + scene.string() + " --out " + (box.dir / "big").string() + args, &log), 2)
