@@ -6,6 +6,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <csignal>
@@ -87,39 +88,62 @@ CLI::Validator real_in(double lo, double hi) {
       fmt::format("NUMBER in [{:g} - {:g}]", lo, hi));
 }
 
-/// CLI11 words an option given twice as a count of values ("--grains: At Most 1 required but
-/// received 2"), which sends the user looking for a missing value; say that it was repeated.
-/// And it lists words it did not expect last first ("not expected: dem --mode" for `compare
-/// --mode dem`), without the command: name them in order, and where to find what it takes.
+/// CLI11's own words, said as sandflow says its errors: with the command, what was meant, and
+/// where to read what it takes. CLI11 words an option given twice as a count of values
+/// ("--grains: At Most 1 required but received 2"), an option without its value as "1 required
+/// INT missing", a missing argument by its variable ("dir is required"), and lists words it did
+/// not expect last first ("not expected: dem --mode" for `compare --mode dem`).
 std::string failure_message(const CLI::App* app, const CLI::Error& e) {
   std::string what = e.what();
-  const std::string repeated = ": At Most 1 required but received ";
-  if (const std::size_t at = what.find(repeated); at != std::string::npos)
-    what = fmt::format("{} is given {} times: give it once", what.substr(0, at),
-                       what.substr(at + repeated.size()));
-  if (app && app->get_subcommands().empty() && !app->remaining().empty()) {
-    std::vector<std::string> names;
+  std::vector<std::string> names;
+  if (app)
     for (const CLI::App* c : app->get_subcommands([](const CLI::App*) { return true; }))
       names.push_back(c->get_name());
-    return fmt::format(
-        "{}: sandflow has no such command; its commands: {}\nRun sandflow --help "
-        "for what each does.\n",
-        app->remaining().front(), fmt::join(names, ", "));
+  const CLI::App* command =
+      app && !app->get_subcommands().empty() ? app->get_subcommands().front() : nullptr;
+  if (!command) {
+    const bool word = app && !app->remaining().empty();
+    const std::string given = word ? app->remaining().front() : "";
+    return fmt::format("{}; its commands: {}\nRun sandflow --help for what each does.\n",
+                       !word ? std::string("sandflow: give a command")
+                       : given.rfind("-", 0) == 0
+                           ? fmt::format("sandflow takes no option {} before its command", given)
+                           : fmt::format("{}: sandflow has no such command", given),
+                       fmt::join(names, ", "));
   }
-  // (a command was read: words before any went to the branch above)
-  if (dynamic_cast<const CLI::ExtrasError*>(&e) && app && !app->get_subcommands().empty()) {
-    const CLI::App* command = app->get_subcommands().front();
+  const std::string name = "sandflow " + command->get_name();
+  const std::string repeated = ": At Most 1 required but received ";
+  const std::string needs_value = ": 1 required ";
+  if (const std::size_t at = what.find(repeated); at != std::string::npos) {
+    what = fmt::format("{} is given {} times: give it once", what.substr(0, at),
+                       what.substr(at + repeated.size()));
+  } else if (const std::size_t v = what.find(needs_value);
+             v != std::string::npos && what.size() > 8 &&
+             what.compare(what.size() - 8, 8, " missing") == 0) {
+    what =
+        fmt::format("{} needs a value ({})", what.substr(0, v),
+                    what.substr(v + needs_value.size(), what.size() - 8 - v - needs_value.size()));
+  } else if (dynamic_cast<const CLI::RequiredError*>(&e)) {
+    for (const CLI::Option* o : command->get_options())
+      if (o->get_positional() && what == o->get_name() + " is required") {
+        std::string var = o->get_name();
+        for (char& c : var) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+        what = fmt::format("`{}` needs its {}: {}", name, var, o->get_description());
+      }
+  } else if (dynamic_cast<const CLI::ExtrasError*>(&e)) {
     const std::vector<std::string> extra = command->remaining();
-    if (!extra.empty()) {
-      const std::string name = "sandflow " + command->get_name();
+    if (extra.empty() && !app->remaining().empty())  // (before the command)
+      what = fmt::format(
+          "sandflow takes no option {} before its command; options go after it, "
+          "as `{} --help` lists them",
+          app->remaining().front(), name);
+    else if (!extra.empty())
       what = fmt::format(
           "`{}` takes no {} {}{}", name, extra.front().rfind("-", 0) == 0 ? "option" : "argument",
           extra.front(),
           extra.size() > 1 ? fmt::format(" (given: {})", fmt::join(extra, " ")) : std::string());
-      return fmt::format("{}\nRun {} --help for what it takes.\n", what, name);
-    }
   }
-  return fmt::format("{}\nRun with --help for more information.\n", what);
+  return fmt::format("{}\nRun {} --help for what it takes.\n", what, name);
 }
 
 // frame counts and numbers: 1 to the most frames a run may have (sim/world.hpp)

@@ -476,6 +476,22 @@ TEST(HostileInputs, AVdbVoxelTooFineAndFrameCountsOutOfRangeAreRefused) {
   EXPECT_TRUE(has(log, "Run sandflow compare --help for what it takes.")) << log;
   EXPECT_EQ(bounded("frobnicate", &log), 2) << log;
   EXPECT_TRUE(has(log, "frobnicate: sandflow has no such command; its commands: run,")) << log;
+  // CLI11's other words, said with the command and what was meant: no command ("A subcommand is
+  // required"), an option before it, a missing argument ("dir is required"), an option without
+  // its value ("1 required INT:INT in [1 - 100] missing"); each says where to read more
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {"", "sandflow: give a command; its commands: run,"},
+           {"--fast run",
+            "sandflow takes no option --fast before its command; options go after it"},
+           {"render", "`sandflow render` needs its DIR: run folder"},
+           {"calibrate",
+            "`sandflow calibrate` needs its SCENE: scene file (TOML)\nRun sandflow "
+            "calibrate --help for what it takes."},
+           {"compare " + scene.string() + " --seeds",
+            "--seeds needs a value (INT:INT in [1 - 100])\nRun sandflow compare --help"}}) {
+    EXPECT_EQ(bounded(args, &log), 2) << args << log;
+    EXPECT_TRUE(has(log, message)) << args << log;
+  }
   // an empty output folder is not the default one
   EXPECT_EQ(bounded("run " + scene.string() + " --frames 1 --out ''", &log), 2) << log;
   EXPECT_TRUE(has(log, "--out: an empty folder name")) << log;
