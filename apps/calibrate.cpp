@@ -147,7 +147,17 @@ nlohmann::json measure_calibration(const SceneConfig& scene, int trials, const R
   if (tty) print_to_stderr("\n");
   nlohmann::json j = calibration_json(c);
   j["threads"] = omp_get_max_threads();  // (what `seconds` took; the angles do not depend on it)
-  if (keep) store_calibration(j);
+  if (keep) {
+    try {
+      store_calibration(j);
+    } catch (const OutputError& e) {
+      // minutes of measuring: the angles are said, so that a scene can take them by hand
+      throw OutputError(fmt::format(
+          "{}\n  the angles measured are not kept: theta0 {:.2f} deg, theta_max {:.2f} deg (a "
+          "scene takes them as [surface] repose_angle and max_angle)",
+          e.what(), j["theta0_deg"].get<double>(), j["theta_max_deg"].get<double>()));
+    }
+  }
   return j;
 }
 
@@ -184,7 +194,15 @@ nlohmann::json resolve_surface_angles(SceneConfig& scene) {
         warn_once(fmt::format("{}: the angles measured now serve this run and are not kept; {}",
                               problem, kCacheAdvice));
       omp_set_num_threads(thread_count(scene));  // the run's --threads: its share of the cores
-      j = measure_calibration(scene, kDefaultCalibrationTrials, {}, problem.empty());
+      j = measure_calibration(scene, kDefaultCalibrationTrials, {}, false);
+      if (problem.empty()) {
+        try {
+          store_calibration(*j);
+        } catch (const OutputError& e) {  // (a disk that filled while it measured)
+          warn_once(fmt::format("{}: the angles measured now serve this run and are not kept; {}",
+                                e.what(), kCacheAdvice));
+        }
+      }
     }
     const Real theta0 = deg_to_rad((*j)["theta0_deg"].get<double>());
     const Real theta_max = deg_to_rad((*j)["theta_max_deg"].get<double>());

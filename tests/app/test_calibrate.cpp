@@ -130,6 +130,29 @@ TEST(Calibrate, ACacheFolderThatCannotBeMadeStopsItBeforeItMeasures) {
   EXPECT_EQ(out.find("calibrating:"), std::string::npos) << out;  // nothing measured
 }
 
+// A cache file that cannot be written after minutes of measuring (a disk that filled meanwhile;
+// here `ulimit -f 0`) loses the measurement, but says the angles, which a scene can take by hand.
+TEST(Calibrate, AnglesMeasuredButNotKeptAreSaid) {
+  Sandbox box;
+  const fs::path scene = box.write("t.toml", sand_scene());
+  const fs::path log = box.dir / "log";
+  // (the output through a pipe: the limit would stop its writes to a file too)
+  const std::string command = "(ulimit -f 0; env -u SANDFLOW_NO_CALIBRATION SANDFLOW_CACHE_DIR=" +
+                              (box.dir / "cache").string() + " timeout 300 " + SANDFLOW_BINARY +
+                              " calibrate " + scene.string() +
+                              " --trials 1 --base 7 --tilt-rate 6; echo status $?) 2>&1 | cat > " +
+                              log.string();
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const std::string out = read_text(log);
+  EXPECT_NE(out.find("status 4"), std::string::npos) << out;
+  EXPECT_NE(out.find("cannot write: File too large\n  the angles measured are not kept: theta0 "),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find(" deg (a scene takes them as [surface] repose_angle and max_angle)"),
+            std::string::npos)
+      << out;
+}
+
 /// Starts `args` with the calibration on, waits until it measures, then sends SIGINT; its exit
 /// status, with its output in `out`.
 int interrupt_while_calibrating(const Sandbox& box, const std::string& args, std::string& out) {
