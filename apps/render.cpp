@@ -41,6 +41,7 @@
 #include "io/run_output.hpp"
 #include "progress.hpp"
 #include "scene/scene_loader.hpp"
+#include "stop_signals.hpp"
 
 namespace fs = std::filesystem;
 
@@ -463,6 +464,19 @@ std::string comma_list(const std::vector<std::string>& v) {
   return s;
 }
 
+/// Frame numbers in ascending order as ranges: "1-3, 5".
+std::string frame_ranges(const std::vector<int>& frames) {
+  std::vector<std::string> parts;
+  for (std::size_t k = 0; k < frames.size();) {
+    std::size_t e = k;
+    while (e + 1 < frames.size() && frames[e + 1] == frames[e] + 1) ++e;
+    parts.push_back(e == k ? std::to_string(frames[k])
+                           : fmt::format("{}-{}", frames[k], frames[e]));
+    k = e + 1;
+  }
+  return comma_list(parts);
+}
+
 }  // namespace
 
 int render_command(const RenderOptions& o) {
@@ -594,7 +608,13 @@ int render_command(const RenderOptions& o) {
   std::mutex progress_mutex;
   int done = 0;
   Progress progress(fmt::format("render {} ({}, {} at once)", o.dir, o.quality, jobs), n);
+  // SIGINT or SIGTERM: the pictures being made are stopped and their files removed, no new one
+  // starts, and what is done stays
+  const StopSignals signals;
+  const StopChildren stop_children;
+  std::vector<char> rendered(tasks.size(), 0);
   parallel_tasks(n, jobs, [&](int i) {
+    if (g_stop_signal != 0) return;
     const Task& t = tasks[i];
     const std::string stem = (fs::path(t.run) / "render" / fmt::format("{:04d}", t.frame)).string();
     std::size_t grains = 0;
@@ -609,6 +629,7 @@ int render_command(const RenderOptions& o) {
       write_pov_scene(stem + ".pov", f, scene.geometry, frame_opt, scene.meshes, &sf);
       render_pov(stem + ".pov", stem + ".png", o.width, o.height, threads_each,
                  o.quality == "final");
+      rendered[static_cast<std::size_t>(i)] = 1;
       if (!o.keep_pov) {
         std::error_code ec;
         fs::remove(stem + ".pov", ec);
@@ -616,10 +637,35 @@ int render_command(const RenderOptions& o) {
       }
     } catch (const std::exception& e) {
       errors[i] = e.what();
+      if (g_stop_signal != 0 && !o.keep_pov) {  // (stopped, not failed: nothing to look into)
+        std::error_code ec;
+        fs::remove(stem + ".pov", ec);
+        fs::remove(stem + ".png.log", ec);
+      }
     }
     const std::lock_guard<std::mutex> lock(progress_mutex);
     progress.update(++done, static_cast<std::int64_t>(grains));
   });
+
+  if (g_stop_signal != 0) {
+    std::vector<int> done_frames;
+    for (int i = 0; i < n; ++i)
+      if (rendered[static_cast<std::size_t>(i)]) done_frames.push_back(tasks[i].frame);
+    for (int i = 0; i < n; ++i)
+      if (rendered[static_cast<std::size_t>(i)])
+        fmt::print("{}\n",
+                   (fs::path(tasks[i].run) / "render" / fmt::format("{:04d}.png", tasks[i].frame))
+                       .string());
+    print_to_stderr(
+        "\ninterrupted: {} of {} pictures made (in place){}; the others are not "
+        "made{}\n",
+        done_frames.size(), n,
+        done_frames.empty() || runs.size() > 1
+            ? std::string()
+            : fmt::format(", frames {}", frame_ranges(done_frames)),
+        o.movie ? ", nor the movie" : "");
+    return 128 + g_stop_signal;
+  }
 
   // What was made, on stdout; what failed, in the error.
   std::vector<int> failed;
@@ -689,7 +735,16 @@ int render_command(const RenderOptions& o) {
         o.width % 2 || o.height % 2 ? " -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2'" : "", m.mp4));
   }
   for (const Movie& m : movies) {
-    encode_movie(m.folders, m.span.first, m.span.last - m.span.first + 1, fps, m.mp4);
+    try {
+      encode_movie(m.folders, m.span.first, m.span.last - m.span.first + 1, fps, m.mp4);
+    } catch (const OutputError&) {
+      if (g_stop_signal == 0) throw;
+      print_to_stderr(
+          "\ninterrupted while {} was encoded: it is not made (the pictures are in "
+          "place)\n",
+          m.mp4);
+      return 128 + g_stop_signal;
+    }
     if (!o.keep_pov) {
       std::error_code ec;
       fs::remove(m.mp4 + ".log", ec);

@@ -6,6 +6,8 @@
 
 #include <csignal>
 
+#include "core/process.hpp"
+
 namespace sandflow {
 
 /// The signal that asked the command to stop, 0 while none has.
@@ -38,6 +40,16 @@ class StopSignals {
  private:
   struct sigaction old_int_ {
   }, old_term_{};
+};
+
+/// For its lifetime, the programs the command starts (POV-Ray, ffmpeg) are ended when a stop
+/// signal comes (core/process.hpp), not waited for nor left running.
+class StopChildren {
+ public:
+  StopChildren() { stop_children_on(&g_stop_signal); }
+  ~StopChildren() { stop_children_on(nullptr); }
+  StopChildren(const StopChildren&) = delete;
+  StopChildren& operator=(const StopChildren&) = delete;
 };
 
 }  // namespace sandflow

@@ -2,12 +2,16 @@
 
 #include "core/process.hpp"
 
+#include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <string_view>
+#include <thread>
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -15,6 +19,14 @@
 #include "core/error.hpp"
 
 namespace sandflow {
+
+namespace {
+std::atomic<const volatile std::sig_atomic_t*> g_stop_flag{nullptr};
+}  // namespace
+
+void stop_children_on(const volatile std::sig_atomic_t* flag) {
+  g_stop_flag = flag;
+}
 
 std::string find_program(const std::string& name) {
   const char* path_env = std::getenv("PATH");
@@ -58,8 +70,23 @@ std::string run_logged(std::vector<std::string> args, const std::string& work_di
   }
   ::close(log_fd);
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  bool stopped = false;
+  if (const volatile std::sig_atomic_t* stop = g_stop_flag.load()) {
+    // polled: a signal handler's flag cannot wake a blocking wait (SA_RESTART restarts it)
+    for (;;) {
+      const pid_t got = ::waitpid(pid, &status, WNOHANG);
+      if (got == pid || (got < 0 && errno != EINTR)) break;
+      if (*stop != 0 && !stopped) {
+        ::kill(pid, SIGTERM);
+        stopped = true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  } else {
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
   }
+  if (stopped) return what + " was stopped";
   if (WIFSIGNALED(status))
     return what + " was killed by signal " + std::to_string(WTERMSIG(status));
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)

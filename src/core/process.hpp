@@ -7,10 +7,16 @@
 // descriptor) is made before the fork, and the child only redirects, changes folder and execs.
 #pragma once
 
+#include <csignal>
 #include <string>
 #include <vector>
 
 namespace sandflow {
+
+/// From now on, run_logged ends its child (SIGTERM) once `*flag` is non-zero, and returns
+/// "WHAT was stopped": a command asked to stop (SIGINT, SIGTERM: the flag its handler sets) does
+/// not wait for a render of minutes, nor leave it running. nullptr: wait for the child's end.
+void stop_children_on(const volatile std::sig_atomic_t* flag);
 
 /// Full path of the executable `name` found on PATH, or "" when there is none.
 std::string find_program(const std::string& name);

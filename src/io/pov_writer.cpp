@@ -742,8 +742,14 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
                                    "-P",
                                    "Output_Alpha=off"};
   if (threads > 0) args.push_back("+WT" + std::to_string(threads));
-  run_into_file(args, work_dir.string(), log_path, "povray", partial, png_path,
-                "povray wrote no image");
+  try {
+    run_into_file(args, work_dir.string(), log_path, "povray", partial, png_path,
+                  "povray wrote no image");
+  } catch (const OutputError&) {
+    // POV-Ray's record of a render that did not end (NAME.partial.pov-state)
+    fs::remove(fs::path(partial).replace_extension(".pov-state"), ec);
+    throw;
+  }
 }
 
 void encode_movie(const std::vector<std::string>& folders, int first, int count, double fps,

@@ -2,13 +2,17 @@
 // options it refuses, a frame that fails, a comparison folder, and the movie.
 #include <gtest/gtest.h>
 #include <png.h>
+#include <signal.h>
+#include <sys/wait.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <fmt/format.h>
@@ -243,6 +247,36 @@ TEST_F(Render, AFailedFrameIsNamedAndTheOthersAreKept) {
   EXPECT_NE(log.find("0002.png"), std::string::npos) << log;
   EXPECT_TRUE(fs::is_regular_file(run / "render" / "0001.png"));
   EXPECT_TRUE(fs::is_regular_file(run / "render" / "0003.png"));
+}
+
+// SIGTERM (or Ctrl-C) while rendering: the povray at work is ended, not left running to write
+// into the folder after sandflow has gone (it was, with its .pov, log and partial picture), no
+// other starts, and the pictures made stay, named.
+TEST_F(Render, AStopSignalEndsThePovrayAtWorkAndKeepsThePicturesMade) {
+  const fs::path run = tiny_run(12);  // (about 0.3 s a picture here: 3 s of work to stop)
+  const fs::path log = box.dir / "render.log";
+  const pid_t pid = sandflow_test::spawn(
+      "render " + run.string() + " --frames all --width 640 --height 360 --jobs 1", log);
+  while (!fs::exists(run / "render" / "0001.png") && waitpid(pid, nullptr, WNOHANG) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  kill(pid, SIGTERM);
+  EXPECT_EQ(sandflow_test::wait_for(pid), 143) << read_text(log);
+  EXPECT_NE(read_text(log).find("interrupted: "), std::string::npos) << read_text(log);
+  EXPECT_NE(read_text(log).find(" pictures made (in place), frames 1"), std::string::npos)
+      << read_text(log);
+  // nothing but whole pictures, and nothing more comes
+  const auto names = [&] {
+    std::vector<std::string> v;
+    for (const auto& e : fs::directory_iterator(run / "render"))
+      v.push_back(e.path().filename().string());
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  const std::vector<std::string> at_exit = names();
+  for (const std::string& name : at_exit)
+    EXPECT_TRUE(name.size() == 8 && name.substr(4) == ".png") << name;
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  EXPECT_EQ(names(), at_exit);
 }
 
 TEST_F(Render, SceneCameraIsUsed) {
