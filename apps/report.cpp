@@ -32,6 +32,11 @@ bool file_exists(const fs::path& p) {
   return fs::exists(p, ec);
 }
 
+/// Thrown when a stop signal ended a render: the report stops there, unwritten.
+struct RenderStopped {
+  int status;  ///< 128 + the signal
+};
+
 /// Renders frame `frame` of `dir` unless its PNG exists; "" on success, else why it failed.
 std::string render_missing(const std::string& dir, int frame, int width, int height) {
   if (file_exists(render_path(dir, frame))) return "";
@@ -42,7 +47,7 @@ std::string render_missing(const std::string& dir, int frame, int width, int hei
     r.width = width;
     r.height = height;
     r.frame = frame;
-    render_command(r);
+    if (const int status = render_command(r); status != 0) throw RenderStopped{status};
   } catch (const std::exception& e) {
     print_to_stderr("warning: report: {} frame {} could not be rendered: {}\n", dir, frame,
                     e.what());
@@ -199,8 +204,16 @@ std::string write_report(const ReportOptions& o) {
 }
 
 int report_command(const ReportOptions& o) {
-  const std::string path = write_report(o);
-  fmt::print("report           {}\n", path);
+  try {
+    const std::string path = write_report(o);
+    fmt::print("report           {}\n", path);
+  } catch (const RenderStopped& e) {
+    print_to_stderr(
+        "\ninterrupted while rendering: the report is not written (the pictures made "
+        "are kept: `sandflow report {}` goes on from them)\n",
+        shell_quote(o.dir));
+    return e.status;
+  }
   return 0;
 }
 

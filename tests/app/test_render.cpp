@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <thread>
 #include <vector>
@@ -277,6 +278,24 @@ TEST_F(Render, AStopSignalEndsThePovrayAtWorkAndKeepsThePicturesMade) {
     EXPECT_TRUE(name.size() == 8 && name.substr(4) == ".png") << name;
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   EXPECT_EQ(names(), at_exit);
+}
+
+// The report renders its contact sheet with render's machinery: a stop signal there stops the
+// report too (each render's handler was installed anew, so the report rendered on past Ctrl-C).
+TEST_F(Render, AStopSignalWhileTheReportRendersStopsTheReport) {
+  const fs::path run = tiny_run(12);
+  fs::remove(run / "report.html");  // (the run's own page, without pictures)
+  const fs::path log = box.dir / "report.log";
+  const pid_t pid = sandflow_test::spawn("report " + run.string() + " --contact-sheet 12", log);
+  while (!fs::exists(run / "render" / "0001.png") && waitpid(pid, nullptr, WNOHANG) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  kill(pid, SIGINT);
+  EXPECT_EQ(sandflow_test::wait_for(pid), 130) << read_text(log);
+  EXPECT_NE(read_text(log).find("interrupted while rendering: the report is not written"),
+            std::string::npos)
+      << read_text(log);
+  EXPECT_FALSE(fs::exists(run / "report.html"));
+  EXPECT_LT(std::distance(fs::directory_iterator(run / "render"), fs::directory_iterator{}), 12);
 }
 
 TEST_F(Render, SceneCameraIsUsed) {
