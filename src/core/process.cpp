@@ -60,6 +60,9 @@ std::string run_logged(std::vector<std::string> args, const std::string& work_di
     return "cannot start " + what + ": " + system_reason(err);
   }
   if (pid == 0) {
+    // (an ignored signal stays ignored across exec: the child gets the defaults sandflow changed)
+    ::signal(SIGPIPE, SIG_DFL);
+    ::signal(SIGXFSZ, SIG_DFL);
     const int null_fd = ::open("/dev/null", O_RDONLY);
     if (null_fd >= 0) ::dup2(null_fd, 0);
     ::dup2(log_fd, 1);
