@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "io/pov_writer.hpp"
 #include "report/report.hpp"
+#include "stop_signals.hpp"
 
 namespace fs = std::filesystem;
 
@@ -39,6 +40,7 @@ struct RenderStopped {
 
 /// Renders frame `frame` of `dir` unless its PNG exists; "" on success, else why it failed.
 std::string render_missing(const std::string& dir, int frame, int width, int height) {
+  if (g_stop_signal != 0) throw RenderStopped{128 + g_stop_signal};
   if (file_exists(render_path(dir, frame))) return "";
   print_to_stderr("report: rendering {} frame {} at {}x{}\n", dir, frame, width, height);
   try {
@@ -204,6 +206,7 @@ std::string write_report(const ReportOptions& o) {
 }
 
 int report_command(const ReportOptions& o) {
+  const StopSignals signals;  // (for the whole report: between two pictures too)
   try {
     const std::string path = write_report(o);
     fmt::print("report           {}\n", path);

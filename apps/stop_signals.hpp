@@ -18,10 +18,13 @@ extern "C" inline void on_stop_signal(int sig) {
 }
 
 /// For its lifetime, SIGINT and SIGTERM set g_stop_signal; a second one has the default effect
-/// (SA_RESETHAND): the process ends at once.
+/// (SA_RESETHAND): the process ends at once. Nested (report around each render), only the
+/// outermost installs and clears: an inner one that cleared the flag, or left a gap between two,
+/// lost the signal (the report rendered on, or died of it without a word).
 class StopSignals {
  public:
   StopSignals() {
+    if (depth()++ > 0) return;
     g_stop_signal = 0;
     struct sigaction sa {};
     sa.sa_handler = on_stop_signal;
@@ -31,6 +34,7 @@ class StopSignals {
     sigaction(SIGTERM, &sa, &old_term_);
   }
   ~StopSignals() {
+    if (--depth() > 0) return;
     sigaction(SIGINT, &old_int_, nullptr);
     sigaction(SIGTERM, &old_term_, nullptr);
   }
@@ -38,8 +42,12 @@ class StopSignals {
   StopSignals& operator=(const StopSignals&) = delete;
 
  private:
-  struct sigaction old_int_ {
-  }, old_term_{};
+  static int& depth() {
+    static int d = 0;  // (made and ended on the main thread only)
+    return d;
+  }
+  struct sigaction old_int_ {};
+  struct sigaction old_term_ {};
 };
 
 /// For its lifetime, the programs the command starts (POV-Ray, ffmpeg) are ended when a stop
