@@ -7,9 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <optional>
-#include <sstream>
 #include <string>
 
 #include <fmt/format.h>
@@ -21,6 +19,7 @@
 #include "core/counted.hpp"
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
+#include "core/read_file.hpp"
 #include "progress.hpp"
 #include "scene/scene_loader.hpp"
 #include "stop_signals.hpp"
@@ -42,11 +41,13 @@ std::string calibration_cache_dir() {
 std::optional<nlohmann::json> cached_calibration(const std::string& key) {
   const fs::path path = fs::path(calibration_cache_dir()) / (key + ".json");
   refuse_special_file(path.string(), "calibration cache file");
-  std::ifstream in(path);
-  if (!in) return std::nullopt;
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const nlohmann::json j = nlohmann::json::parse(ss.str(), nullptr, false);
+  std::string text;
+  try {
+    text = read_whole_file(path.string(), "calibration cache file", kAnyFileSize);
+  } catch (const InputError&) {
+    return std::nullopt;  // not there or unreadable: measured again, as a damaged one is
+  }
+  const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
   // a damaged or foreign file is measured again, not trusted
   if (j.is_discarded() || !j.is_object() || j.value("key", "") != key ||
       !j.contains("theta0_deg") || !j["theta0_deg"].is_number() || !j.contains("theta_max_deg") ||

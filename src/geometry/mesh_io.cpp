@@ -8,11 +8,9 @@
 #include <cctype>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
-#include <system_error>
 
-#include "core/file_kind.hpp"
+#include "core/read_file.hpp"
 #include "geometry/mesh_io_detail.hpp"
 
 namespace sandflow {
@@ -21,24 +19,6 @@ namespace {
 
 using mesh_io::fail_file;
 using mesh_io::lower_case;
-
-std::string read_file_bytes(const std::string& path) {
-  if (const std::string kind = special_file_kind(path); !kind.empty())
-    fail_file(path, "the mesh file is " + kind + ", not a file");
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec) fail_file(path, "cannot read the mesh file (" + ec.message() + ")");
-  if (size > kMaxMeshFileBytes)
-    fail_file(path, "file is " + std::to_string(size) + " bytes, more than the limit of " +
-                        std::to_string(kMaxMeshFileBytes));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail_file(path, "cannot open the mesh file");
-  std::string bytes(static_cast<std::size_t>(size), '\0');
-  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  if (in.gcount() != static_cast<std::streamsize>(bytes.size()))
-    fail_file(path, "could not read the whole file");
-  return bytes;
-}
 
 bool is_gzip(const std::string& bytes) {
   return bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0x1f &&
@@ -165,7 +145,7 @@ TriangleMesh decode_mesh(std::string bytes, const std::string& name) {
 
 TriangleMesh load_mesh(const std::string& path) {
   mesh_format_from_name(path);  // an unknown format is refused before the file is read
-  return decode_mesh(read_file_bytes(path), path);
+  return decode_mesh(read_whole_file(path, "mesh file", kMaxMeshFileBytes), path);
 }
 
 }  // namespace sandflow

@@ -3,21 +3,18 @@
 #include <algorithm>
 #include <bit>
 #include <cctype>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <limits>
-#include <memory>
 #include <stdexcept>
 #include <string_view>
 #include <vector>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/read_file.hpp"
 #include "geometry/ply_format.hpp"
 #include "io/export_formats.hpp"
 
@@ -29,13 +26,6 @@ namespace {
 
 constexpr std::size_t kRecordBytes = 7 * 4 + 4 + 1;  // 7 floats, a uint, a uchar
 constexpr std::size_t kChunkGrains = 1 << 16;        // bounded buffer for any frame size
-
-struct FileCloser {
-  void operator()(std::FILE* fp) const {
-    if (fp) std::fclose(fp);
-  }
-};
-using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 
 template <class T>
 void put_le(unsigned char*& p, T v) {
@@ -315,23 +305,6 @@ class Reader {
   const std::string& name_;
 };
 
-std::string read_file(const std::string& path) {
-  // a device or a pipe has no end to read up to (/dev/zero): frames are regular files
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
-    throw InputError(path + ": cannot read: not a regular file");
-  errno = 0;
-  FilePtr fp(std::fopen(path.c_str(), "rb"));
-  if (!fp) throw InputError(path + ": cannot open: " + system_reason(errno));
-  std::string data;
-  std::vector<char> buf(1 << 16);  // (off the stack: it may be 64 KiB in all)
-  std::size_t got = 0;
-  while ((got = std::fread(buf.data(), 1, buf.size(), fp.get())) > 0) data.append(buf.data(), got);
-  if (std::ferror(fp.get())) throw InputError(path + ": read error: " + system_reason(errno));
-  return data;
-}
-
 }  // namespace
 
 void write_ply(const std::string& path, const FrameData& f, UpAxis up) {
@@ -382,7 +355,7 @@ FrameData parse_frame_ply(std::string_view bytes, const std::string& name) {
 }
 
 FrameData read_ply(const std::string& path) {
-  return parse_frame_ply(read_file(path), path);
+  return parse_frame_ply(read_whole_file(path, "frame", kAnyFileSize), path);
 }
 
 }  // namespace sandflow

@@ -16,7 +16,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
-#include "core/file_kind.hpp"
+#include "core/read_file.hpp"
 
 namespace sandflow {
 namespace {
@@ -212,27 +212,7 @@ GrayImage parse_gray_png(std::string_view bytes, const std::string& name, int ma
 }
 
 GrayImage read_gray_png(const std::string& path, int max_side) {
-  refuse_special_file(path, "image");
-  errno = 0;
-  std::FILE* fp = std::fopen(path.c_str(), "rb");
-  if (!fp) throw InputError(path + ": cannot open the image: " + system_reason(errno));
-  // read in pieces up to the limit: a pipe or a device has no size to check first
-  std::string bytes;
-  std::vector<char> buf(1 << 16);  // (off the stack: it may be 64 KiB in all)
-  std::size_t got = 0;
-  while ((got = std::fread(buf.data(), 1, buf.size(), fp)) > 0) {
-    if (bytes.size() + got > kMaxPngFileBytes) {
-      std::fclose(fp);
-      throw InputError(path + ": byte " + std::to_string(kMaxPngFileBytes) +
-                       ": the file is larger than the limit of " +
-                       std::to_string(kMaxPngFileBytes) + " bytes for a heightmap PNG");
-    }
-    bytes.append(buf.data(), got);
-  }
-  const int read_errno = std::ferror(fp) ? (errno ? errno : EIO) : 0;
-  std::fclose(fp);
-  if (read_errno) throw InputError(path + ": cannot read the image: " + system_reason(read_errno));
-  return parse_gray_png(bytes, path, max_side);
+  return parse_gray_png(read_whole_file(path, "image", kMaxPngFileBytes), path, max_side);
 }
 
 void write_gray_png(const std::string& path, int width, int height,

@@ -7,7 +7,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iterator>
 #include <stdexcept>
 #include <string_view>
@@ -18,6 +17,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/process.hpp"
+#include "core/read_file.hpp"
 #include "io/sand_colour.hpp"
 
 namespace sandflow {
@@ -407,8 +407,12 @@ void write_grains(std::string& s, const FrameData& f) {
 }
 
 std::string tail_of(const std::string& path, std::size_t max_chars) {
-  std::ifstream in(path, std::ios::binary);
-  std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::string text;
+  try {
+    text = read_whole_file(path, "log", kAnyFileSize);
+  } catch (const InputError&) {
+    return "";  // (no log to show: the caller's message stands alone)
+  }
   if (text.size() > max_chars) text = "..." + text.substr(text.size() - max_chars);
   return text;
 }

@@ -4,7 +4,6 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <sstream>
 
@@ -12,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
+#include "core/read_file.hpp"
 #include "report/html.hpp"
 #include "report/svg_plot.hpp"
 
@@ -203,13 +203,12 @@ std::string table(const std::vector<std::pair<std::string, std::string>>& rows) 
 
 /// A PNG as an <img> with a data: URI, or a note when it cannot be read.
 std::string image(const std::string& png, const std::string& alt) {
-  if (const std::string kind = special_file_kind(png); !kind.empty())
-    return note(png + ": is " + kind + ", not a picture");
-  std::ifstream in(png, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string bytes = in ? ss.str() : std::string();
-  if (bytes.empty()) return note(png + ": cannot be read");
+  std::string bytes;
+  try {
+    bytes = read_whole_file(png, "picture", kAnyFileSize);
+  } catch (const InputError& e) {
+    return note(e.what());  // (gone, a folder, unreadable: the page says so and goes on)
+  }
   if (bytes.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0) return note(png + ": not a PNG picture");
   std::string size;
   if (const auto s = png_size(png)) size = fmt::format(" width=\"{}\" height=\"{}\"", s->width, s->height);
@@ -469,9 +468,7 @@ Table1ReportData load_table1_report_data(const std::string& dir) {
   Table1ReportData t;
   t.dir = dir;
   const std::string csv = (fs::path(dir) / "table1.csv").string();
-  refuse_special_file(csv, "table");
-  std::ifstream in(csv);
-  if (!in) throw InputError(fmt::format("{}: cannot read", csv));
+  std::istringstream in(read_whole_file(csv, "table", kAnyFileSize));
   std::string line;
   int line_no = 0;
   while (std::getline(in, line)) {
@@ -503,11 +500,9 @@ Table1ReportData load_table1_report_data(const std::string& dir) {
   }
   if (t.columns.empty()) throw InputError(fmt::format("{}:1: empty file; expected a header", csv));
   const fs::path md_path = fs::path(dir) / "table1.md";
-  refuse_special_file(md_path.string(), "table");
-  std::ifstream md(md_path);
-  std::stringstream ss;
-  ss << md.rdbuf();
-  t.table_md = ss.str();
+  std::error_code ec;
+  if (fs::exists(md_path, ec))
+    t.table_md = read_whole_file(md_path.string(), "table", kAnyFileSize);
   return t;
 }
 

@@ -5,12 +5,12 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 #include <fmt/format.h>
 
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
+#include "core/read_file.hpp"
 
 namespace sandflow {
 
@@ -65,12 +65,10 @@ std::vector<double> StatsTable::column(const std::string& name) const {
 }
 
 StatsTable read_stats_csv(const std::string& path) {
-  refuse_special_file(path, "statistics file");  // (a FIFO would block, /dev/zero never end)
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot read (the run folder has no statistics)", path));
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw InputError(fmt::format("{}: cannot read (the run folder has no statistics)", path));
+  const std::string text = read_whole_file(path, "statistics file", kAnyFileSize);
   StatsTable t;
   t.path = path;
 
@@ -131,12 +129,10 @@ StatsTable read_stats_csv(const std::string& path) {
 }
 
 nlohmann::json read_json_object(const std::string& path) {
-  refuse_special_file(path, "JSON file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot read", path));
+  const std::string text = read_whole_file(path, "JSON file", kAnyFileSize);
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(in);
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     // e.what() reads "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
     throw InputError(fmt::format("{}: not valid JSON: {}", path, without_library_tag(e.what())));

@@ -543,7 +543,8 @@ TEST(SceneLoader, LoadSceneReadsAFileAndNamesAMissingOne) {
     load_scene(missing);
     FAIL() << "a missing file must raise InputError";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), missing + ": cannot open scene file");
+    EXPECT_EQ(std::string(e.what()),
+              missing + ": cannot open the scene file: No such file or directory");
   }
   std::filesystem::remove_all(dir);
 }
