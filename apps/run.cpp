@@ -131,14 +131,14 @@ void warn_once(const std::string& text) {
 }
 
 int thread_count(const SceneConfig& scene) {
+  const int limit = omp_get_thread_limit();
   const int asked =
       scene.simulation.threads > 0 ? scene.simulation.threads : omp_num_threads().value_or(0);
   // (OpenMP would run the regions on fewer threads than the run says it has)
-  if (asked > omp_get_thread_limit())
-    warn_once(fmt::format("OMP_THREAD_LIMIT={} holds this job to {} ({} asked)",
-                          omp_get_thread_limit(), counted(omp_get_thread_limit(), "thread"),
-                          asked));
-  return scene.simulation.threads > 0 ? std::min(scene.simulation.threads, omp_get_thread_limit())
+  if (asked > limit)
+    warn_once(fmt::format("OMP_THREAD_LIMIT={} holds this job to {} ({} asked)", limit,
+                          counted(limit, "thread"), asked));
+  return scene.simulation.threads > 0 ? std::min(scene.simulation.threads, limit)
                                       : default_thread_count();
 }
 
