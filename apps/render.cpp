@@ -656,14 +656,15 @@ int render_command(const RenderOptions& o) {
         fmt::print("{}\n",
                    (fs::path(tasks[i].run) / "render" / fmt::format("{:04d}.png", tasks[i].frame))
                        .string());
-    print_to_stderr(
-        "\ninterrupted: {} of {} pictures made (in place){}; the others are not "
-        "made{}\n",
-        done_frames.size(), n,
-        done_frames.empty() || runs.size() > 1
-            ? std::string()
-            : fmt::format(", frames {}", frame_ranges(done_frames)),
-        o.movie ? ", nor the movie" : "");
+    if (signals.outermost())
+      print_to_stderr(
+          "\ninterrupted: {} of {} pictures made (in place){}; the others are not "
+          "made{}\n",
+          done_frames.size(), n,
+          done_frames.empty() || runs.size() > 1
+              ? std::string()
+              : fmt::format(", frames {}", frame_ranges(done_frames)),
+          o.movie ? ", nor the movie" : "");
     return 128 + g_stop_signal;
   }
 

@@ -23,8 +23,8 @@ extern "C" inline void on_stop_signal(int sig) {
 /// lost the signal (the report rendered on, or died of it without a word).
 class StopSignals {
  public:
-  StopSignals() {
-    if (depth()++ > 0) return;
+  StopSignals() : outermost_(depth()++ == 0) {
+    if (!outermost_) return;
     g_stop_signal = 0;
     struct sigaction sa {};
     sa.sa_handler = on_stop_signal;
@@ -41,11 +41,16 @@ class StopSignals {
   StopSignals(const StopSignals&) = delete;
   StopSignals& operator=(const StopSignals&) = delete;
 
+  /// Whether no other command's handlers were in place: a nested command (a render inside a
+  /// report) leaves saying that it was interrupted to the one around it.
+  bool outermost() const { return outermost_; }
+
  private:
   static int& depth() {
     static int d = 0;  // (made and ended on the main thread only)
     return d;
   }
+  bool outermost_;
   struct sigaction old_int_ {};
   struct sigaction old_term_ {};
 };
