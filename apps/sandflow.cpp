@@ -197,12 +197,12 @@ int main(int argc, char** argv) {
   omp_set_num_threads(default_thread_count());
   if (const std::vector<long> cpus = absent_affinity_cpus(); !cpus.empty())
     print_to_stderr(
-        "warning: GOMP_CPU_AFFINITY={} names {} this machine does not have online ({}{}): OpenMP "
+        "warning: GOMP_CPU_AFFINITY={} names {} this process cannot run on ({}{}): OpenMP "
         "stops the program (\"Thread creation failed\") if it binds a thread to one; unset it or "
         "name only CPUs of {}\n",
         std::getenv("GOMP_CPU_AFFINITY"), cpus.size() == 1 ? "a CPU" : "CPUs",
         fmt::join(cpus.begin(), cpus.begin() + std::min<std::size_t>(cpus.size(), 8), ", "),
-        cpus.size() > 8 ? ", ..." : "", online_cpus());
+        cpus.size() > 8 ? ", ..." : "", usable_cpus());
   // a region gets the threads the job says it runs on (OMP_DYNAMIC=true let libgomp give fewer)
   omp_set_dynamic(0);
   CLI::App app{

@@ -79,21 +79,54 @@ inline std::string online_cpus() {
   return text;
 }
 
-/// The CPUs in GOMP_CPU_AFFINITY that are not online here; empty when the variable is unset or
-/// cannot be read (libgomp then ignores it and says so). libgomp binds its k-th thread to the
-/// k-th CPU listed and stops the program ("Thread creation failed: Invalid argument", exit status
-/// 1) when there is no such CPU (a job script written for a larger machine): the caller warns
-/// first, naming the variable. (Not the process's affinity mask: libgomp has already bound the
-/// main thread to the first CPU listed when main() begins.)
+/// The CPUs the process's control group lets it run on (its cpuset: a container started with
+/// fewer CPUs than the machine has), as Linux lists them; "" when no cpuset can be read. Read from
+/// cgroup v2 (cpuset.cpus.effective) or v1 (the cpuset hierarchy's cpuset.effective_cpus), from
+/// the process's cgroup list and the cgroup file system's root (tests point both elsewhere).
+inline std::string cgroup_cpus(const std::string& cgroup_list = "/proc/self/cgroup",
+                               const std::string& root = "/sys/fs/cgroup") {
+  std::ifstream in(cgroup_list);
+  std::string line;
+  while (std::getline(in, line)) {  // "ID:CONTROLLERS:PATH", v2's line with no controllers
+    const std::size_t a = line.find(':'), b = line.find(':', a + 1);
+    if (a == std::string::npos || b == std::string::npos) continue;
+    const std::string controllers = "," + line.substr(a + 1, b - a - 1) + ",";
+    const std::string path = line.substr(b + 1);
+    std::string file;
+    if (controllers == ",,")
+      file = root + path + "/cpuset.cpus.effective";
+    else if (controllers.find(",cpuset,") != std::string::npos)
+      file = root + "/cpuset" + path + "/cpuset.effective_cpus";
+    else
+      continue;
+    std::ifstream cpus(file);
+    std::string text;
+    if (std::getline(cpus, text) && !text.empty()) return text;
+  }
+  return "";
+}
+
+/// The CPUs this process may run on: its cgroup's cpuset, else the CPUs online.
+inline std::string usable_cpus() {
+  const std::string cpuset = cgroup_cpus();
+  return cpuset.empty() ? online_cpus() : cpuset;
+}
+
+/// The CPUs in GOMP_CPU_AFFINITY that this process may not run on (usable_cpus); empty when the
+/// variable is unset or cannot be read (libgomp then ignores it and says so). libgomp binds its
+/// k-th thread to the k-th CPU listed and stops the program ("Thread creation failed: Invalid
+/// argument", exit status 1) when there is no such CPU (a job script written for a larger
+/// machine): the caller warns first, naming the variable. (Not the process's affinity mask:
+/// libgomp has already bound the main thread to the first CPU listed when main() begins.)
 inline std::vector<long> absent_affinity_cpus() {
   const char* text = std::getenv("GOMP_CPU_AFFINITY");
   if (!text) return {};
   const std::optional<std::vector<long>> listed = cpu_list(text);
-  const std::optional<std::vector<long>> online = cpu_list(online_cpus());
-  if (!listed || !online || online->empty()) return {};
+  const std::optional<std::vector<long>> usable = cpu_list(usable_cpus());
+  if (!listed || !usable || usable->empty()) return {};
   std::vector<long> absent;
   for (const long cpu : *listed)
-    if (std::find(online->begin(), online->end(), cpu) == online->end() &&
+    if (std::find(usable->begin(), usable->end(), cpu) == usable->end() &&
         std::find(absent.begin(), absent.end(), cpu) == absent.end())
       absent.push_back(cpu);
   return absent;

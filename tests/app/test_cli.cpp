@@ -102,8 +102,8 @@ TEST(Cli, ThreadsComeFromTheOptionTheSceneOmpNumThreadsThenTheCores) {
   sandflow("run " + scene.string() + " --mode dem --frames 1 --threads 2 --force --out " +
                (box.dir / "bound").string(),
            &log, "env GOMP_CPU_AFFINITY='0 100000'");
-  EXPECT_NE(log.find("warning: GOMP_CPU_AFFINITY=0 100000 names a CPU this machine does not have "
-                     "online (100000)"),
+  EXPECT_NE(log.find("warning: GOMP_CPU_AFFINITY=0 100000 names a CPU this process cannot run "
+                     "on (100000)"),
             std::string::npos)
       << log;
   for (const std::string args : {" --threads 4097", " --set simulation.threads=4097"}) {
