@@ -65,8 +65,7 @@ std::vector<double> StatsTable::column(const std::string& name) const {
 }
 
 StatsTable read_stats_csv(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec))
+  if (std::error_code missing; !std::filesystem::exists(path, missing))
     throw InputError(fmt::format("{}: cannot read (the run folder has no statistics)", path));
   const std::string text = read_whole_file(path, "statistics file", kAnyFileSize);
   StatsTable t;

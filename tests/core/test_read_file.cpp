@@ -11,21 +11,13 @@
 #include <unistd.h>
 
 #include "core/error.hpp"
+#include "support/input_error.hpp"
 #include "support/scratch.hpp"
 
 namespace sandflow {
 namespace {
 
-// The message of the InputError that `f` throws ("" when it throws none).
-template <class F>
-std::string input_error(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::input_error;
 
 TEST(ReadWholeFile, ReturnsTheBytesAsTheyAre) {
   const test::ScratchFolder box;

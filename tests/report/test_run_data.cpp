@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "io/png_gray.hpp"
 #include "report/run_data.hpp"
+#include "support/input_error.hpp"
 #include "support/scratch.hpp"
 
 using namespace sandflow;
@@ -28,16 +29,7 @@ std::string row(int frame, int n_total) {
 
 using TempDir = sandflow::test::ScratchFolder;
 
-/// The message of the InputError `f` throws ("" when it throws none).
-template <class F>
-std::string input_error(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using sandflow::test::input_error;
 
 }  // namespace
 
