@@ -752,6 +752,21 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
   } catch (const OutputError&) {
     // POV-Ray's record of a render that did not end (NAME.partial.pov-state)
     fs::remove(fs::path(partial).replace_extension(".pov-state"), ec);
+    // That record grows to about 20 bytes a pixel while POV-Ray renders (measured with POV-Ray
+    // 3.7, which cannot be told not to write it): on a full disk POV-Ray stops with status 1 and
+    // a log cut short, saying nothing of the disk, so sandflow says it.
+    const std::uintmax_t need = static_cast<std::uintmax_t>(width) * height * 24 + (1u << 20);
+    const fs::space_info space = fs::space(work_dir, ec);
+    const auto size = [](std::uintmax_t bytes) {
+      return bytes < 1'000'000 ? fmt::format("{} kB", bytes / 1000)
+                               : fmt::format("{:.3g} MB", static_cast<double>(bytes) / 1e6);
+    };
+    if (!ec && space.available < need)
+      throw OutputError(fmt::format(
+          "{}: cannot render: the disk holding {} has {} free, and POV-Ray needs about {} for a "
+          "picture of {} x {} while it renders (its state file): make room, then render again "
+          "(POV-Ray's log: {})",
+          png_path, work_dir.string(), size(space.available), size(need), width, height, log_path));
     throw;
   }
 }
