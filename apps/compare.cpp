@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -17,7 +17,7 @@
 #include "core/atomic_file.hpp"
 #include "core/counted.hpp"
 #include "core/error.hpp"
-#include "core/file_kind.hpp"
+#include "core/read_file.hpp"
 #include "io/folder_lock.hpp"
 #include "scene/scene_loader.hpp"
 #include "surface/surface_params.hpp"
@@ -121,10 +121,9 @@ CompareOptions read_plan(const std::string& out) {
             path.string(), out, e.path().filename().string()));
     return co;
   }
-  refuse_special_file(path.string(), "comparison plan");
   try {
-    std::ifstream in(path);
-    const nlohmann::json j = nlohmann::json::parse(in);
+    const nlohmann::json j =
+        nlohmann::json::parse(read_whole_file(path.string(), "comparison plan", kAnyFileSize));
     co.seeds = j.at("seeds").get<int>();
     co.equal_stiffness = j.at("equal_stiffness").get<bool>();
     co.run_to_frame = j.value("run_to_frame", 0);
@@ -143,8 +142,10 @@ CompareOptions read_plan(const std::string& out) {
 
 /// How many frames the run in `dir` has written (the rows of its stats.csv; 0 when there is none).
 int frames_written(const std::string& dir) {
-  refuse_special_file((fs::path(dir) / "stats.csv").string(), "statistics file");
-  std::ifstream in(fs::path(dir) / "stats.csv");
+  const std::optional<std::string> text =
+      read_file_if_present((fs::path(dir) / "stats.csv").string(), "statistics file", kAnyFileSize);
+  if (!text) return 0;
+  std::istringstream in(*text);
   int rows = -1;  // (the header)
   for (std::string line; std::getline(in, line);)
     if (!line.empty()) ++rows;

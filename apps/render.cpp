@@ -13,7 +13,6 @@
 #include <cctype>
 #include <charconv>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -30,8 +29,8 @@
 #include "console.hpp"
 #include "core/counted.hpp"
 #include "core/error.hpp"
-#include "core/file_kind.hpp"
 #include "core/process.hpp"
+#include "core/read_file.hpp"
 #include "core/threads.hpp"
 #include "geometry/mesh.hpp"
 #include "geometry/shapes.hpp"
@@ -149,10 +148,10 @@ struct RenderScene {
 };
 
 nlohmann::json read_summary(const std::string& run) {
-  refuse_special_file((fs::path(run) / "summary.json").string(), "summary");
-  std::ifstream in(fs::path(run) / "summary.json");
-  if (!in) return nlohmann::json();
-  auto j = nlohmann::json::parse(in, nullptr, false);
+  const std::optional<std::string> text =
+      read_file_if_present((fs::path(run) / "summary.json").string(), "summary", kAnyFileSize);
+  if (!text) return nlohmann::json();
+  auto j = nlohmann::json::parse(*text, nullptr, false);
   return j.is_discarded() || !j.is_object() ? nlohmann::json() : j;
 }
 
@@ -362,11 +361,11 @@ struct HeightImages {
 };
 
 std::optional<HeightImages> read_height_images(const std::string& run) {
-  refuse_special_file((fs::path(run) / "heightfield" / "heightfield.json").string(),
-                      "height field's record");
-  std::ifstream in(fs::path(run) / "heightfield" / "heightfield.json");
-  if (!in) return std::nullopt;
-  const auto j = nlohmann::json::parse(in, nullptr, false);
+  const std::optional<std::string> text =
+      read_file_if_present((fs::path(run) / "heightfield" / "heightfield.json").string(),
+                           "height field's record", kAnyFileSize);
+  if (!text) return std::nullopt;
+  const auto j = nlohmann::json::parse(*text, nullptr, false);
   try {
     HeightImages h;
     h.origin_x = j.at("origin").at(0).get<Real>();

@@ -3,11 +3,9 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <set>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -24,6 +22,7 @@
 #include "core/error.hpp"
 #include "core/file_kind.hpp"
 #include "core/memory.hpp"
+#include "core/read_file.hpp"
 #include "core/threads.hpp"
 #include "geometry/heightmap.hpp"
 #include "geometry/mesh.hpp"
@@ -114,10 +113,11 @@ void record_mesh_digests(const std::string& out, const Geometry& geometry) {
   const std::string path = (fs::path(out) / "run.json").string();
   nlohmann::json record;
   try {
-    std::ifstream in(path);
-    record = nlohmann::json::parse(in);
+    record = nlohmann::json::parse(read_whole_file(path, "run record", kAnyFileSize));
   } catch (const nlohmann::json::exception& e) {
     throw OutputError(fmt::format("{}: cannot be read back ({})", path, e.what()));
+  } catch (const InputError& e) {
+    throw OutputError(fmt::format("{} (the run record just written)", e.what()));
   }
   record["mesh_digests"] = mesh_digests(geometry);
   write_file_atomic(path, record.dump(2) + "\n");
@@ -402,10 +402,9 @@ RunOptions read_run_record(const std::string& dir, nlohmann::json& record, std::
                       record_path.string(), name, v.dump(), lo, hi));
     return v.get<std::int64_t>();
   };
-  refuse_special_file(record_path.string(), "run record");
   try {
-    std::ifstream in(record_path);
-    record = nlohmann::json::parse(in);
+    record =
+        nlohmann::json::parse(read_whole_file(record_path.string(), "run record", kAnyFileSize));
     text = record.at("start").at("scene_text").get<std::string>();
     r.scene = record.at("scene_file").get<std::string>();
     if (r.scene.empty() || r.scene.find('\0') != std::string::npos)
@@ -564,9 +563,11 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
   RunOptions r = read_run_record(dir, record, text);
   // finished: its summary is written whole (one edited into something else is written again)
   const bool finished = [&] {
-    refuse_special_file((fs::path(dir) / "summary.json").string(), "summary");
-    std::ifstream in(fs::path(dir) / "summary.json");
-    const nlohmann::json summary = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+    const std::optional<std::string> written =
+        read_file_if_present((fs::path(dir) / "summary.json").string(), "summary", kAnyFileSize);
+    if (!written) return false;
+    const nlohmann::json summary =
+        nlohmann::json::parse(*written, nullptr, /*allow_exceptions=*/false);
     return summary.is_object() && summary.contains("frames") && summary.contains("state_hash");
   }();
   if (finished && !reload_finished && o.frames == 0) {

@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <vector>
 
@@ -52,6 +53,15 @@ std::string read_whole_file(const std::string& path, std::string_view what, std:
     throw InputError(path + ": cannot read the " + name + ": " +
                      system_reason(errno ? errno : EIO));
   return bytes;
+}
+
+std::optional<std::string> read_file_if_present(const std::string& path, std::string_view what,
+                                                std::size_t max_bytes) {
+  std::error_code
+      ec;  // (not found only: a folder that cannot be searched is read_whole_file's to say)
+  if (std::filesystem::status(path, ec).type() == std::filesystem::file_type::not_found)
+    return std::nullopt;
+  return read_whole_file(path, what, max_bytes);
 }
 
 }  // namespace sandflow

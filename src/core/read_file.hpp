@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -22,5 +23,10 @@ inline constexpr std::size_t kAnyFileSize = std::numeric_limits<std::size_t>::ma
 /// file", "cannot open the WHAT: REASON", "the WHAT is larger than the limit of N bytes", "cannot
 /// read the WHAT: REASON".
 std::string read_whole_file(const std::string& path, std::string_view what, std::size_t max_bytes);
+
+/// read_whole_file, or nothing when `path` is not there (a file a command writes later, such as a
+/// run's summary). A link to nothing counts as not there: refuse_broken_link says otherwise.
+std::optional<std::string> read_file_if_present(const std::string& path, std::string_view what,
+                                                std::size_t max_bytes);
 
 }  // namespace sandflow

@@ -63,5 +63,18 @@ TEST(ReadWholeFile, RefusesAFileOverTheLimit) {
             path + ": the frame is larger than the limit of 1000 bytes");
 }
 
+// A file a command writes later (a run's summary) may not be there yet; anything else that is
+// wrong with it is still said.
+TEST(ReadWholeFile, AFileNotThereYetIsNothingNotAnError) {
+  const test::ScratchFolder box;
+  EXPECT_EQ(read_file_if_present(box.path("summary.json"), "summary", 100), std::nullopt);
+  EXPECT_EQ(read_file_if_present(box.write("summary.json", "{}"), "summary", 100), "{}");
+  ASSERT_EQ(::symlink("/dev/zero", box.path("zero").c_str()), 0);
+  EXPECT_EQ(input_error([&] { read_file_if_present(box.path("zero"), "summary", 100); }),
+            box.path("zero") + ": the summary is a character device, not a file");
+  EXPECT_EQ(input_error([&] { read_file_if_present(box.write("big", "12345"), "summary", 4); }),
+            box.path("big") + ": the summary is larger than the limit of 4 bytes");
+}
+
 }  // namespace
 }  // namespace sandflow
