@@ -12,6 +12,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -53,6 +54,7 @@ std::string run_logged(std::vector<std::string> args, const std::string& work_di
   errno = 0;
   const int log_fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (log_fd < 0) throw OutputError(log_path + ": cannot create: " + system_reason(errno));
+  const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0) {
     const int err = errno;
@@ -60,6 +62,11 @@ std::string run_logged(std::vector<std::string> args, const std::string& work_di
     return "cannot start " + what + ": " + system_reason(err);
   }
   if (pid == 0) {
+    // the child ends with sandflow: killed (kill -9, a second Ctrl-C), sandflow leaves no POV-Ray
+    // running on, writing pictures into a folder no one watches (checked after the call: sandflow
+    // may have died before it)
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(1);
     // (an ignored signal stays ignored across exec: the child gets the defaults sandflow changed)
     ::signal(SIGPIPE, SIG_DFL);
     ::signal(SIGXFSZ, SIG_DFL);

@@ -26,7 +26,8 @@ std::string find_program(const std::string& name);
 /// went wrong, naming the program `what`: "cannot start WHAT: REASON", "WHAT failed with exit
 /// status N" (127: it could not be executed, 126: no `work_dir`), "WHAT was killed by signal N".
 /// Throws OutputError when the log cannot be created. Safe to call from several threads at once:
-/// the log is opened close-on-exec, so a child started by another thread does not hold it.
+/// the log is opened close-on-exec, so a child started by another thread does not hold it. The
+/// child is killed if sandflow dies first (PR_SET_PDEATHSIG): none outlives it.
 std::string run_logged(std::vector<std::string> args, const std::string& work_dir,
                        const std::string& log_path, const std::string& what);
 

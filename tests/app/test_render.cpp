@@ -284,6 +284,53 @@ TEST_F(Render, AStopSignalEndsThePovrayAtWorkAndKeepsThePicturesMade) {
 
 // The report renders its contact sheet with render's machinery: a stop signal there stops the
 // report too (each render's handler was installed anew, so the report rendered on past Ctrl-C).
+// The programs a process started, by pid (from every thread's /proc/PID/task/TID/children).
+std::vector<pid_t> children_of(pid_t pid) {
+  std::vector<pid_t> out;
+  std::error_code ec;
+  for (const auto& task : fs::directory_iterator("/proc/" + std::to_string(pid) + "/task", ec)) {
+    std::ifstream in(task.path() / "children");
+    for (pid_t child = 0; in >> child;) out.push_back(child);
+  }
+  return out;
+}
+
+// Whether `pid` still runs (a zombie, killed and waiting to be reaped, does not).
+bool still_running(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat;
+  std::getline(in, stat);
+  const std::size_t paren = stat.rfind(')');
+  return paren != std::string::npos && paren + 2 < stat.size() && stat[paren + 2] != 'Z';
+}
+
+// kill -9 (or a second Ctrl-C) ends sandflow at once, with no word: the povray at work must end
+// with it, not render on into the folder with no one to clean up after it (it did).
+TEST_F(Render, KilledWhileRenderingItLeavesNoPovrayRunning) {
+  const fs::path run = tiny_run(12);
+  const fs::path log = box.dir / "render.log";
+  const pid_t pid = sandflow_test::spawn(
+      "render " + run.string() + " --frames all --width 1920 --height 1080 --jobs 1", log);
+  std::vector<pid_t> povrays;
+  for (int k = 0; k < 2000 && povrays.empty() && waitpid(pid, nullptr, WNOHANG) == 0; ++k) {
+    povrays = children_of(pid);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_FALSE(povrays.empty()) << "no povray started: " << read_text(log);
+  kill(pid, SIGKILL);
+  EXPECT_EQ(sandflow_test::wait_for(pid), 128 + SIGKILL);
+  for (const pid_t povray : povrays) {
+    bool ended = false;
+    // (it is killed at once; a picture at this size takes seconds)
+    for (int k = 0; k < 50 && !ended; ++k) {
+      ended = !still_running(povray);
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    EXPECT_TRUE(ended) << "povray " << povray << " runs on after sandflow was killed";
+    if (!ended) kill(povray, SIGKILL);
+  }
+}
+
 TEST_F(Render, AStopSignalWhileTheReportRendersStopsTheReport) {
   const fs::path run = tiny_run(12);
   fs::remove(run / "report.html");  // (the run's own page, without pictures)
