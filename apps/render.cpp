@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -34,6 +35,7 @@
 #include "core/threads.hpp"
 #include "geometry/mesh.hpp"
 #include "geometry/shapes.hpp"
+#include "io/folder_lock.hpp"
 #include "io/ply.hpp"
 #include "io/png_gray.hpp"
 #include "io/pov_writer.hpp"
@@ -593,13 +595,13 @@ int render_command(const RenderOptions& o) {
     }
   }
 
-  for (const std::string& run : runs) {
-    std::error_code ec;
-    fs::create_directories(fs::path(run) / "render", ec);
-    if (ec)
-      throw OutputError(
-          fmt::format("{}: cannot create: {}", (fs::path(run) / "render").string(), ec.message()));
-  }
+  // one render at a time in a folder: two wrote the same scene, log and partial picture names
+  // and removed each other's (the second failed every frame with an empty log)
+  std::vector<std::unique_ptr<FolderLock>> locks;
+  for (const std::string& run : runs)
+    locks.push_back(std::make_unique<FolderLock>(
+        (fs::path(run) / "render").string(),
+        FolderUse{"render", "wait for it to end or stop it, then render again"}));
 
   // Render: failures are collected, the other frames go on.
   const int n = static_cast<int>(tasks.size());

@@ -50,7 +50,7 @@ std::string lock_holder(ino_t ino) {
 
 }  // namespace
 
-FolderLock::FolderLock(const std::string& dir) {
+FolderLock::FolderLock(const std::string& dir, const FolderUse& use) {
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
     throw InputError(fmt::format("{}: the output path exists and is not a folder", dir));
@@ -73,10 +73,8 @@ FolderLock::FolderLock(const std::string& dir) {
   fd_ = -1;
   if (err != EWOULDBLOCK)
     throw OutputError(fmt::format("{}: cannot lock the output folder: {}", dir, std::strerror(err)));
-  throw InputError(fmt::format(
-      "{}: the output folder is in use by another sandflow run{}; wait for it to end, stop it, or "
-      "choose another output folder",
-      dir, holder.empty() ? "" : " (" + holder + ")"));
+  throw InputError(fmt::format("{}: the output folder is in use by another sandflow {}{}; {}", dir,
+                               use.holder, holder.empty() ? "" : " (" + holder + ")", use.advice));
 }
 
 FolderLock::~FolderLock() {

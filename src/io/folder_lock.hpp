@@ -4,8 +4,15 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 namespace sandflow {
+
+/// Who holds a locked folder, for the message that refuses the next one.
+struct FolderUse {
+  std::string_view holder = "run";  ///< "another sandflow HOLDER"
+  std::string_view advice = "wait for it to end, stop it, or choose another output folder";
+};
 
 /// Holds the lock on a folder while it lives. The lock is flock(2) on the folder itself: no file
 /// is added to the folder, and the kernel drops the lock when the holder ends, however it ends
@@ -17,7 +24,7 @@ class FolderLock {
   /// Creates `dir` (and its parents) if needed and locks it. Throws InputError when `dir` is
   /// something other than a folder, or naming the process that holds it (its pid and command
   /// line, where /proc tells them); OutputError when the folder cannot be created or opened.
-  explicit FolderLock(const std::string& dir);
+  explicit FolderLock(const std::string& dir, const FolderUse& use = {});
   ~FolderLock();
   FolderLock(const FolderLock&) = delete;
   FolderLock& operator=(const FolderLock&) = delete;

@@ -331,6 +331,31 @@ TEST_F(Render, KilledWhileRenderingItLeavesNoPovrayRunning) {
   }
 }
 
+// Two renders of one run at once wrote the same scene, log and partial picture names and removed
+// each other's: the second failed every frame with an empty log. The second is now refused, and
+// the first finishes as if alone.
+TEST_F(Render, ASecondRenderOfTheSameRunIsRefusedNotMixedIn) {
+  const fs::path run = tiny_run(3);
+  const fs::path log = box.dir / "first.log";
+  const std::string args =
+      "render " + run.string() + " --frames all --width 640 --height 360 --jobs 1";
+  const pid_t first = sandflow_test::spawn(args, log);
+  for (int k = 0; k < 2000 && children_of(first).empty() && waitpid(first, nullptr, WNOHANG) == 0;
+       ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  std::string second;
+  EXPECT_EQ(sandflow(args, &second), 2) << second;
+  EXPECT_NE(second.find(run.string() +
+                        "/render: the output folder is in use by another sandflow "
+                        "render (pid " +
+                        std::to_string(first)),
+            std::string::npos)
+      << second;
+  EXPECT_EQ(sandflow_test::wait_for(first), 0) << read_text(log);
+  for (int frame = 1; frame <= 3; ++frame)
+    EXPECT_TRUE(fs::is_regular_file(run / "render" / fmt::format("{:04d}.png", frame))) << frame;
+}
+
 TEST_F(Render, AStopSignalWhileTheReportRendersStopsTheReport) {
   const fs::path run = tiny_run(12);
   fs::remove(run / "report.html");  // (the run's own page, without pictures)
