@@ -45,6 +45,7 @@ std::string read_whole_file(const std::string& path, std::string_view what, std:
   // off the stack: a command's whole stack may be 64 KiB (`ulimit -s 64`)
   std::vector<char> piece(std::size_t{1} << 16);
   std::size_t got = 0;
+  errno = 0;
   while ((got = std::fread(piece.data(), 1, piece.size(), fp.get())) > 0) {
     if (got > max_bytes - bytes.size()) too_large(path, name, max_bytes);
     bytes.append(piece.data(), got);
@@ -57,8 +58,8 @@ std::string read_whole_file(const std::string& path, std::string_view what, std:
 
 std::optional<std::string> read_file_if_present(const std::string& path, std::string_view what,
                                                 std::size_t max_bytes) {
-  std::error_code
-      ec;  // (not found only: a folder that cannot be searched is read_whole_file's to say)
+  // (not found only: a folder that cannot be searched is read_whole_file's to say)
+  std::error_code ec;
   if (std::filesystem::status(path, ec).type() == std::filesystem::file_type::not_found)
     return std::nullopt;
   return read_whole_file(path, what, max_bytes);
