@@ -86,6 +86,7 @@ std::unique_ptr<FolderLock> prepare_compare_dir(const std::string& out, bool for
           "{}: the output folder is not empty; pass --force to replace its comparison, or "
           "--resume to go on with it",
           out));
+    const auto renders = lock_render_folders(out, 3);  // (held while the runs go)
     for (const auto& e : fs::directory_iterator(out, ec)) {
       const std::string name = e.path().filename().string();
       if (name == "compare.json" || name == kPlanFile || name == "dem" || name == "surface" ||

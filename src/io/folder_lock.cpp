@@ -81,4 +81,23 @@ FolderLock::~FolderLock() {
   if (fd_ >= 0) ::close(fd_);  // (closing drops the lock)
 }
 
+std::vector<std::unique_ptr<FolderLock>> lock_render_folders(const std::string& dir, int depth) {
+  std::vector<std::unique_ptr<FolderLock>> locks;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (!e.is_directory(ec) || e.is_symlink(ec) || name == "frames" || name == "heightfield")
+      continue;
+    if (name == "render") {
+      locks.push_back(std::make_unique<FolderLock>(
+          e.path().string(),
+          FolderUse{"render", "wait for it to end or stop it, then replace the run"}));
+    } else if (depth > 1) {
+      for (auto& lock : lock_render_folders(e.path().string(), depth - 1))
+        locks.push_back(std::move(lock));
+    }
+  }
+  return locks;
+}
+
 }  // namespace sandflow

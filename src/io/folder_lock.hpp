@@ -3,8 +3,10 @@
 // holds the folder, before it touches anything there.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace sandflow {
 
@@ -32,5 +34,11 @@ class FolderLock {
  private:
   int fd_ = -1;
 };
+
+/// Locks every folder named render/ within `depth` levels under `dir` (a run's is one level down, a
+/// comparison's seed-2/dem/render three), for as long as the locks live: taken before --force
+/// removes the runs there, so that a render drawing into one is not left writing into a folder
+/// removed under it. Throws InputError naming the render that holds one.
+std::vector<std::unique_ptr<FolderLock>> lock_render_folders(const std::string& dir, int depth);
 
 }  // namespace sandflow

@@ -8,6 +8,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "io/folder_lock.hpp"
 
 namespace sandflow {
 
@@ -38,6 +39,7 @@ void prepare_output_dir(const std::string& dir, bool force) {
           "{}: the output folder is not empty; pass --force to replace its run (or --resume {} "
           "to continue it)",
           dir, dir));
+    const auto renders = lock_render_folders(dir, 1);  // (held while the run's files go)
     for (const char* name : {"frames", "stats.csv", "summary.json", "final_grains.ply", "render",
                              "report.html", "frames.pvd", "heightfield", "checkpoint.bin",
                              "run.json"})

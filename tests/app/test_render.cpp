@@ -356,6 +356,33 @@ TEST_F(Render, ASecondRenderOfTheSameRunIsRefusedNotMixedIn) {
     EXPECT_TRUE(fs::is_regular_file(run / "render" / fmt::format("{:04d}.png", frame))) << frame;
 }
 
+// `run --force` on a run that a render is drawing removed render/ under it; now it waits its turn,
+// and removes nothing.
+TEST_F(Render, ARunForcedOverARunThatRendersIsRefused) {
+  const fs::path run = tiny_run(3);
+  const pid_t render = sandflow_test::spawn(
+      "render " + run.string() + " --frames all --width 640 --height 360 --jobs 1",
+      box.dir / "render.log");
+  for (int k = 0; k < 2000 && children_of(render).empty() && waitpid(render, nullptr, WNOHANG) == 0;
+       ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  std::string log;
+  EXPECT_EQ(sandflow("run " + (box.dir / "tiny.toml").string() +
+                         " --mode dem --frames 3 --force --out " + run.string(),
+                     &log),
+            2)
+      << log;
+  EXPECT_NE(log.find(run.string() +
+                     "/render: the output folder is in use by another sandflow "
+                     "render (pid " +
+                     std::to_string(render)),
+            std::string::npos)
+      << log;
+  EXPECT_TRUE(fs::exists(run / "summary.json"));  // (nothing removed)
+  EXPECT_EQ(sandflow_test::wait_for(render), 0) << read_text(box.dir / "render.log");
+  EXPECT_TRUE(fs::is_regular_file(run / "render" / "0003.png"));
+}
+
 TEST_F(Render, AStopSignalWhileTheReportRendersStopsTheReport) {
   const fs::path run = tiny_run(12);
   fs::remove(run / "report.html");  // (the run's own page, without pictures)
