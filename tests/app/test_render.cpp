@@ -282,8 +282,6 @@ TEST_F(Render, AStopSignalEndsThePovrayAtWorkAndKeepsThePicturesMade) {
   EXPECT_EQ(names(), at_exit);
 }
 
-// The report renders its contact sheet with render's machinery: a stop signal there stops the
-// report too (each render's handler was installed anew, so the report rendered on past Ctrl-C).
 // The programs a process started, by pid (from every thread's /proc/PID/task/TID/children).
 std::vector<pid_t> children_of(pid_t pid) {
   std::vector<pid_t> out;
@@ -304,6 +302,23 @@ bool still_running(pid_t pid) {
   return paren != std::string::npos && paren + 2 < stat.size() && stat[paren + 2] != 'Z';
 }
 
+// The words that refuse a command the render `pid` stands in the way of, in `run`'s render/.
+std::string held_by_render(const fs::path& run, pid_t pid) {
+  return (run / "render").string() +
+         ": the output folder is in use by another sandflow render (pid " + std::to_string(pid);
+}
+
+// The programs `pid` has started once it has started one (nothing if it ended first or after
+// ten seconds).
+std::vector<pid_t> first_children_of(pid_t pid) {
+  std::vector<pid_t> children;
+  for (int k = 0; k < 2000 && children.empty() && waitpid(pid, nullptr, WNOHANG) == 0; ++k) {
+    children = children_of(pid);
+    if (children.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return children;
+}
+
 // kill -9 (or a second Ctrl-C) ends sandflow at once, with no word: the povray at work must end
 // with it, not render on into the folder with no one to clean up after it (it did).
 TEST_F(Render, KilledWhileRenderingItLeavesNoPovrayRunning) {
@@ -311,11 +326,7 @@ TEST_F(Render, KilledWhileRenderingItLeavesNoPovrayRunning) {
   const fs::path log = box.dir / "render.log";
   const pid_t pid = sandflow_test::spawn(
       "render " + run.string() + " --frames all --width 1920 --height 1080 --jobs 1", log);
-  std::vector<pid_t> povrays;
-  for (int k = 0; k < 2000 && povrays.empty() && waitpid(pid, nullptr, WNOHANG) == 0; ++k) {
-    povrays = children_of(pid);
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
+  const std::vector<pid_t> povrays = first_children_of(pid);
   ASSERT_FALSE(povrays.empty()) << "no povray started: " << read_text(log);
   kill(pid, SIGKILL);
   EXPECT_EQ(sandflow_test::wait_for(pid), 128 + SIGKILL);
@@ -340,17 +351,10 @@ TEST_F(Render, ASecondRenderOfTheSameRunIsRefusedNotMixedIn) {
   const std::string args =
       "render " + run.string() + " --frames all --width 640 --height 360 --jobs 1";
   const pid_t first = sandflow_test::spawn(args, log);
-  for (int k = 0; k < 2000 && children_of(first).empty() && waitpid(first, nullptr, WNOHANG) == 0;
-       ++k)
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_FALSE(first_children_of(first).empty()) << read_text(log);
   std::string second;
   EXPECT_EQ(sandflow(args, &second), 2) << second;
-  EXPECT_NE(second.find(run.string() +
-                        "/render: the output folder is in use by another sandflow "
-                        "render (pid " +
-                        std::to_string(first)),
-            std::string::npos)
-      << second;
+  EXPECT_NE(second.find(held_by_render(run, first)), std::string::npos) << second;
   EXPECT_EQ(sandflow_test::wait_for(first), 0) << read_text(log);
   for (int frame = 1; frame <= 3; ++frame)
     EXPECT_TRUE(fs::is_regular_file(run / "render" / fmt::format("{:04d}.png", frame))) << frame;
@@ -363,26 +367,21 @@ TEST_F(Render, ARunForcedOverARunThatRendersIsRefused) {
   const pid_t render = sandflow_test::spawn(
       "render " + run.string() + " --frames all --width 640 --height 360 --jobs 1",
       box.dir / "render.log");
-  for (int k = 0; k < 2000 && children_of(render).empty() && waitpid(render, nullptr, WNOHANG) == 0;
-       ++k)
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_FALSE(first_children_of(render).empty()) << read_text(box.dir / "render.log");
   std::string log;
   EXPECT_EQ(sandflow("run " + (box.dir / "tiny.toml").string() +
                          " --mode dem --frames 3 --force --out " + run.string(),
                      &log),
             2)
       << log;
-  EXPECT_NE(log.find(run.string() +
-                     "/render: the output folder is in use by another sandflow "
-                     "render (pid " +
-                     std::to_string(render)),
-            std::string::npos)
-      << log;
+  EXPECT_NE(log.find(held_by_render(run, render)), std::string::npos) << log;
   EXPECT_TRUE(fs::exists(run / "summary.json"));  // (nothing removed)
   EXPECT_EQ(sandflow_test::wait_for(render), 0) << read_text(box.dir / "render.log");
   EXPECT_TRUE(fs::is_regular_file(run / "render" / "0003.png"));
 }
 
+// The report renders its contact sheet with render's machinery: a stop signal there stops the
+// report too (each render's handler was installed anew, so the report rendered on past Ctrl-C).
 TEST_F(Render, AStopSignalWhileTheReportRendersStopsTheReport) {
   const fs::path run = tiny_run(12);
   fs::remove(run / "report.html");  // (the run's own page, without pictures)
