@@ -500,9 +500,7 @@ Table1ReportData load_table1_report_data(const std::string& dir) {
   }
   if (t.columns.empty()) throw InputError(fmt::format("{}:1: empty file; expected a header", csv));
   const fs::path md_path = fs::path(dir) / "table1.md";
-  std::error_code ec;
-  if (fs::exists(md_path, ec))
-    t.table_md = read_whole_file(md_path.string(), "table", kAnyFileSize);
+  t.table_md = read_file_if_present(md_path.string(), "table", kAnyFileSize).value_or("");
   return t;
 }
 

@@ -65,9 +65,11 @@ std::vector<double> StatsTable::column(const std::string& name) const {
 }
 
 StatsTable read_stats_csv(const std::string& path) {
-  if (std::error_code missing; !std::filesystem::exists(path, missing))
+  const std::optional<std::string> written =
+      read_file_if_present(path, "statistics file", kAnyFileSize);
+  if (!written)
     throw InputError(fmt::format("{}: cannot read (the run folder has no statistics)", path));
-  const std::string text = read_whole_file(path, "statistics file", kAnyFileSize);
+  const std::string& text = *written;
   StatsTable t;
   t.path = path;
 
