@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <iterator>
 #include <stdexcept>
 #include <string_view>
@@ -18,6 +19,7 @@
 #include "core/error.hpp"
 #include "core/process.hpp"
 #include "core/read_file.hpp"
+#include "io/media_check.hpp"
 #include "io/sand_colour.hpp"
 
 namespace sandflow {
@@ -677,6 +679,15 @@ std::string find_povray() {
 
 namespace {
 
+// Less free than this after a program failed, the disk is full: what filled it was the file the
+// program was writing (a disk that has this much left is not what stopped it).
+constexpr std::uintmax_t kNearlyFullDisk = 1u << 20;
+
+std::string byte_size(std::uintmax_t bytes) {
+  return bytes < 1'000'000 ? fmt::format("{} kB", bytes / 1000)
+                           : fmt::format("{:.3g} MB", static_cast<double>(bytes) / 1e6);
+}
+
 bool ascii_without_spaces(const std::string& name) {
   return std::all_of(name.begin(), name.end(), [](char c) {
     const auto u = static_cast<unsigned char>(c);
@@ -685,18 +696,29 @@ bool ascii_without_spaces(const std::string& name) {
 }
 
 // Runs `args` with run_logged (core/process.hpp) into the file `partial`, which becomes
-// `out_path` only when the program succeeded and wrote something: no half-made picture or movie is
-// ever left under its name. Throws OutputError with the end of the log (`nothing`: the message
-// when no file came).
+// `out_path` only when the program succeeded and `whole` (io/media_check.hpp) finds nothing wrong
+// with what it wrote: no half-made picture or movie is ever left under its name, whatever the
+// program's exit status says. Throws OutputError with the end of the log, and what the disk
+// holds when it is full (the log, on the same disk, may be cut before it says so).
 void run_into_file(const std::vector<std::string>& args, const std::string& work_dir,
-                   const std::string& log_path, const std::string& what,
-                   const std::string& partial, const std::string& out_path,
-                   const std::string& nothing) {
+                   const std::string& log_path, const std::string& what, const std::string& partial,
+                   const std::string& out_path,
+                   const std::function<std::string(const std::string&)>& whole) {
   std::error_code ec;
   std::string problem = run_logged(args, work_dir, log_path, what);
-  if (problem.empty() && (!fs::exists(partial, ec) || fs::file_size(partial, ec) == 0))
-    problem = nothing;
+  if (problem.empty()) {
+    if (!fs::exists(partial, ec))
+      problem = what + " wrote nothing";
+    else if (const std::string wrong = whole(partial); !wrong.empty())
+      problem = what + " ended as if done, but what it wrote is not whole: " + wrong;
+  }
   if (!problem.empty()) {
+    // measured before the unfinished file is removed: it is what filled the disk
+    const fs::path folder = fs::path(out_path).parent_path();
+    const fs::space_info space = fs::space(folder.empty() ? fs::path(".") : folder, ec);
+    if (!ec && space.available < kNearlyFullDisk)
+      problem += fmt::format("; the disk holding {} is full ({} free): make room, then try again",
+                             fs::absolute(folder, ec).string(), byte_size(space.available));
     fs::remove(partial, ec);
     throw OutputError(out_path + ": " + problem + "; end of " + log_path + ":\n" +
                       tail_of(log_path, 1500));
@@ -747,8 +769,7 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
                                    "Output_Alpha=off"};
   if (threads > 0) args.push_back("+WT" + std::to_string(threads));
   try {
-    run_into_file(args, work_dir.string(), log_path, "povray", partial, png_path,
-                  "povray wrote no image");
+    run_into_file(args, work_dir.string(), log_path, "povray", partial, png_path, png_problem);
   } catch (const OutputError&) {
     // POV-Ray's record of a render that did not end (NAME.partial.pov-state)
     fs::remove(fs::path(partial).replace_extension(".pov-state"), ec);
@@ -757,16 +778,13 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
     // a log cut short, saying nothing of the disk, so sandflow says it.
     const std::uintmax_t need = static_cast<std::uintmax_t>(width) * height * 24 + (1u << 20);
     const fs::space_info space = fs::space(work_dir, ec);
-    const auto size = [](std::uintmax_t bytes) {
-      return bytes < 1'000'000 ? fmt::format("{} kB", bytes / 1000)
-                               : fmt::format("{:.3g} MB", static_cast<double>(bytes) / 1e6);
-    };
     if (!ec && space.available < need)
       throw OutputError(fmt::format(
           "{}: cannot render: the disk holding {} has {} free, and POV-Ray needs about {} for a "
           "picture of {} x {} while it renders (its state file): make room, then render again "
           "(POV-Ray's log: {})",
-          png_path, work_dir.string(), size(space.available), size(need), width, height, log_path));
+          png_path, work_dir.string(), byte_size(space.available), byte_size(need), width, height,
+          log_path));
     throw;
   }
 }
@@ -814,7 +832,7 @@ void encode_movie(const std::vector<std::string>& folders, int first, int count,
         partial})
     args.push_back(a);
   run_into_file(args, fs::absolute(folders.front(), ec).string(), log_path, "ffmpeg", partial,
-                mp4_path, "ffmpeg wrote no movie");
+                mp4_path, [count](const std::string& movie) { return mp4_problem(movie, count); });
 }
 
 std::string pov_grain_lines(const FrameData& f) {

@@ -116,8 +116,9 @@ std::string find_povray();
 
 /// Renders `pov_path` to `png_path` (width x height, antialiased unless `antialias` is false,
 /// `threads` render threads; 0 or less lets POV-Ray decide). POV-Ray's output goes to
-/// png_path + ".log". The PNG appears only when the render succeeded. Throws OutputError with the
-/// end of the log when povray is missing, fails, or leaves no image.
+/// png_path + ".log". The PNG appears only when the render succeeded and the picture is whole
+/// (io/media_check.hpp). Throws OutputError with the end of the log when povray is missing, fails,
+/// or leaves no whole picture, and with what the disk holds when it is full.
 void render_pov(const std::string& pov_path, const std::string& png_path, int width, int height,
                 int threads, bool antialias = true);
 
@@ -125,8 +126,9 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
 /// gives), into the H.264 MP4 `mp4_path` (yuv420p, odd sizes padded to even) at `fps` frames per
 /// second, with ffmpeg. Several folders (pictures of the same size) are put side by side, left
 /// to right. ffmpeg's output goes to mp4_path + ".log"; the movie appears only when the encoding
-/// succeeded. Throws OutputError naming the path (with the end of the log) when ffmpeg is
-/// missing or fails.
+/// succeeded and the movie is whole, `count` frames (io/media_check.hpp: ffmpeg can exit with
+/// status 0 on a full disk). Throws OutputError naming the path (with the end of the log, and
+/// what the disk holds when it is full) when ffmpeg is missing or fails.
 void encode_movie(const std::vector<std::string>& folders, int first, int count, double fps,
                   const std::string& mp4_path);
 
