@@ -64,6 +64,7 @@ struct RenderOptions {
   bool keep_pov = false;          ///< keep each picture's .pov scene and the logs
   std::string scene;              ///< scene file; "": the one DIR/summary.json names
   std::vector<std::string> sets;  ///< --set camera.KEY=... or geometry.N.render=...
+  bool folder_held = false;       ///< the caller holds DIR/render/'s lock (a report's pictures)
 };
 
 /// `sandflow report` (report.cpp)

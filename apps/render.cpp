@@ -599,9 +599,10 @@ int render_command(const RenderOptions& o) {
   // and removed each other's (the second failed every frame with an empty log)
   std::vector<std::unique_ptr<FolderLock>> locks;
   for (const std::string& run : runs)
-    locks.push_back(std::make_unique<FolderLock>(
-        (fs::path(run) / "render").string(),
-        FolderUse{"render", "wait for it to end or stop it, then render again"}));
+    if (!o.folder_held)
+      locks.push_back(std::make_unique<FolderLock>(
+          (fs::path(run) / "render").string(),
+          FolderUse{"render", "wait for it to end or stop it, then render again"}));
 
   // Render: failures are collected, the other frames go on.
   const int n = static_cast<int>(tasks.size());

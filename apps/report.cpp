@@ -3,6 +3,8 @@
 // `sandflow render`; `run` and `compare` call write_report() without rendering, so every run
 // has a report.
 #include <filesystem>
+#include <map>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,6 +15,7 @@
 #include "console.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "io/folder_lock.hpp"
 #include "io/pov_writer.hpp"
 #include "report/report.hpp"
 #include "stop_signals.hpp"
@@ -33,15 +36,25 @@ bool file_exists(const fs::path& p) {
   return fs::exists(p, ec);
 }
 
+/// The render/ folders this report draws into, each locked from its first picture to the end of
+/// the report: a second report (or a render) of the same run is refused while this one renders,
+/// rather than finding its pictures refused one by one and writing its page without them.
+using RenderLocks = std::map<std::string, std::unique_ptr<FolderLock>>;
+
 /// Thrown when a stop signal ended a render: the report stops there, unwritten.
 struct RenderStopped {
   int status;  ///< 128 + the signal
 };
 
 /// Renders frame `frame` of `dir` unless its PNG exists; "" on success, else why it failed.
-std::string render_missing(const std::string& dir, int frame, int width, int height) {
+std::string render_missing(const std::string& dir, int frame, int width, int height,
+                           RenderLocks& locks) {
   if (g_stop_signal != 0) throw RenderStopped{128 + g_stop_signal};
   if (file_exists(render_path(dir, frame))) return "";
+  if (!locks.contains(dir))  // (refused: the report stops, exit status 2)
+    locks[dir] = std::make_unique<FolderLock>(
+        (fs::path(dir) / "render").string(),
+        FolderUse{"render", "wait for it to end or stop it, then report again"});
   print_to_stderr("report: rendering {} frame {} at {}x{}\n", dir, frame, width, height);
   try {
     RenderOptions r;
@@ -49,6 +62,7 @@ std::string render_missing(const std::string& dir, int frame, int width, int hei
     r.width = width;
     r.height = height;
     r.frame = frame;
+    r.folder_held = true;
     if (const int status = render_command(r); status != 0) throw RenderStopped{status};
   } catch (const std::exception& e) {
     print_to_stderr("warning: report: {} frame {} could not be rendered: {}\n", dir, frame,
@@ -74,7 +88,8 @@ std::string why_no_render(const std::string& dir, bool render) {
 /// The contact sheet: `n` frames evenly spaced, rendered when missing and `render`; otherwise the
 /// PNGs already in DIR/render/. `top`: the folder to name in `sandflow report TOP` (a
 /// comparison's, for its runs).
-void fill_contact_sheet(RunReportData& run, int n, bool render, const std::string& top) {
+void fill_contact_sheet(RunReportData& run, int n, bool render, const std::string& top,
+                        RenderLocks& locks) {
   if (n <= 0) {
     run.sheet_note = "No contact sheet asked for (--contact-sheet 0).";
     return;
@@ -92,7 +107,7 @@ void fill_contact_sheet(RunReportData& run, int n, bool render, const std::strin
     }
     chosen = evenly_spaced(frames, n);
     for (int f : chosen) {
-      const std::string err = render_missing(run.dir, f, kSheetWidth, kSheetHeight);
+      const std::string err = render_missing(run.dir, f, kSheetWidth, kSheetHeight, locks);
       if (!err.empty()) {
         // the same cause would fail the others too (a scene file that moved, a POV-Ray error)
         run.sheet_note = fmt::format("Frame {} could not be rendered: {}", f, err);
@@ -109,7 +124,7 @@ void fill_contact_sheet(RunReportData& run, int n, bool render, const std::strin
 }
 
 /// The two last frames, rendered at one size: that of the one already rendered, if any.
-void fill_final_frames(CompareReportData& c, bool render) {
+void fill_final_frames(CompareReportData& c, bool render, RenderLocks& locks) {
   const std::vector<int> fs_ = list_frames(c.surface.dir), fd = list_frames(c.dem.dir);
   if (fs_.empty() || fd.empty()) {
     c.final_note = "A run has no frame files (frames/NNNN.ply), so there is no final frame to show.";
@@ -121,8 +136,8 @@ void fill_final_frames(CompareReportData& c, bool render) {
   if (cannot.empty()) {
     int w = kFinalWidth, h = kFinalHeight;
     if (const auto s = png_size(file_exists(ps) ? ps : pd)) w = s->width, h = s->height;
-    std::string err = render_missing(c.surface.dir, ls, w, h);
-    if (err.empty()) err = render_missing(c.dem.dir, ld, w, h);
+    std::string err = render_missing(c.surface.dir, ls, w, h, locks);
+    if (err.empty()) err = render_missing(c.dem.dir, ld, w, h, locks);
     if (!err.empty()) c.final_note = "The final frames could not be rendered: " + err;
   } else if (!file_exists(ps) || !file_exists(pd)) {
     c.final_note = cannot;
@@ -137,15 +152,16 @@ void fill_final_frames(CompareReportData& c, bool render) {
         sd->width, sd->height, ss->width, ss->height);
 }
 
-std::string write_run_report(const std::string& dir, const ReportOptions& o) {
+std::string write_run_report(const std::string& dir, const ReportOptions& o, RenderLocks& locks) {
   RunReportData run = load_run_report_data(dir);
-  fill_contact_sheet(run, o.contact_sheet, o.render, dir);
+  fill_contact_sheet(run, o.contact_sheet, o.render, dir, locks);
   const std::string path = (fs::path(dir) / "report.html").string();
   write_file_atomic(path, run_report_html(run));
   return path;
 }
 
-std::string write_compare_report(const std::string& dir, const ReportOptions& o) {
+std::string write_compare_report(const std::string& dir, const ReportOptions& o,
+                                 RenderLocks& locks) {
   for (const auto& [folder, mode] :
        {std::pair{"surface", "surface"}, std::pair{"dem", "plain-DEM"}})
     if (const fs::path stats = fs::path(dir) / folder / "stats.csv"; !file_exists(stats))
@@ -154,9 +170,9 @@ std::string write_compare_report(const std::string& dir, const ReportOptions& o)
           "--resume {} runs it again",
           dir, mode, stats.string(), dir));
   CompareReportData c = load_compare_report_data(dir);
-  fill_final_frames(c, o.render);
-  fill_contact_sheet(c.surface, o.contact_sheet, o.render, dir);
-  fill_contact_sheet(c.dem, o.contact_sheet, o.render, dir);
+  fill_final_frames(c, o.render, locks);
+  fill_contact_sheet(c.surface, o.contact_sheet, o.render, dir, locks);
+  fill_contact_sheet(c.dem, o.contact_sheet, o.render, dir, locks);
   // each run's own page too (its pictures are rendered already)
   write_file_atomic((fs::path(c.surface.dir) / "report.html").string(), run_report_html(c.surface));
   write_file_atomic((fs::path(c.dem.dir) / "report.html").string(), run_report_html(c.dem));
@@ -174,7 +190,8 @@ std::string write_report(const ReportOptions& o) {
     throw InputError(
         fmt::format("{}: {} (expected a run, compare or table1 folder)", o.dir, problem));
   const fs::path d(o.dir);
-  if (file_exists(d / "compare.json")) return write_compare_report(o.dir, o);
+  RenderLocks locks;
+  if (file_exists(d / "compare.json")) return write_compare_report(o.dir, o, locks);
   if (file_exists(d / "table1.csv")) {
     Table1ReportData t = load_table1_report_data(o.dir);
     // a page per scene that has a comparison, in the table's order
@@ -186,14 +203,15 @@ std::string write_report(const ReportOptions& o) {
         continue;
       }
       print_to_stderr("report: {}\n", scene.string());
-      write_compare_report(scene.string(), o);
+      write_compare_report(scene.string(), o, locks);
       t.linked.push_back(row[0]);
     }
     const std::string path = (d / "report.html").string();
     write_file_atomic(path, table1_report_html(t));
     return path;
   }
-  if (file_exists(d / "stats.csv") || file_exists(d / "summary.json")) return write_run_report(o.dir, o);
+  if (file_exists(d / "stats.csv") || file_exists(d / "summary.json"))
+    return write_run_report(o.dir, o, locks);
   if (file_exists(d / "compare_plan.json"))
     throw InputError(fmt::format(
         "{}: a comparison that did not finish (no compare.json yet): go on with it with "

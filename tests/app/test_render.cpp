@@ -360,6 +360,28 @@ TEST_F(Render, ASecondRenderOfTheSameRunIsRefusedNotMixedIn) {
     EXPECT_TRUE(fs::is_regular_file(run / "render" / fmt::format("{:04d}.png", frame))) << frame;
 }
 
+// A second report of a run whose report is rendering found each of its pictures refused by the
+// render lock and wrote its page without them; it is now refused as a second render is, and the
+// first's page shows every picture.
+TEST_F(Render, ASecondReportOfTheSameRunIsRefusedWhileTheFirstRenders) {
+  const fs::path run = tiny_run(12);
+  fs::remove(run / "report.html");  // (the run's own page, without pictures)
+  const fs::path log = box.dir / "first.log";
+  const std::string args = "report " + run.string() + " --contact-sheet 12";
+  const pid_t first = sandflow_test::spawn(args, log);
+  ASSERT_FALSE(first_children_of(first).empty()) << read_text(log);
+  std::string second;
+  EXPECT_EQ(sandflow(args, &second), 2) << second;
+  EXPECT_NE(second.find(held_by_render(run, first)), std::string::npos) << second;
+  EXPECT_NE(second.find("wait for it to end or stop it, then report again"), std::string::npos)
+      << second;
+  EXPECT_EQ(sandflow_test::wait_for(first), 0) << read_text(log);
+  for (int frame = 1; frame <= 12; ++frame)
+    EXPECT_TRUE(fs::is_regular_file(run / "render" / fmt::format("{:04d}.png", frame))) << frame;
+  const std::string page = read_text(run / "report.html");
+  EXPECT_EQ(page.find("could not be rendered"), std::string::npos);
+}
+
 // `run --force` on a run that a render is drawing removed render/ under it; now it waits its turn,
 // and removes nothing.
 TEST_F(Render, ARunForcedOverARunThatRendersIsRefused) {
