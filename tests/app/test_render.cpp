@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 #include <png.h>
 #include <signal.h>
-#include <sys/mount.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -24,6 +23,7 @@
 #include "core/process.hpp"
 #include "io/ply.hpp"
 #include "io/pov_writer.hpp"
+#include "support/small_disk.hpp"
 
 namespace fs = std::filesystem;
 
@@ -426,21 +426,12 @@ TEST_F(Render, AStopSignalWhileTheReportRendersStopsTheReport) {
 // POV-Ray stops with status 1 and its log (on the same disk) is cut short, saying nothing of the
 // disk. The message says it, with what a picture needs; nothing half-made stays.
 TEST_F(Render, AFullDiskIsSaidNotLeftToPovraysCutLog) {
-  if (::geteuid() != 0) GTEST_SKIP() << "mounting a small file system needs root";
-  const fs::path run = tiny_run(1);
   const fs::path small = box.dir / "small";
-  fs::create_directories(small);
-  if (std::system(("mount -t tmpfs -o size=2m tmpfs " + small.string() + " 2>/dev/null").c_str()))
-    GTEST_SKIP() << "cannot mount a tmpfs here";
-  struct Unmount {
-    std::string dir;
-    ~Unmount() { ::umount2(dir.c_str(), MNT_DETACH); }
-  } unmount{small.string()};
-  fs::copy(run, small / "run", fs::copy_options::recursive);
+  const sandflow::test::SmallDisk disk(small, 2 << 20);
+  if (!disk.mounted()) GTEST_SKIP() << disk.why_not();
+  fs::copy(tiny_run(1), small / "run", fs::copy_options::recursive);
   // 700 kB left: room for the picture (about 45 kB) and its log, not for the state file (1.6 MB)
-  const std::uintmax_t available = fs::space(small).available;
-  ASSERT_GT(available, 700'000u);
-  std::ofstream(small / "filler", std::ios::binary) << std::string(available - 700'000, 'x');
+  ASSERT_TRUE(disk.fill_to(700'000));
   std::string log;
   EXPECT_EQ(sandflow("render " + (small / "run").string() + " --width 320 --height 240", &log), 4)
       << log;
@@ -456,7 +447,7 @@ TEST_F(Render, AFullDiskIsSaidNotLeftToPovraysCutLog) {
   for (const auto& e : fs::directory_iterator(small / "run" / "render"))
     EXPECT_EQ(e.path().string().find("partial"), std::string::npos) << e.path();
   // with room made, the same command renders the picture
-  fs::remove(small / "filler");
+  fs::remove(disk.filler());
   EXPECT_EQ(sandflow("render " + (small / "run").string() + " --width 320 --height 240", &log), 0)
       << log;
   EXPECT_TRUE(fs::exists(small / "run" / "render" / "0001.png"));

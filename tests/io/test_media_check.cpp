@@ -3,11 +3,7 @@
 #include "io/media_check.hpp"
 
 #include <gtest/gtest.h>
-#include <sys/mount.h>
-#include <unistd.h>
-
 #include <cstdint>
-#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -17,6 +13,7 @@
 #include "io/png_gray.hpp"
 #include "io/pov_writer.hpp"
 #include "support/scratch.hpp"
+#include "support/small_disk.hpp"
 
 namespace sandflow {
 namespace {
@@ -90,20 +87,12 @@ TEST_F(Mp4Problem, AWholeMovieHasNoneAndEveryCutOneIsFound) {
 // ffmpeg 5.1 on a full disk logs "Error writing trailer ...: No space left on device" and exits
 // with status 0, its movie cut after a few kilobytes: the movie is refused, and the disk named.
 TEST_F(Mp4Problem, AMovieCutByAFullDiskIsRefusedThoughFfmpegEndsWell) {
-  if (::geteuid() != 0) GTEST_SKIP() << "mounting a small file system needs root";
   const fs::path small = box.dir() / "small";
-  fs::create_directories(small);
-  if (std::system(("mount -t tmpfs -o size=1m tmpfs " + small.string() + " 2>/dev/null").c_str()))
-    GTEST_SKIP() << "cannot mount a tmpfs here";
-  struct Unmount {
-    std::string dir;
-    ~Unmount() { ::umount2(dir.c_str(), MNT_DETACH); }
-  } unmount{small.string()};
+  const test::SmallDisk disk(small, 1 << 20);
+  if (!disk.mounted()) GTEST_SKIP() << disk.why_not();
   write_noise_frames(box.dir() / "frames", 20);
   // 24 kB left: room for ffmpeg's log (about 3 kB), not for the movie (about 70 kB)
-  const std::uintmax_t available = fs::space(small).available;
-  ASSERT_GT(available, 24'000u);
-  write_bytes((small / "filler").string(), std::string(available - 24'000, 'x'));
+  ASSERT_TRUE(disk.fill_to(24'000));
   const std::string movie = (small / "movie.mp4").string();
   try {
     encode_movie({(box.dir() / "frames").string()}, 1, 20, 30.0, movie);
@@ -119,7 +108,7 @@ TEST_F(Mp4Problem, AMovieCutByAFullDiskIsRefusedThoughFfmpegEndsWell) {
   EXPECT_FALSE(fs::exists(movie));
   EXPECT_FALSE(fs::exists(movie + ".partial"));
   // with room made, the same call makes the whole movie
-  fs::remove(small / "filler");
+  fs::remove(disk.filler());
   encode_movie({(box.dir() / "frames").string()}, 1, 20, 30.0, movie);
   EXPECT_EQ(mp4_problem(movie, 20), "");
 }
