@@ -16,6 +16,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/folder_lock.hpp"
+#include "io/media_check.hpp"
 #include "io/pov_writer.hpp"
 #include "report/report.hpp"
 #include "stop_signals.hpp"
@@ -36,6 +37,12 @@ bool file_exists(const fs::path& p) {
   return fs::exists(p, ec);
 }
 
+/// A picture the page can show: there and whole. One cut short (a copy that stopped, a picture
+/// of a sandflow older than the check in render_pov) is rendered again, or left out.
+bool picture_ready(const std::string& path) {
+  return png_problem(path).empty();
+}
+
 /// The render/ folders this report draws into, each locked from its first picture to the end of
 /// the report: a second report (or a render) of the same run is refused while this one renders,
 /// rather than finding its pictures refused one by one and writing its page without them.
@@ -50,7 +57,7 @@ struct RenderStopped {
 std::string render_missing(const std::string& dir, int frame, int width, int height,
                            RenderLocks& locks) {
   if (g_stop_signal != 0) throw RenderStopped{128 + g_stop_signal};
-  if (file_exists(render_path(dir, frame))) return "";
+  if (picture_ready(render_path(dir, frame))) return "";
   if (!locks.contains(dir))  // (refused: the report stops, exit status 2)
     locks[dir] = std::make_unique<FolderLock>(
         (fs::path(dir) / "render").string(),
@@ -69,7 +76,7 @@ std::string render_missing(const std::string& dir, int frame, int width, int hei
                     e.what());
     return e.what();
   }
-  return file_exists(render_path(dir, frame)) ? "" : "POV-Ray wrote no picture";
+  return picture_ready(render_path(dir, frame)) ? "" : "POV-Ray wrote no whole picture";
 }
 
 /// Why nothing can be rendered now ("" when rendering is possible and asked for).
@@ -120,7 +127,7 @@ void fill_contact_sheet(RunReportData& run, int n, bool render, const std::strin
                      : fmt::format("The frames already rendered in {}/render/. {}", run.dir, cannot);
   }
   for (int f : chosen)
-    if (file_exists(render_path(run.dir, f))) run.sheet.push_back({f, render_path(run.dir, f)});
+    if (picture_ready(render_path(run.dir, f))) run.sheet.push_back({f, render_path(run.dir, f)});
 }
 
 /// The two last frames, rendered at one size: that of the one already rendered, if any.
@@ -135,15 +142,15 @@ void fill_final_frames(CompareReportData& c, bool render, RenderLocks& locks) {
   const std::string cannot = why_no_render(c.dir, render);
   if (cannot.empty()) {
     int w = kFinalWidth, h = kFinalHeight;
-    if (const auto s = png_size(file_exists(ps) ? ps : pd)) w = s->width, h = s->height;
+    if (const auto s = png_size(picture_ready(ps) ? ps : pd)) w = s->width, h = s->height;
     std::string err = render_missing(c.surface.dir, ls, w, h, locks);
     if (err.empty()) err = render_missing(c.dem.dir, ld, w, h, locks);
     if (!err.empty()) c.final_note = "The final frames could not be rendered: " + err;
-  } else if (!file_exists(ps) || !file_exists(pd)) {
+  } else if (!picture_ready(ps) || !picture_ready(pd)) {
     c.final_note = cannot;
   }
-  if (file_exists(ps)) c.final_surface = ReportImage{ls, ps};
-  if (file_exists(pd)) c.final_dem = ReportImage{ld, pd};
+  if (picture_ready(ps)) c.final_surface = ReportImage{ls, ps};
+  if (picture_ready(pd)) c.final_dem = ReportImage{ld, pd};
   const auto ss = png_size(ps), sd = png_size(pd);
   if (ss && sd && (ss->width != sd->width || ss->height != sd->height))
     c.final_note = fmt::format(

@@ -21,6 +21,7 @@
 
 #include "cli_runner.hpp"
 #include "core/process.hpp"
+#include "io/media_check.hpp"
 #include "io/ply.hpp"
 #include "io/pov_writer.hpp"
 #include "support/small_disk.hpp"
@@ -420,6 +421,24 @@ TEST_F(Render, AStopSignalWhileTheReportRendersStopsTheReport) {
   EXPECT_EQ(text.find("interrupted"), text.rfind("interrupted")) << text;
   EXPECT_FALSE(fs::exists(run / "report.html"));
   EXPECT_LT(std::distance(fs::directory_iterator(run / "render"), fs::directory_iterator{}), 12);
+}
+
+// A picture of the contact sheet cut short (a copy that stopped) is rendered again, not shown cut.
+TEST_F(Render, AReportRendersAgainAPictureCutShort) {
+  const fs::path run = tiny_run(2);
+  std::string log;
+  ASSERT_EQ(sandflow("report " + run.string() + " --contact-sheet 2", &log), 0) << log;
+  const fs::path picture = run / "render" / "0002.png";
+  const std::string whole = read_text(picture);
+  ASSERT_GT(whole.size(), 100u);
+  std::ofstream(picture, std::ios::binary | std::ios::trunc) << whole.substr(0, whole.size() / 2);
+  ASSERT_NE(sandflow::png_problem(picture.string()), "");
+  ASSERT_EQ(sandflow("report " + run.string() + " --contact-sheet 2", &log), 0) << log;
+  EXPECT_NE(log.find("report: rendering " + run.string() + " frame 2 at 480x270"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(log.find("frame 1 at"), std::string::npos) << log;  // (whole: not rendered again)
+  EXPECT_EQ(sandflow::png_problem(picture.string()), "");
 }
 
 // A disk that fills while POV-Ray renders: POV-Ray's state file grows to about 20 bytes a pixel,
