@@ -62,6 +62,7 @@ struct RenderOptions {
   int jobs = 0;                   ///< frames rendered at once; 0: one per core
   bool movie = false;             ///< also encode DIR/render/movie.mp4 with ffmpeg
   bool keep_pov = false;          ///< keep each picture's .pov scene and the logs
+  bool again = false;             ///< make every picture, also those made from the same input
   std::string scene;              ///< scene file; "": the one DIR/summary.json names
   std::vector<std::string> sets;  ///< --set camera.KEY=... or geometry.N.render=...
   bool folder_held = false;       ///< the caller holds DIR/render/'s lock (a report's pictures)

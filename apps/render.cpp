@@ -28,14 +28,17 @@
 
 #include "commands.hpp"
 #include "console.hpp"
+#include "core/atomic_file.hpp"
 #include "core/counted.hpp"
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "core/process.hpp"
 #include "core/read_file.hpp"
 #include "core/threads.hpp"
 #include "geometry/mesh.hpp"
 #include "geometry/shapes.hpp"
 #include "io/folder_lock.hpp"
+#include "io/media_check.hpp"
 #include "io/ply.hpp"
 #include "io/png_gray.hpp"
 #include "io/pov_writer.hpp"
@@ -473,6 +476,75 @@ std::string frame_ranges(const std::vector<int>& frames) {
   return comma_list(parts);
 }
 
+// ---- Pictures already made -------------------------------------------------------------------
+
+/// A picture's digest: its POV-Ray scene, size and quality, all that POV-Ray makes it from.
+std::uint64_t picture_digest(const std::string& pov_text, int width, int height, bool antialias) {
+  Hasher h;
+  h.add_bytes(pov_text.data(), pov_text.size());
+  h.add(width);
+  h.add(height);
+  h.add(antialias);
+  return h.value();
+}
+
+/// What each picture in a run's render/ was made from: render/pictures.json, frame -> digest. A
+/// picture asked for again with the same digest, and whole, is kept: an interrupted render (or the
+/// same one with --movie) goes on from the pictures it made instead of making them anew.
+class PictureRecord {
+ public:
+  explicit PictureRecord(const std::string& run)
+      : path_((fs::path(run) / "render" / "pictures.json").string()) {
+    try {
+      if (const auto text = read_file_if_present(path_, "picture record", kMaxRecordBytes)) {
+        nlohmann::json record = nlohmann::json::parse(*text);
+        if (!record.is_object() || !record.contains("pictures") || !record["pictures"].is_object())
+          throw InputError(path_ + ": not a record of pictures (no \"pictures\" object)");
+        pictures_ = std::move(record["pictures"]);
+      }
+    } catch (const nlohmann::json::exception& e) {
+      forget(fmt::format("{}: not a record of pictures ({})", path_, e.what()));
+    } catch (const InputError& e) {  // (its message names the file)
+      forget(e.what());
+    }
+  }
+
+  /// Whether the picture of `frame` was made from `digest` (and is still there, whole).
+  bool has(int frame, std::uint64_t digest, const std::string& png) const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = pictures_.find(std::to_string(frame));
+    return it != pictures_.end() && *it == fmt::format("{:016x}", digest) &&
+           png_problem(png).empty();
+  }
+
+  /// Records the picture of `frame`, just made from `digest` (the record written at once: a
+  /// render killed later keeps it). A record that cannot be written is warned of, once.
+  void made(int frame, std::uint64_t digest) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    pictures_[std::to_string(frame)] = fmt::format("{:016x}", digest);
+    try {
+      write_file_atomic(path_, nlohmann::json{{"pictures", pictures_}}.dump(1) + "\n");
+    } catch (const OutputError& e) {
+      if (!warned_)
+        print_to_stderr("warning: {}: the next render makes these pictures again\n", e.what());
+      warned_ = true;
+    }
+  }
+
+ private:
+  /// Starts with no picture recorded, saying why: only time is lost, the pictures made again.
+  void forget(const std::string& why) {
+    print_to_stderr("warning: {}: every picture is made again\n", why);
+    pictures_ = nlohmann::json::object();
+  }
+
+  static constexpr std::size_t kMaxRecordBytes = std::size_t{64} << 20;
+  std::string path_;
+  nlohmann::json pictures_ = nlohmann::json::object();
+  mutable std::mutex mutex_;
+  bool warned_ = false;
+};
+
 }  // namespace
 
 int render_command(const RenderOptions& o) {
@@ -609,7 +681,9 @@ int render_command(const RenderOptions& o) {
   // starts, and what is done stays
   const StopSignals signals;
   const StopChildren stop_children;
-  std::vector<char> rendered(tasks.size(), 0);
+  std::vector<char> rendered(tasks.size(), 0), kept(tasks.size(), 0);
+  std::vector<std::unique_ptr<PictureRecord>> records;
+  for (const std::string& run : runs) records.push_back(std::make_unique<PictureRecord>(run));
   parallel_tasks(n, jobs, [&](int i) {
     if (g_stop_signal != 0) return;
     const Task& t = tasks[i];
@@ -618,14 +692,23 @@ int render_command(const RenderOptions& o) {
     try {
       const FrameData f = read_ply(frame_path(t.run, t.frame));
       grains = f.size();
-      const auto& hi = heights[static_cast<std::size_t>(std::find(runs.begin(), runs.end(), t.run) -
-                                                        runs.begin())];
-      const SandSurface sf = hi ? static_layer(t.run, t.frame, *hi, scene) : SandSurface{};
+      const auto k =
+          static_cast<std::size_t>(std::find(runs.begin(), runs.end(), t.run) - runs.begin());
+      const SandSurface sf =
+          heights[k] ? static_layer(t.run, t.frame, *heights[k], scene) : SandSurface{};
       PovOptions frame_opt = opt;
       frame_opt.time = t.frame / scene.fps.value_or(30.0);  // (a removed solid is not drawn)
-      write_pov_scene(stem + ".pov", f, scene.geometry, frame_opt, scene.meshes, &sf);
-      render_pov(stem + ".pov", stem + ".png", o.width, o.height, threads_each,
-                 o.quality == "final");
+      const std::string text = pov_scene_text(f, scene.geometry, frame_opt, scene.meshes, &sf);
+      const bool antialias = o.quality == "final";
+      const std::uint64_t digest = picture_digest(text, o.width, o.height, antialias);
+      const bool up_to_date = !o.again && records[k]->has(t.frame, digest, stem + ".png");
+      if (!up_to_date || o.keep_pov) write_file_atomic(stem + ".pov", text, Sync::Later);
+      if (up_to_date) {
+        kept[static_cast<std::size_t>(i)] = 1;
+      } else {
+        render_pov(stem + ".pov", stem + ".png", o.width, o.height, threads_each, antialias);
+        records[k]->made(t.frame, digest);
+      }
       rendered[static_cast<std::size_t>(i)] = 1;
       if (!o.keep_pov) {
         std::error_code ec;
@@ -656,7 +739,7 @@ int render_command(const RenderOptions& o) {
     if (signals.outermost())
       print_to_stderr(
           "\ninterrupted: {} of {} pictures made (in place){}; the others are not "
-          "made{}\n",
+          "made{}. The same command goes on from them\n",
           done_frames.size(), n,
           done_frames.empty() || runs.size() > 1
               ? std::string()
@@ -664,6 +747,12 @@ int render_command(const RenderOptions& o) {
           o.movie ? ", nor the movie" : "");
     return 128 + g_stop_signal;
   }
+
+  if (const auto same = std::count(kept.begin(), kept.end(), 1); same > 0)
+    print_to_stderr(
+        "render: {} of {} kept, made earlier from the same scene, size and quality "
+        "(render/pictures.json; --again makes them anew)\n",
+        same, counted(n, "picture"));
 
   // What was made, on stdout; what failed, in the error.
   std::vector<int> failed;

@@ -386,6 +386,9 @@ int main(int argc, char** argv) {
   render->add_flag("--keep-pov", rdo.keep_pov,
                    "keep each picture's POV-Ray scene (NNNN.pov) and the logs of POV-Ray "
                    "(NNNN.png.log) and ffmpeg (movie.mp4.log)");
+  render->add_flag("--again", rdo.again,
+                   "make every picture anew (default: a picture made earlier from the same scene, "
+                   "size and quality is kept)");
   render->add_option("--scene", rdo.scene,
                      "scene file for the geometry and [camera] (default: the one the run ran, "
                      "recorded in its run.json with its --set)");
@@ -398,7 +401,9 @@ int main(int argc, char** argv) {
       "folder renders both runs with one camera, into surface/render and dem/render (--movie\n"
       "adds DIR/render/side_by_side.mp4: surface flow left, plain DEM right). Frames\n"
       "render in parallel (--jobs); each povray gets cores/jobs threads. A frame that fails is\n"
-      "named with the end of POV-Ray's log, and the others are still rendered. The movie runs\n"
+      "named with the end of POV-Ray's log, and the others are still rendered. A picture made\n"
+      "earlier from the same scene, size and quality is kept (DIR/render/pictures.json), so an\n"
+      "interrupted render goes on where it stopped. The movie runs\n"
       "at the run's fps; without ffmpeg the frames are rendered and the exit status is 2.\n"
       "Prints the path of each picture (and movie) on stdout.\n"
       "Exit status: 0 done, 2 bad option or folder, povray or ffmpeg missing, 4 a frame failed\n"

@@ -35,7 +35,7 @@ COMMANDS = {
     "compare": ["--out", "--frames", "--grains", "--threads", "--set", "--seeds",
                 "--equal-stiffness", "--resume", "--force"],
     "calibrate": ["--trials", "--again", "--base", "--tilt-rate", "--set", "--threads"],
-    "render": ["--frames", "--movie", "--width", "--height", "--jobs", "--fps"],
+    "render": ["--frames", "--movie", "--width", "--height", "--jobs", "--fps", "--again"],
     "report": ["--no-render"],
     "measure": [],
     "table1": ["--scale", "--only", "--seeds", "--out", "--frames", "--resume", "--force",

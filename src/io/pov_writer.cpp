@@ -637,8 +637,14 @@ void write_pov_scene(const std::string& path, const FrameData& f,
                      const std::vector<GeometryConfig>& geometry, const PovOptions& opt,
                      const std::vector<const TriangleMesh*>& meshes,
                      const SandSurface* static_layer) {
+  write_file_atomic(path, pov_scene_text(f, geometry, opt, meshes, static_layer), Sync::Later);
+}
+
+std::string pov_scene_text(const FrameData& f, const std::vector<GeometryConfig>& geometry,
+                           const PovOptions& opt, const std::vector<const TriangleMesh*>& meshes,
+                           const SandSurface* static_layer) {
   if (f.radius.size() != f.size() || (!f.id.empty() && f.id.size() != f.size())) {
-    throw std::invalid_argument("write_pov_scene: FrameData arrays have different lengths");
+    throw std::invalid_argument("pov_scene_text: FrameData arrays have different lengths");
   }
   const ViewBounds b = scene_bounds(f, geometry, meshes, opt);
   Camera cam{opt.camera_position, opt.camera_look_at, opt.camera_up};
@@ -670,7 +676,7 @@ void write_pov_scene(const std::string& path, const FrameData& f,
   line(s, "");
   if (static_layer) write_static_layer(s, *static_layer);
   write_grains(s, f);
-  write_file_atomic(path, s, Sync::Later);
+  return s;
 }
 
 std::string find_povray() {

@@ -111,6 +111,12 @@ void write_pov_scene(const std::string& path, const FrameData& f,
                      const std::vector<const TriangleMesh*>& meshes = {},
                      const SandSurface* static_layer = nullptr);
 
+/// The text write_pov_scene writes.
+std::string pov_scene_text(const FrameData& f, const std::vector<GeometryConfig>& geometry,
+                           const PovOptions& opt,
+                           const std::vector<const TriangleMesh*>& meshes = {},
+                           const SandSurface* static_layer = nullptr);
+
 /// find_program("povray") (core/process.hpp).
 std::string find_povray();
 

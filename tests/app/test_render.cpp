@@ -145,11 +145,56 @@ TEST_F(Render, LastFrameByDefaultAndNoLeftovers) {
   std::string log;
   ASSERT_EQ(sandflow("render " + run.string() + " --width 32 --height 24 --quality draft", &log), 0)
       << log;
-  // exactly the last frame's picture: no .pov, no log, no partial image
+  // exactly the last frame's picture and the record of what it was made from: no .pov, no log,
+  // no partial image
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(run / "render"))
     names.push_back(e.path().filename().string());
-  EXPECT_EQ(names, std::vector<std::string>{"0002.png"});
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"0002.png", "pictures.json"}));
+}
+
+// A picture made earlier from the same POV-Ray scene, size and quality is kept, not made again:
+// an interrupted render goes on where it stopped. Another size, a picture gone or cut, or --again
+// make it anew.
+TEST_F(Render, APictureMadeFromTheSameInputIsKept) {
+  const fs::path run = tiny_run(3);
+  const std::string base = "render " + run.string() + " --frames all --quality draft ";
+  std::string log;
+  ASSERT_EQ(sandflow(base + "--width 32 --height 24", &log), 0) << log;
+  EXPECT_EQ(log.find("kept"), std::string::npos) << log;
+  const auto made_at = [&](int frame) {
+    return fs::last_write_time(run / "render" / fmt::format("{:04d}.png", frame));
+  };
+  const auto first = made_at(1);
+  ASSERT_EQ(sandflow(base + "--width 32 --height 24", &log), 0) << log;
+  EXPECT_NE(log.find("render: 3 of 3 pictures kept, made earlier from the same scene, size and "
+                     "quality (render/pictures.json; --again makes them anew)"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(made_at(1), first);
+  // every picture is still named on stdout, made or kept
+  for (int frame = 1; frame <= 3; ++frame)
+    EXPECT_NE(log.find(fmt::format("{:04d}.png", frame)), std::string::npos) << log;
+  // one gone, one cut: those two are made again
+  fs::remove(run / "render" / "0002.png");
+  const std::string whole = read_text(run / "render" / "0003.png");
+  std::ofstream(run / "render" / "0003.png", std::ios::binary | std::ios::trunc)
+      << whole.substr(0, whole.size() - 1);
+  ASSERT_EQ(sandflow(base + "--width 32 --height 24", &log), 0) << log;
+  EXPECT_NE(log.find("render: 1 of 3 pictures kept"), std::string::npos) << log;
+  EXPECT_EQ(sandflow::png_problem((run / "render" / "0003.png").string()), "");
+  // another size, or --again: all made anew
+  ASSERT_EQ(sandflow(base + "--width 32 --height 26", &log), 0) << log;
+  EXPECT_EQ(log.find("kept"), std::string::npos) << log;
+  ASSERT_EQ(sandflow(base + "--width 32 --height 26 --again", &log), 0) << log;
+  EXPECT_EQ(log.find("kept"), std::string::npos) << log;
+  // a record that is not one is warned of, and every picture made again
+  std::ofstream(run / "render" / "pictures.json") << "[1, 2";
+  ASSERT_EQ(sandflow(base + "--width 32 --height 26", &log), 0) << log;
+  EXPECT_NE(log.find("pictures.json"), std::string::npos) << log;
+  EXPECT_NE(log.find(": every picture is made again"), std::string::npos) << log;
+  EXPECT_EQ(log.find("kept"), std::string::npos) << log;
 }
 
 // Without --scene the picture shows the scene the run ran: its run.json's text with its --set,
@@ -278,9 +323,17 @@ TEST_F(Render, AStopSignalEndsThePovrayAtWorkAndKeepsThePicturesMade) {
   };
   const std::vector<std::string> at_exit = names();
   for (const std::string& name : at_exit)
-    EXPECT_TRUE(name.size() == 8 && name.substr(4) == ".png") << name;
+    EXPECT_TRUE((name.size() == 8 && name.substr(4) == ".png") || name == "pictures.json") << name;
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   EXPECT_EQ(names(), at_exit);
+  // the same command goes on from the pictures made
+  const auto made = static_cast<int>(at_exit.size()) - 1;
+  std::string again;
+  ASSERT_EQ(sandflow("render " + run.string() + " --frames all --width 640 --height 360", &again),
+            0)
+      << again;
+  EXPECT_NE(again.find(fmt::format("render: {} of 12 pictures kept", made)), std::string::npos)
+      << again;
 }
 
 // The programs a process started, by pid (from every thread's /proc/PID/task/TID/children).
