@@ -574,7 +574,8 @@ int render_command(const RenderOptions& o) {
     int first, last;
   };
   std::vector<Span> spans;
-  const bool last_only = o.frames.empty() && o.frame <= 0;
+  // (a movie of the last frame alone is no movie: --movie alone takes them all)
+  const bool last_only = o.frames.empty() && o.frame <= 0 && !o.movie;
   for (const std::string& run : runs) {
     const std::vector<int> have = frame_numbers(run);
     if (have.empty()) throw InputError(fmt::format("{}: no frames/NNNN.ply in this folder", run));

@@ -361,11 +361,12 @@ int main(int argc, char** argv) {
   render->add_option("--height", rdo.height, "image height [pixels] (default 720)")
       ->check(whole(16, 16384));
   auto* frame_opt =
-      render->add_option("--frame", rdo.frame, "one frame (default: the last)")->check(kFrameRange);
+      render->add_option("--frame", rdo.frame, "one frame (default: the last; all with --movie)")
+          ->check(kFrameRange);
   render
       ->add_option("--frames", rdo.frames,
                    "frames to render, from 1: N, A:B (inclusive), A:, :B, or all (default: the "
-                   "last)")
+                   "last; all with --movie)")
       ->excludes(frame_opt)
       ->check(CLI::Validator(
           [](std::string& v) {

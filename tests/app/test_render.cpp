@@ -664,6 +664,21 @@ TEST_F(Render, ComparisonFolderGetsOneCameraForBothRuns) {
   EXPECT_EQ(cs, camera_and_lights(read_text(d / "0002.pov")));
 }
 
+// --movie without --frames is a movie of every frame, not of the last alone (it was).
+TEST_F(Render, AMovieAloneTakesEveryFrame) {
+  if (sandflow::find_program("ffmpeg").empty())
+    GTEST_SKIP() << "ffmpeg is not installed (sudo apt-get install ffmpeg)";
+  const fs::path run = tiny_run(3);
+  std::string log;
+  ASSERT_EQ(
+      sandflow("render " + run.string() + " --width 32 --height 24 --quality draft --movie", &log),
+      0)
+      << log;
+  for (int frame = 1; frame <= 3; ++frame)
+    EXPECT_TRUE(fs::is_regular_file(run / "render" / fmt::format("{:04d}.png", frame))) << frame;
+  EXPECT_EQ(sandflow::mp4_problem((run / "render" / "movie.mp4").string(), 3), "");
+}
+
 TEST_F(Render, MovieOfTheFrames) {
   if (sandflow::find_program("ffmpeg").empty())
     GTEST_SKIP() << "ffmpeg is not installed (sudo apt-get install ffmpeg)";
