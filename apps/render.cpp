@@ -144,8 +144,9 @@ std::vector<std::string> run_folders(const std::string& dir) {
 
 struct RenderScene {
   std::vector<GeometryConfig> geometry;
-  std::vector<const TriangleMesh*>
-      meshes;  ///< by geometry entry: solids' own (moving them keeps them)
+  /// by geometry entry, nothing for other solids: the solids' own meshes (which a move of the
+  /// RenderScene keeps where they are)
+  std::vector<const TriangleMesh*> meshes;
   CameraConfig camera;
   std::optional<double> fps;  ///< [1/s]: the run's, else the scene file's
   std::optional<Geometry> solids;  ///< what the grains met: where the static layer has sand
