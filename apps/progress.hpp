@@ -31,14 +31,17 @@ class Progress {
   /// `simulated`: grains in the DEM (active + interface), shown when below `grains`.
   void update(int frame, std::int64_t grains, std::int64_t simulated = -1) {
     const double elapsed = clock_.seconds();
+    // (no frame timed yet, when every one so far was skipped: no speed to show)
     const double per_frame = elapsed / std::max(1, frame - first_);
-    const double eta = per_frame * (total_ - frame);
+    const std::string speed =
+        frame > first_ ? fmt::format("{:.1f} frames/min  ETA {}", 60.0 / std::max(per_frame, 1e-9),
+                                     format_duration(per_frame * (total_ - frame)))
+                       : std::string("frames/min -  ETA -");
     const std::string line =
-        fmt::format("{} frame {}/{}  grains {}{}  {:.1f} frames/min  ETA {}", label_, frame, total_,
-                    grains,
+        fmt::format("{} frame {}/{}  grains {}{}  {}", label_, frame, total_, grains,
                     simulated >= 0 && simulated < grains ? fmt::format(" ({} simulated)", simulated)
                                                          : std::string(),
-                    60.0 / std::max(per_frame, 1e-9), format_duration(eta));
+                    speed);
     if (tty_) {
       std::fprintf(stderr, "\r%s\033[K", line.c_str());
       if (frame == total_) std::fputc('\n', stderr);
@@ -47,6 +50,10 @@ class Progress {
     }
     std::fflush(stderr);
   }
+
+  /// One frame done at no cost (a picture kept from an earlier render): left out of the speed,
+  /// as a resumed run's first frames are. Before the update() that counts it.
+  void skip() { ++first_; }
 
   /// A line of its own (a warning) while the progress line runs: on a terminal it takes the
   /// progress line's place, which the next update() draws again below it.
