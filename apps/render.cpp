@@ -512,10 +512,12 @@ class PictureRecord {
 
   /// Whether the picture of `frame` was made from `digest` (and is still there, whole).
   bool has(int frame, std::uint64_t digest, const std::string& png) const {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    const auto it = pictures_.find(std::to_string(frame));
-    return it != pictures_.end() && *it == fmt::format("{:016x}", digest) &&
-           png_problem(png).empty();
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      const auto it = pictures_.find(std::to_string(frame));
+      if (it == pictures_.end() || *it != fmt::format("{:016x}", digest)) return false;
+    }
+    return png_problem(png).empty();  // (read outside the lock: the other jobs' records go on)
   }
 
   /// Records the picture of `frame`, just made from `digest` (the record written at once: a

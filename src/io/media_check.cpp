@@ -1,6 +1,7 @@
 // Written by hand: a PNG's signature and last chunk, and an MP4's box headers down to its sample
 // count, are a few fixed-size fields (ISO/IEC 14496-12, §4.2 and §8.7.3); libavformat would be a
-// new build dependency to read them, ffprobe another program to run and parse.
+// new build dependency to read them, ffprobe another program to run and parse. The files are
+// read by seeking to those fields, not whole (core/read_file.hpp): a movie can be gigabytes.
 #include "io/media_check.hpp"
 
 #include <sys/stat.h>
@@ -11,8 +12,12 @@
 #include <memory>
 #include <optional>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
+
+#include "core/file_kind.hpp"
 
 namespace sandflow {
 namespace {
@@ -25,6 +30,11 @@ struct Opened {
 };
 
 std::optional<Opened> open_regular(const std::string& path, std::string& problem) {
+  // (opening a FIFO would wait for a writer: refused by its type first)
+  if (const std::string kind = special_file_kind(path); !kind.empty()) {
+    problem = "it is " + kind + ", not a file";
+    return std::nullopt;
+  }
   Opened o;
   o.file.reset(std::fopen(path.c_str(), "rb"));
   struct stat st {};
@@ -74,18 +84,26 @@ std::optional<BoxHeader> box_header(const unsigned char* p, std::uint64_t left) 
   return b;
 }
 
-// The content of the first box of `type` directly inside `body`, or nothing (also when a box
-// overruns `body`).
-std::optional<std::string_view> child(std::string_view body, std::string_view type) {
+// The boxes directly inside `body` (a box's content), in order, up to the first that overruns
+// it: each one's type and content.
+std::vector<std::pair<std::string, std::string_view>> boxes(std::string_view body) {
+  std::vector<std::pair<std::string, std::string_view>> out;
   std::uint64_t at = 0;
   while (at < body.size()) {
     const std::uint64_t left = body.size() - at;
-    const auto* p = reinterpret_cast<const unsigned char*>(body.data() + at);
-    const std::optional<BoxHeader> b = box_header(p, left);
-    if (!b || b->size > left) return std::nullopt;
-    if (b->type == type) return body.substr(at + b->header, b->size - b->header);
+    const std::optional<BoxHeader> b =
+        box_header(reinterpret_cast<const unsigned char*>(body.data() + at), left);
+    if (!b || b->size > left) break;
+    out.emplace_back(b->type, body.substr(at + b->header, b->size - b->header));
     at += b->size;
   }
+  return out;
+}
+
+// The content of the first box of `type` directly inside `body`, or nothing.
+std::optional<std::string_view> child(std::string_view body, std::string_view type) {
+  for (const auto& [t, content] : boxes(body))
+    if (t == type) return content;
   return std::nullopt;
 }
 
@@ -93,14 +111,8 @@ std::optional<std::string_view> child(std::string_view body, std::string_view ty
 // 'vide': its sample table's 'stsz' or 'stz2' count), or nothing when there is no video track.
 std::optional<std::uint64_t> video_samples(std::string_view moov) {
   std::optional<std::uint64_t> samples;
-  std::uint64_t at = 0;
-  while (at < moov.size()) {
-    const auto* p = reinterpret_cast<const unsigned char*>(moov.data() + at);
-    const std::optional<BoxHeader> b = box_header(p, moov.size() - at);
-    if (!b || b->size > moov.size() - at) break;
-    const std::string_view content = moov.substr(at + b->header, b->size - b->header);
-    at += b->size;
-    if (b->type != "trak") continue;
+  for (const auto& [type, content] : boxes(moov)) {
+    if (type != "trak") continue;
     const auto mdia = child(content, "mdia");
     const auto hdlr = mdia ? child(*mdia, "hdlr") : std::nullopt;
     // hdlr: version and flags (4), pre_defined (4), handler_type (4)

@@ -3,6 +3,7 @@
 #include "io/media_check.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -56,6 +57,9 @@ TEST(PngProblem, AWholePictureHasNoneAndEveryCutOneIsFound) {
   EXPECT_NE(png_problem(box.path("text.png")).find("not a PNG"), std::string::npos);
   EXPECT_NE(png_problem(box.path("absent.png")).find("cannot read it: No such file"),
             std::string::npos);
+  // a FIFO where a picture should be is refused by its type, not waited on for a writer
+  ASSERT_EQ(::mkfifo(box.path("fifo.png").c_str(), 0600), 0);
+  EXPECT_EQ(png_problem(box.path("fifo.png")), "it is a FIFO, not a file");
 }
 
 class Mp4Problem : public ::testing::Test {
