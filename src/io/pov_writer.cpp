@@ -204,7 +204,6 @@ void write_header(std::string& s, const Camera& cam, const ViewBounds& b, const 
     line(s, "  texture { pigment { srgb ", sand_srgb(k), " } finish { SandFinish } }",
          k + 1 < kSandShades ? "," : "");
   line(s, "}");
-  line(s, "#macro G(X,Y,Z,R,C) sphere { <X,Y,Z>, R texture { Sand[C] } } #end");
   line(s, "");
   line(s,
        "#declare Solid = texture { pigment { srgb <0.62,0.63,0.65> }"
@@ -389,22 +388,35 @@ void write_geometry(std::string& s, const GeometryConfig& g, const ViewBounds& b
   }
 }
 
+// The grains as one union of spheres per sand shade, its texture given once: POV-Ray reads a
+// 202,362-grain frame in 0.34 s this way against 1.50 s as a macro call a grain, and holds it in
+// 98 MB against 237 MB (a texture a sphere); docs/performance.md, 2026-12-02, sixty-first. A shade
+// with a single grain is a textured sphere (POV-Ray warns of a union of one).
 void write_grains(std::string& s, const FrameData& f) {
-  line(s, "// grains: G(x, y, z, radius, texture)");
+  std::array<std::vector<std::uint32_t>, kSandShades> by_shade;
   for (std::size_t i = 0; i < f.size(); ++i) {
     if (!is_finite(f.position[i]) || !(f.radius[i] > 0)) continue;
     const std::uint32_t id = f.id.empty() ? static_cast<std::uint32_t>(i) : f.id[i];
-    s += "G(";
-    put(s, f.position[i].x);
-    s += ',';
-    put(s, f.position[i].y);
-    s += ',';
-    put(s, f.position[i].z);
-    s += ',';
-    put(s, f.radius[i]);
-    s += ',';
-    s += static_cast<char>('0' + sand_shade(id));
-    s += ")\n";
+    by_shade[static_cast<std::size_t>(sand_shade(id))].push_back(static_cast<std::uint32_t>(i));
+  }
+  line(s, "// grains: a union of spheres per sand shade, sphere{<x,y,z>,radius}");
+  for (int k = 0; k < kSandShades; ++k) {
+    const std::vector<std::uint32_t>& grains = by_shade[static_cast<std::size_t>(k)];
+    if (grains.empty()) continue;
+    const bool alone = grains.size() == 1;
+    if (!alone) line(s, "union {  // Sand[", k, "]");
+    for (const std::uint32_t i : grains) {
+      s += "sphere{<";
+      put(s, f.position[i].x);
+      s += ',';
+      put(s, f.position[i].y);
+      s += ',';
+      put(s, f.position[i].z);
+      s += ">,";
+      put(s, f.radius[i]);
+      s += alone ? fmt::format(" texture{{Sand[{}]}}}}\n", k) : std::string("}\n");
+    }
+    if (!alone) line(s, "texture { Sand[", k, "] } }");
   }
 }
 

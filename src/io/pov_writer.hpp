@@ -10,18 +10,18 @@
 // built with rotation_xyz_deg(), the same function the collision geometry uses, so what is drawn
 // is what the grains hit.
 //
-// Grains are one short line each, `G(x,y,z,r,c)`, a macro that draws a sphere with one of 8 sand
-// textures (c, chosen from a hash of the grain id: a small, stable colour variation that does not
-// flicker between frames). Geometry: planes are drawn as infinite floors with a faint checker
-// (glass planes as a thin finite slab); boxes and cylinders as solids or, for containers, as
-// walls of wall_thickness around the inner size, centred on `center`, without a lid when
-// open_top; spheres as spheres; a bowl as its shell below the rim; heightmaps and meshes as
-// mesh2 triangles; a surface-mode frame's static layer (SandSurface) as a smooth mesh2 in a sand
-// texture with a grain-sized grain. RenderStyle::Glass draws clear glass, Hidden draws nothing. A
-// scene without a solid plane gets a floor under its lowest point, for looks only (unless the
-// camera is below it). Lighting: for the final look a soft key light (a 3x3 adaptive area light), a
-// shadowless fill light and a little ambient light, with a pale sky behind; the draft look replaces
-// the area light by a point light (faster, hard shadows).
+// Grains are spheres gathered in one union per sand texture (8 shades; a grain's shade comes
+// from a hash of its id: a small, stable colour variation that does not flicker between frames),
+// which POV-Ray reads faster and holds in less memory than a texture a sphere. Geometry: planes are
+// drawn as infinite floors with a faint checker (glass planes as a thin finite slab); boxes and
+// cylinders as solids or, for containers, as walls of wall_thickness around the inner size, centred
+// on `center`, without a lid when open_top; spheres as spheres; a bowl as its shell below the rim;
+// heightmaps and meshes as mesh2 triangles; a surface-mode frame's static layer (SandSurface) as a
+// smooth mesh2 in a sand texture with a grain-sized grain. RenderStyle::Glass draws clear glass,
+// Hidden draws nothing. A scene without a solid plane gets a floor under its lowest point, for
+// looks only (unless the camera is below it). Lighting: for the final look a soft key light (a 3x3
+// adaptive area light), a shadowless fill light and a little ambient light, with a pale sky behind;
+// the draft look replaces the area light by a point light (faster, hard shadows).
 //
 // An animation must not jitter: everything sized from the scene's extent (the automatic camera,
 // the lights, the floor's squares, a glass plane's slab) is sized from PovOptions::bounds when it

@@ -22,6 +22,7 @@
 #include "scene/scene_loader.hpp"
 #include "sim/world.hpp"
 #include "support/houdini_geo.hpp"
+#include "support/pov_grains.hpp"
 #include "support/scratch.hpp"
 
 namespace sandflow {
@@ -119,26 +120,28 @@ TEST_F(HoudiniTest, CdIsTheColourOfTheGrainInPovRayAsLinearLight) {
   write_pov_scene(path("f.pov"), f, {}, PovOptions{});
   // the POV-Ray scene: the sand textures' sRGB colours, then each grain's texture
   std::vector<Vec3> srgb;
-  std::vector<int> texture;
   std::istringstream pov(read_bytes(path("f.pov")));
   for (std::string line; std::getline(pov, line);) {
     Vec3 c;
-    int k = 0;
-    double x, y, z, r;
     if (std::sscanf(line.c_str(), "  texture { pigment { srgb <%lf,%lf,%lf>", &c.x, &c.y, &c.z) ==
         3)
       srgb.push_back(c);
-    else if (std::sscanf(line.c_str(), "G(%lf,%lf,%lf,%lf,%d)", &x, &y, &z, &r, &k) == 5)
-      texture.push_back(k);
   }
   ASSERT_EQ(srgb.size(), 8u);
-  ASSERT_EQ(texture.size(), f.size());
+  const std::vector<test::PovGrain> drawn = test::pov_grains(read_bytes(path("f.pov")));
+  ASSERT_EQ(drawn.size(), f.size());
+  std::vector<int> texture(f.size(), -1);
+  for (const test::PovGrain& d : drawn)
+    for (std::size_t i = 0; i < f.size(); ++i)
+      if (std::hypot(f.position[i].x - d.x, f.position[i].y - d.y, f.position[i].z - d.z) < 1e-6)
+        texture[i] = d.shade;
   const test::Geo g = test::parse_geo(read_bytes(path("f.geo")));
   ASSERT_EQ(g.points.size(), f.size());
   std::set<int> shades;
   for (std::size_t i = 0; i < f.size(); ++i) {
     const std::vector<double>& cd = g.points[i].attr.at("Cd");
     ASSERT_EQ(cd.size(), 3u);
+    ASSERT_GE(texture[i], 0) << i;
     const Vec3 want = srgb.at(static_cast<std::size_t>(texture[i]));
     // POV-Ray's colours are printed to 7 digits
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(cd[c], linear(want[c]), 1e-6) << i;

@@ -15,6 +15,8 @@
 
 #include "core/error.hpp"
 #include "core/rng.hpp"
+#include "io/sand_colour.hpp"
+#include "support/pov_grains.hpp"
 #include "support/scratch.hpp"
 
 namespace sandflow {
@@ -69,6 +71,12 @@ FrameData small_mound() {
   return f;
 }
 
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
 GeometryConfig floor_plane() {
   GeometryConfig g;
   g.type = GeometryType::Plane;
@@ -101,14 +109,22 @@ TEST_F(PovTest, SceneTextHasGrainsAndGeometry) {
   EXPECT_NE(text.find("assumed_gamma 1.0"), std::string::npos);
   EXPECT_NE(text.find("sky <0,0,1>"), std::string::npos);
   EXPECT_NE(text.find("right -x*"), std::string::npos);
-  EXPECT_NE(text.find("#macro G(X,Y,Z,R,C)"), std::string::npos);
-  // One line per grain.
-  std::size_t grains = 0;
-  for (std::size_t at = text.find("\nG("); at != std::string::npos;
-       at = text.find("\nG(", at + 1)) {
-    ++grains;
+  // Every grain once, where it is, in its own shade (the grains of a shade in one union).
+  const std::vector<test::PovGrain> grains = test::pov_grains(text);
+  ASSERT_EQ(grains.size(), f.size());
+  std::vector<int> seen(f.size(), 0);
+  for (const test::PovGrain& g : grains) {
+    std::size_t i = 0;  // the grain at g's place (the mound's grains are millimetres apart)
+    while (i < f.size() &&
+           std::hypot(f.position[i].x - g.x, f.position[i].y - g.y, f.position[i].z - g.z) > 1e-6)
+      ++i;
+    ASSERT_LT(i, f.size()) << g.x << " " << g.y << " " << g.z;
+    ++seen[i];
+    EXPECT_DOUBLE_EQ(g.radius, f.radius[i]);
+    EXPECT_EQ(g.shade, sand_shade(f.id[i])) << i;
   }
-  EXPECT_EQ(grains, f.size());
+  EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), static_cast<long>(f.size()));
+  EXPECT_EQ(count_of(text, "union {  // Sand["), static_cast<std::size_t>(kSandShades));
   // The glass container: walls cut from a box, unrotated, centred on its centre.
   EXPECT_NE(text.find("// tray\ndifference { box"), std::string::npos);
   EXPECT_NE(text.find("texture { Glass } interior { GlassInterior } matrix <1,0,0,0,1,0,0,0,1,0.3,"
@@ -138,10 +154,18 @@ SandSurface two_sand_columns() {
   return sf;
 }
 
-std::size_t count_of(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
+TEST_F(PovTest, AShadeWithOneGrainIsATexturedSphereNotAUnion) {
+  // POV-Ray warns of a union of one object: a lone grain of its shade is drawn on its own
+  FrameData f;
+  f.position = {{0.01, 0.02, 0.03}};
+  f.radius = {0.004};
+  f.id = {7};
+  const std::string text = pov_scene_text(f, {floor_plane()}, PovOptions{});
+  EXPECT_EQ(count_of(text, "union {  // Sand["), 0u);
+  const std::vector<test::PovGrain> grains = test::pov_grains(text);
+  ASSERT_EQ(grains.size(), 1u);
+  EXPECT_EQ(grains[0].shade, sand_shade(7));
+  EXPECT_DOUBLE_EQ(grains[0].z, 0.03);
 }
 
 TEST_F(PovTest, TheStaticLayerIsASmoothSurfaceOverTheCellsThatTouchSand) {
@@ -158,8 +182,8 @@ TEST_F(PovTest, TheStaticLayerIsASmoothSurfaceOverTheCellsThatTouchSand) {
   // a sand column's vertex at its centre and height
   EXPECT_NE(text.find("<-0.005,0.005,0.02>"), std::string::npos);
   // the grains are still drawn, after the surface
-  EXPECT_EQ(count_of(text, "\nG("), small_mound().size());
-  EXPECT_LT(text.find("mesh2 {"), text.find("\nG("));
+  EXPECT_EQ(test::pov_grains(text).size(), small_mound().size());
+  EXPECT_LT(text.find("mesh2 {"), text.find("// grains"));
 
   SandSurface bare = two_sand_columns();
   bare.sand.assign(bare.sand.size(), 0);
