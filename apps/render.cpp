@@ -32,6 +32,8 @@
 #include "core/counted.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
+#include "core/memory.hpp"
+#include "core/memory_gate.hpp"
 #include "core/process.hpp"
 #include "core/read_file.hpp"
 #include "core/threads.hpp"
@@ -688,8 +690,13 @@ int render_command(const RenderOptions& o) {
   std::vector<char> rendered(tasks.size(), 0), kept(tasks.size(), 0);
   std::vector<std::unique_ptr<PictureRecord>> records;
   for (const std::string& run : runs) records.push_back(std::make_unique<PictureRecord>(run));
+  // POV-Rays at once: no more than the memory free now holds, by what each picture took
+  const std::int64_t free_memory = available_memory_bytes();
+  MemoryGate gate(free_memory / 10 * 9, jobs, std::min(jobs, cores));
+  bool memory_said = false;
   parallel_tasks(n, jobs, [&](int i) {
-    if (g_stop_signal != 0) return;
+    if (!gate.enter([] { return g_stop_signal != 0; })) return;
+    std::int64_t peak = 0;  // what this picture held: POV-Ray's peak and the scene's text
     const Task& t = tasks[i];
     const std::string stem = (fs::path(t.run) / "render" / fmt::format("{:04d}", t.frame)).string();
     std::size_t grains = 0;
@@ -710,7 +717,9 @@ int render_command(const RenderOptions& o) {
       if (up_to_date) {
         kept[static_cast<std::size_t>(i)] = 1;
       } else {
-        render_pov(stem + ".pov", stem + ".png", o.width, o.height, threads_each, antialias);
+        peak =
+            render_pov(stem + ".pov", stem + ".png", o.width, o.height, threads_each, antialias) +
+            static_cast<std::int64_t>(text.size());
         records[k]->made(t.frame, digest);
       }
       rendered[static_cast<std::size_t>(i)] = 1;
@@ -727,7 +736,16 @@ int render_command(const RenderOptions& o) {
         fs::remove(stem + ".png.log", ec);
       }
     }
+    gate.leave(peak);
     const std::lock_guard<std::mutex> lock(progress_mutex);
+    if (!memory_said && gate.allowed() < jobs) {
+      memory_said = true;
+      progress.note(fmt::format(
+          "render: a picture takes up to {:.0f} MB (POV-Ray and its scene) and {:.0f} MB were "
+          "free: {} at once, not {}",
+          static_cast<double>(gate.largest_peak()) / 1e6, static_cast<double>(free_memory) / 1e6,
+          gate.allowed(), jobs));
+    }
     if (kept[static_cast<std::size_t>(i)]) progress.skip();  // (its speed is POV-Ray's)
     progress.update(++done, static_cast<std::int64_t>(grains));
   });

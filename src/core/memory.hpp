@@ -1,4 +1,5 @@
-// The memory a process has used, for the run's summary (summary.json: peak_memory_bytes).
+// The memory a process has used, for the run's summary (summary.json: peak_memory_bytes), and
+// what the machine has free for more.
 #pragma once
 
 #include <cstdint>
@@ -8,5 +9,10 @@ namespace sandflow {
 /// The most resident memory this process has held so far (VmHWM of /proc/self/status) [bytes];
 /// 0 where the system does not say.
 std::int64_t peak_memory_bytes();
+
+/// The memory that new work can take without swapping [bytes]: the kernel's MemAvailable, or less
+/// when this process's control group (cgroup v2 memory.max, v1 memory.limit_in_bytes) leaves less;
+/// 0 where the system does not say.
+std::int64_t available_memory_bytes();
 
 }  // namespace sandflow

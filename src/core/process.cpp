@@ -13,6 +13,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -45,7 +46,8 @@ std::string find_program(const std::string& name) {
 }
 
 std::string run_logged(std::vector<std::string> args, const std::string& work_dir,
-                       const std::string& log_path, const std::string& what) {
+                       const std::string& log_path, const std::string& what,
+                       std::int64_t* peak_bytes) {
   // Everything the child needs is prepared before fork: it may only call async-signal-safe
   // functions (the parent has other threads).
   std::vector<char*> argv;
@@ -81,10 +83,11 @@ std::string run_logged(std::vector<std::string> args, const std::string& work_di
   ::close(log_fd);
   int status = 0;
   bool stopped = false;
+  struct rusage usage {};
   if (const volatile std::sig_atomic_t* stop = g_stop_flag.load()) {
     // polled: a signal handler's flag cannot wake a blocking wait (SA_RESTART restarts it)
     for (;;) {
-      const pid_t got = ::waitpid(pid, &status, WNOHANG);
+      const pid_t got = ::wait4(pid, &status, WNOHANG, &usage);
       if (got == pid || (got < 0 && errno != EINTR)) break;
       if (*stop != 0 && !stopped) {
         ::kill(pid, SIGTERM);
@@ -93,9 +96,10 @@ std::string run_logged(std::vector<std::string> args, const std::string& work_di
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
   } else {
-    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
     }
   }
+  if (peak_bytes) *peak_bytes = static_cast<std::int64_t>(usage.ru_maxrss) * 1024;  // (kB)
   if (stopped) return what + " was stopped";
   if (WIFSIGNALED(status))
     return what + " was killed by signal " + std::to_string(WTERMSIG(status));

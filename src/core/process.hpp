@@ -8,6 +8,7 @@
 #pragma once
 
 #include <csignal>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -27,8 +28,10 @@ std::string find_program(const std::string& name);
 /// status N" (127: it could not be executed, 126: no `work_dir`), "WHAT was killed by signal N".
 /// Throws OutputError when the log cannot be created. Safe to call from several threads at once:
 /// the log is opened close-on-exec, so a child started by another thread does not hold it. The
-/// child is killed if sandflow dies first (PR_SET_PDEATHSIG): none outlives it.
+/// child is killed if sandflow dies first (PR_SET_PDEATHSIG): none outlives it. `peak_bytes`, when
+/// given, receives the most memory the child held (its resident high-water mark; 0 if unknown).
 std::string run_logged(std::vector<std::string> args, const std::string& work_dir,
-                       const std::string& log_path, const std::string& what);
+                       const std::string& log_path, const std::string& what,
+                       std::int64_t* peak_bytes = nullptr);
 
 }  // namespace sandflow

@@ -721,9 +721,10 @@ bool ascii_without_spaces(const std::string& name) {
 void run_into_file(const std::vector<std::string>& args, const std::string& work_dir,
                    const std::string& log_path, const std::string& what, const std::string& partial,
                    const std::string& out_path,
-                   const std::function<std::string(const std::string&)>& whole) {
+                   const std::function<std::string(const std::string&)>& whole,
+                   std::int64_t* peak_bytes = nullptr) {
   std::error_code ec;
-  std::string problem = run_logged(args, work_dir, log_path, what);
+  std::string problem = run_logged(args, work_dir, log_path, what, peak_bytes);
   if (problem.empty()) {
     if (!fs::exists(partial, ec))
       problem = what + " wrote nothing";
@@ -751,8 +752,8 @@ void run_into_file(const std::vector<std::string>& args, const std::string& work
 
 }  // namespace
 
-void render_pov(const std::string& pov_path, const std::string& png_path, int width, int height,
-                int threads, bool antialias) {
+std::int64_t render_pov(const std::string& pov_path, const std::string& png_path, int width,
+                        int height, int threads, bool antialias) {
   const std::string exe = find_povray();
   if (exe.empty()) {
     throw OutputError(png_path +
@@ -787,7 +788,10 @@ void render_pov(const std::string& pov_path, const std::string& png_path, int wi
                                    "Output_Alpha=off"};
   if (threads > 0) args.push_back("+WT" + std::to_string(threads));
   try {
-    run_into_file(args, work_dir.string(), log_path, "povray", partial, png_path, png_problem);
+    std::int64_t peak = 0;
+    run_into_file(args, work_dir.string(), log_path, "povray", partial, png_path, png_problem,
+                  &peak);
+    return peak;
   } catch (const OutputError&) {
     // POV-Ray's record of a render that did not end (NAME.partial.pov-state)
     fs::remove(fs::path(partial).replace_extension(".pov-state"), ec);

@@ -124,9 +124,10 @@ std::string find_povray();
 /// `threads` render threads; 0 or less lets POV-Ray decide). POV-Ray's output goes to
 /// png_path + ".log". The PNG appears only when the render succeeded and the picture is whole
 /// (io/media_check.hpp). Throws OutputError with the end of the log when povray is missing, fails,
-/// or leaves no whole picture, and with what the disk holds when it is full.
-void render_pov(const std::string& pov_path, const std::string& png_path, int width, int height,
-                int threads, bool antialias = true);
+/// or leaves no whole picture, and with what the disk holds when it is full. Returns the most
+/// memory POV-Ray held [bytes] (0 if unknown).
+std::int64_t render_pov(const std::string& pov_path, const std::string& png_path, int width,
+                        int height, int threads, bool antialias = true);
 
 /// Encodes the images FOLDER/NNNN.png, frames first .. first + count - 1 (the names frame_path
 /// gives), into the H.264 MP4 `mp4_path` (yuv420p, odd sizes padded to even) at `fps` frames per
