@@ -388,10 +388,10 @@ void write_geometry(std::string& s, const GeometryConfig& g, const ViewBounds& b
   }
 }
 
-// The grains as one union of spheres per sand shade, its texture given once: POV-Ray reads a
-// 202,362-grain frame in 0.34 s this way against 1.50 s as a macro call a grain, and holds it in
-// 98 MB against 237 MB (a texture a sphere); docs/performance.md, 2026-12-02, sixty-first. A shade
-// with a single grain is a textured sphere (POV-Ray warns of a union of one).
+// The grains as one union of spheres per sand shade, its texture given once: POV-Ray parsed a
+// 202,362-grain frame in 0.48 s this way against 1.78 s as a macro call a grain, and held 98 MB
+// against 237 MB with a texture for every sphere (docs/performance.md, 2026-12-02, sixty-first).
+// A shade with a single grain is a textured sphere (POV-Ray warns of a union of one).
 void write_grains(std::string& s, const FrameData& f) {
   std::array<std::vector<std::uint32_t>, kSandShades> by_shade;
   for (std::size_t i = 0; i < f.size(); ++i) {
