@@ -239,8 +239,20 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
                             config.rate / config.rate_scale)
               : "",
           max_rate, config.rate_scale != 1 ? ", or ask for fewer grains" : ""));
-    // a batch is born at the first step past its wait: bound the fall over a whole interval
-    const Real wait = batch_interval_;
+    // A stream, not a stack of discs: each slot's grains leave as if born up to one interval
+    // before their batch, a fixed share of it for each slot, so neighbouring slots' grains fall at
+    // different heights. Their paths are still free fall from rest at the pour (the same speeds
+    // where they land), one slot's grains are still one interval apart, and slots lie at least a
+    // spacing apart across: nothing overlaps. Only where the grains fall straight down: a pour
+    // thrown sideways would carry a slot's grains across its neighbours' paths.
+    const bool vertical =
+        config.velocity.x == 0 && config.velocity.y == 0 && gravity.x == 0 && gravity.y == 0;
+    Rng shares(0x5eed57ea3ULL);  // (the same stream for every seed: the emitter's, not the run's)
+    for (std::size_t q = 0; q < slots_.size(); ++q)
+      slot_lead_.push_back(vertical ? shares.uniform() * batch_interval_ : 0);
+    // a batch is born at the first step past its wait, and a slot leads by up to an interval:
+    // bound the fall over two
+    const Real wait = 2 * batch_interval_;
     drop_ = norm(config.velocity) * wait + g * wait * wait / 2;
     slot_lo_ = slot_hi_ = slots_.front();
     for (const Vec3& p : slots_) {
@@ -478,11 +490,9 @@ void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vect
     return;
   }
   // pour: a batch of randomly chosen free slots, emitted tau after its time (it waited for a
-  // rebuild of the pair list, or for the step): placed and moving as free fall since its time
-  // would have them, so that the wait changes nothing while they fly
+  // rebuild of the pair list, or for the step), each grain placed and moving as free fall since
+  // its time, and its slot's lead, would have it, so that the wait changes nothing while they fly
   const Real tau = std::max(0.0, t - next_time_);
-  const Vec3 shift = config_.velocity * tau + gravity_ * (tau * tau / 2);
-  const Vec3 velocity = config_.velocity + gravity_ * tau;
   owed_ += per_batch_;
   auto k = static_cast<std::int64_t>(owed_);
   k = std::min<std::int64_t>(
@@ -495,9 +505,10 @@ void Emitter::emit(Real t, Rng& rng, std::vector<NewGrain>& out, const std::vect
     const auto pick =
         q + static_cast<std::size_t>(rng.uniform() * static_cast<Real>(order.size() - q));
     std::swap(order[q], order[std::min(pick, order.size() - 1)]);
-    const Vec3 slot = slots_[order[q]] + shift;
+    const Real fall = tau + slot_lead_[order[q]];
+    const Vec3 slot = slots_[order[q]] + config_.velocity * fall + gravity_ * (fall * fall / 2);
     if (old_grains.taken(slot, reach_)) continue;  // (the top of a heap grown up to the pour)
-    out.push_back({jittered(slot), velocity, draw_radius(rng)});
+    out.push_back({jittered(slot), config_.velocity + gravity_ * fall, draw_radius(rng)});
     ++placed;
   }
   owed_ += static_cast<Real>(k - placed);  // the grains of taken slots come with later batches

@@ -2,6 +2,7 @@
 // once instead of making (or looping over) a pattern no machine holds.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -122,6 +123,67 @@ TEST(Emitters, ALatePourBatchIsWhereAndAsFastAsFreeFallSinceItsTimeMakesIt) {
     EXPECT_TRUE(late.near_slots(b[i].x, b[i].r));  // the slot check sees where it lands
   }
   EXPECT_EQ(on_time.next_time(), late.next_time());  // the schedule does not slip
+}
+
+// A pour straight down falls as a stream, not as a stack of discs: its grains leave the disk at
+// heights spread over a batch's fall, yet every one is on free fall from rest at the disk (the
+// speed it lands with is the pour's), none overlaps another, and the flow is the rate.
+TEST(Emitters, AVerticalPourFallsAsAStreamOfFreeFallingGrainsNotAsDiscs) {
+  EmitterConfig pour;
+  pour.type = EmitterType::Pour;
+  pour.center = {0, 0, 0.5};
+  pour.radius = 0.006;
+  pour.count = 4000;
+  pour.rate = 5000;  // of the 6,698 grains/s its slots let through
+  pour.jitter = 0.5;
+  Emitter e(pour, millimetre_grains(), kGravity, "test");
+  const Real g = 9.81;
+  Rng rng(3);
+  struct Born {
+    NewGrain grain;
+    Real t;
+  };
+  std::vector<Born> born;
+  std::vector<Real> drops;
+  for (int b = 0; b < 40 && !e.done(); ++b) {
+    const Real t = e.next_time();
+    std::vector<NewGrain> out;
+    e.emit(t, rng, out);
+    for (const NewGrain& n : out) {
+      born.push_back({n, t});
+      const Real drop = pour.center.z - n.x.z;
+      drops.push_back(drop);
+      // on free fall from rest at the disk, but for the jitter of its place (at most half the
+      // free gap between slots, 0.5 * 0.05 mm): v^2 = 2 g (drop - jitter)
+      const Real jit = pour.jitter * (pour.spacing - 1) * 0.001 / 2;
+      EXPECT_NEAR(n.v.z * n.v.z, 2 * g * drop, 2 * g * jit + 1e-12);
+      EXPECT_LE(n.v.z, 0.0);
+      EXPECT_EQ(n.v.x, 0.0);
+      EXPECT_EQ(n.v.y, 0.0);
+    }
+  }
+  ASSERT_GT(born.size(), 1000u);
+  // heights spread over (nearly) a whole batch's fall of one spacing, not a disc
+  const auto [lo, hi] = std::minmax_element(drops.begin(), drops.end());
+  EXPECT_LT(*lo, 0.0002);
+  EXPECT_GT(*hi, 0.0008);
+  // no two grains overlap at the latest birth: each moved on its free fall until then
+  const Real t_end = born.back().t;
+  std::vector<Vec3> at_end;
+  for (const Born& b : born) {
+    const Real dt = t_end - b.t;
+    at_end.push_back(b.grain.x + b.grain.v * dt + kGravity * (dt * dt / 2));
+  }
+  Real closest = 1;
+  for (std::size_t i = 0; i < at_end.size(); ++i)
+    for (std::size_t j = i + 1; j < at_end.size(); ++j)
+      closest = std::min(closest, norm(at_end[i] - at_end[j]) - born[i].grain.r - born[j].grain.r);
+  EXPECT_GE(closest, -1e-12);
+  // the rate: as many grains as the pour's rate over the batches' time
+  const Real span = born.back().t - born.front().t;
+  const auto first_batch = static_cast<Real>(std::count_if(
+      born.begin(), born.end(), [&](const Born& b) { return b.t == born.front().t; }));
+  EXPECT_NEAR((static_cast<Real>(born.size()) - first_batch) / span, pour.rate, 0.02 * pour.rate);
 }
 
 TEST(Emitters, ABoxTooSmallForItsCountIsRefusedWithWhatItHolds) {
