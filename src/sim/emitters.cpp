@@ -4,6 +4,7 @@
 #include <cmath>
 #include <compare>
 #include <numbers>
+#include <optional>
 #include <tuple>
 
 #include <fmt/format.h>
@@ -75,6 +76,71 @@ class Occupancy {
   Real cell_ = 0;
   std::vector<Entry> cells_;  // sorted by cell, then grain
 };
+
+/// Most slot pairs stream_is_clear tests (a fraction of a second); a pour that would need more
+/// falls as discs.
+constexpr double kMaxStreamPairs = 2e7;
+/// A pour whose slots cannot lead by an eighth of a batch interval falls as discs: less would
+/// hardly break them up.
+constexpr Real kLeastStreamLead = 1.0 / 8;
+
+// Whether grains that leave slot q lead[q] early (each lead less than the batch interval T) never
+// come closer than `clearance`, centre to centre, while they fall: nullopt when there are more
+// pairs to test than kMaxStreamPairs. Gravity g is across the slots' plane and v does not rise
+// against it. The older A of two grains in flight has fallen df longer than the younger B; at B's
+// birth they are S = (a - b) + v df + g df (l_B + df / 2) apart, and a time t later S + g df t:
+// the closest they come is |S|, or S's part across g when A is still above B. A pair df >= T
+// apart has fallen at least a slot spacing further along g and only parts, so the pairs tested
+// are those of one batch and of neighbouring batches, of slots nearer than clearance plus what v
+// carries across g in T.
+std::optional<bool> stream_is_clear(const std::vector<Vec3>& slots, const std::vector<Real>& lead,
+                                    Real T, const Vec3& v, const Vec3& g, Real spacing,
+                                    Real clearance) {
+  const Vec3 down = g * (1 / norm(g));
+  const Vec3 across = v - down * dot(v, down);
+  if (norm2(across) == 0 && spacing >= clearance) return true;  // apart by a spacing across g
+  const Real reach = clearance + norm(across) * T;
+  const double per_slot = 9 * reach * reach / (spacing * spacing * std::sqrt(3.0) / 2);
+  if (per_slot * static_cast<double>(slots.size()) / 2 > kMaxStreamPairs) return std::nullopt;
+  struct Entry {
+    std::int64_t i, j;
+    std::uint32_t slot;
+    auto operator<=>(const Entry&) const = default;
+  };
+  auto cell = [&](const Vec3& p) {
+    return std::pair{static_cast<std::int64_t>(std::floor(p.x / reach)),
+                     static_cast<std::int64_t>(std::floor(p.y / reach))};
+  };
+  std::vector<Entry> cells;
+  cells.reserve(slots.size());
+  for (std::uint32_t q = 0; q < slots.size(); ++q) {
+    const auto [i, j] = cell(slots[q]);
+    cells.push_back({i, j, q});
+  }
+  std::sort(cells.begin(), cells.end());
+  auto apart = [&](std::uint32_t older, std::uint32_t younger, Real df) {
+    const Vec3 s = slots[older] - slots[younger] + v * df + g * (df * (lead[younger] + df / 2));
+    const Real below = dot(s, down);  // > 0: the older one is below, and they part
+    const Real closest2 = below >= 0 ? norm2(s) : norm2(s) - below * below;
+    return closest2 >= clearance * clearance;
+  };
+  for (std::uint32_t q = 0; q < slots.size(); ++q) {
+    const auto [i, j] = cell(slots[q]);
+    for (std::int64_t b = j - 1; b <= j + 1; ++b)
+      for (std::int64_t a = i - 1; a <= i + 1; ++a)
+        for (auto e = std::lower_bound(cells.begin(), cells.end(), Entry{a, b, 0});
+             e != cells.end() && e->i == a && e->j == b; ++e) {
+          const std::uint32_t p = e->slot;
+          if (p <= q) continue;
+          const Real d = lead[p] - lead[q];  // one batch: the larger lead is the older grain
+          if (!(d >= 0 ? apart(p, q, d) : apart(q, p, -d))) return false;
+          // neighbouring batches: the earlier batch's grain is older by T less the lead it lacks
+          if (d < 0 && !apart(p, q, T + d)) return false;
+          if (d > 0 && !apart(q, p, T - d)) return false;
+        }
+  }
+  return true;
+}
 
 }  // namespace
 
@@ -241,15 +307,30 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
           max_rate, config.rate_scale != 1 ? ", or ask for fewer grains" : ""));
     // A stream, not a stack of discs: each slot's grains leave as if born up to one interval
     // before their batch, a fixed share of it for each slot, so neighbouring slots' grains fall at
-    // different heights. Their paths are still free fall from rest at the pour (the same speeds
-    // where they land), one slot's grains are still one interval apart, and slots lie at least a
-    // spacing apart across: nothing overlaps. Only where the grains fall straight down: a pour
-    // thrown sideways would carry a slot's grains across its neighbours' paths.
-    const bool vertical =
-        config.velocity.x == 0 && config.velocity.y == 0 && gravity.x == 0 && gravity.y == 0;
+    // different heights. Their paths are still free fall from the pour (the same speeds where
+    // they land), and one slot's grains are still one interval apart. Straight down, slots a
+    // spacing apart across stay so: nothing overlaps. Thrown sideways, a slot's grains cross its
+    // neighbours' paths, so the leads shrink (by halves) until stream_is_clear finds every pair
+    // clear (jitter included), or the pour falls as discs, which never meet.
     Rng shares(0x5eed57ea3ULL);  // (the same stream for every seed: the emitter's, not the run's)
-    for (std::size_t q = 0; q < slots_.size(); ++q)
-      slot_lead_.push_back(vertical ? shares.uniform() * batch_interval_ : 0);
+    std::vector<Real> share(slots_.size());
+    for (Real& u : share) u = shares.uniform();
+    const bool falls = g > 0 && gravity.x == 0 && gravity.y == 0 &&
+                       dot(config.velocity, gravity) >= 0;  // (not thrown up into its own stream)
+    const Real clearance = d_max_ + config.jitter * std::max(0.0, s - d_max_);
+    slot_lead_.assign(slots_.size(), 0);
+    for (Real part = 1; falls && part >= kLeastStreamLead; part /= 2) {
+      for (std::size_t q = 0; q < slots_.size(); ++q)
+        slot_lead_[q] = part * share[q] * batch_interval_;
+      const std::optional<bool> clear = stream_is_clear(slots_, slot_lead_, batch_interval_,
+                                                        config.velocity, gravity, s, clearance);
+      if (clear == true) {
+        stream_lead_ = part;
+        break;
+      }
+      slot_lead_.assign(slots_.size(), 0);
+      if (!clear) break;  // (too many pairs to test)
+    }
     // a batch is born at the first step past its wait, and a slot leads by up to an interval:
     // bound the fall over two
     const Real wait = 2 * batch_interval_;

@@ -1,12 +1,12 @@
 // Emitters (docs/design.md §7): where grains come from. A pour drops batches from a disk or a
 // rectangle, each batch placed on free slots of a hexagonal pattern so that no two new grains
 // overlap, and the next batch waits until the last one has fallen one slot spacing; a slot's
-// grains leave a fixed part of an interval early, so that the stream does not fall as discs. A
-// block fills a box with a jittered cubic lattice and gives it a velocity (a splash, a wave); a
-// lattice fills a box with a close-packed (FCC) lattice at rest (a prefilled pile). A bed fills a
-// footprint, from the scene's geometry up to a height, with a random packing at rest
-// (geometry/bed_packing.hpp), made once when the scene is loaded (resolve_beds: it decides the
-// count) and again, the same, by the World.
+// grains leave a fixed part of an interval early (less when thrown sideways, where their paths
+// cross), so that the stream does not fall as discs. A block fills a box with a jittered cubic
+// lattice and gives it a velocity (a splash, a wave); a lattice fills a box with a close-packed
+// (FCC) lattice at rest (a prefilled pile). A bed fills a footprint, from the scene's geometry up
+// to a height, with a random packing at rest (geometry/bed_packing.hpp), made once when the scene
+// is loaded (resolve_beds: it decides the count) and again, the same, by the World.
 #pragma once
 
 #include <cstdint>
@@ -130,6 +130,9 @@ class Emitter {
     if (done()) bed_ = {};  // (a bed emitted before the checkpoint: its grains are in the state)
   }
 
+  /// A pour's slots lead their batches by up to this share of a batch interval, each its own
+  /// share of it: 1 for a stream straight down, less for one thrown sideways, 0 for discs.
+  Real stream_lead() const { return stream_lead_; }
   /// Time the last grain is emitted [s].
   Real end_time() const;
   std::int64_t emitted() const { return emitted_; }
@@ -149,6 +152,7 @@ class Emitter {
   Real spacing_;             ///< slot spacing [m]
   std::vector<Vec3> slots_;  ///< pour: slot centres (one layer)
   std::vector<Real> slot_lead_;  ///< pour: how long each slot's grains have fallen at birth [s]
+  Real stream_lead_ = 0;     ///< pour: the largest lead, in batch intervals (0: it falls as discs)
   Real batch_interval_ = 0;  ///< pour: time between batches [s]
   Real per_batch_ = 0;       ///< pour: grains per batch (fractional)
   Real owed_ = 0;            ///< pour: fractional grains carried to the next batch

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "checkpoint/checkpoint.hpp"
 #include "core/error.hpp"
 #include "sim/emitters.hpp"
@@ -115,8 +117,9 @@ TEST(Emitters, ALatePourBatchIsWhereAndAsFastAsFreeFallSinceItsTimeMakesIt) {
   late.emit(t0 + tau, rng_b, b);
   ASSERT_EQ(a.size(), b.size());
   ASSERT_GT(a.size(), 0u);
-  const Vec3 shift = pour.velocity * tau + kGravity * (tau * tau / 2);
   for (std::size_t i = 0; i < a.size(); ++i) {
+    // the grain on time, carried on by its own free fall
+    const Vec3 shift = a[i].v * tau + kGravity * (tau * tau / 2);
     EXPECT_LT(norm(b[i].x - (a[i].x + shift)), 1e-12) << i;
     EXPECT_LT(norm(b[i].v - (a[i].v + kGravity * tau)), 1e-12) << i;
     EXPECT_EQ(a[i].r, b[i].r);
@@ -184,6 +187,108 @@ TEST(Emitters, AVerticalPourFallsAsAStreamOfFreeFallingGrainsNotAsDiscs) {
   const auto first_batch = static_cast<Real>(std::count_if(
       born.begin(), born.end(), [&](const Born& b) { return b.t == born.front().t; }));
   EXPECT_NEAR((static_cast<Real>(born.size()) - first_batch) / span, pour.rate, 0.02 * pour.rate);
+}
+
+// A pour's grains from their births on, as free fall carries them.
+struct PourFlight {
+  std::vector<NewGrain> grains;
+  std::vector<Real> born;  ///< [s]
+  Real lead = 0;           ///< the emitter's stream_lead()
+};
+
+PourFlight pour_flight(const EmitterConfig& pour, int batches) {
+  Emitter e(pour, millimetre_grains(), kGravity, "test");
+  PourFlight f;
+  f.lead = e.stream_lead();
+  Rng rng(3);
+  for (int b = 0; b < batches && !e.done(); ++b) {
+    const Real t = e.next_time();
+    std::vector<NewGrain> out;
+    e.emit(t, rng, out);
+    for (const NewGrain& n : out) {
+      f.grains.push_back(n);
+      f.born.push_back(t);
+    }
+  }
+  return f;
+}
+
+// The smallest gap between two grains of a pour over their flights: each pair from the younger's
+// birth, where the older has flown on its free fall, to where their constant relative velocity
+// brings them closest [m] (negative: they overlap).
+Real closest_gap_in_flight(const PourFlight& f) {
+  Real closest = 1;
+  for (std::size_t b = 0; b < f.grains.size(); ++b)
+    for (std::size_t a = 0; a < f.grains.size(); ++a) {
+      if (a == b || f.born[a] > f.born[b] || (f.born[a] == f.born[b] && a > b)) continue;
+      const Real t = f.born[b] - f.born[a];
+      const NewGrain& A = f.grains[a];
+      const NewGrain& B = f.grains[b];
+      const Vec3 s = A.x + A.v * t + kGravity * (t * t / 2) - B.x;
+      const Vec3 w = A.v + kGravity * t - B.v;
+      Real d2 = norm2(s);
+      if (dot(s, w) < 0 && norm2(w) > 0) d2 -= dot(s, w) * dot(s, w) / norm2(w);
+      closest = std::min(closest, std::sqrt(std::max(d2, 0.0)) - A.r - B.r);
+    }
+  return closest;
+}
+
+// rate: about half of what its slots let through at that speed down
+EmitterConfig sideways_pour(Vec3 velocity, Real rate) {
+  EmitterConfig pour;
+  pour.type = EmitterType::Pour;
+  pour.center = {0, 0, 0.5};
+  pour.radius = 0.006;
+  pour.count = 100000;
+  pour.rate = rate;
+  pour.velocity = velocity;
+  pour.jitter = 0.5;
+  return pour;
+}
+
+// Thrown a little sideways, a pour still falls as a stream (heights spread over a batch's fall,
+// on free fall from the pour) and its grains never meet in flight; thrown more steeply, its leads
+// shrink or go, as its spacing allows, and still no two grains meet.
+TEST(Emitters, APourThrownSidewaysFallsAsAStreamWhoseGrainsNeverMeetInFlight) {
+  const EmitterConfig slant = sideways_pour({0.2, 0, -1.5}, 80000);
+  const PourFlight f = pour_flight(slant, 30);
+  ASSERT_GT(f.grains.size(), 200u);
+  EXPECT_EQ(f.lead, 1.0);
+  Real low = 1, high = 0;
+  const Real jit = slant.jitter * (slant.spacing - 1) * 0.001 / 2;
+  for (const NewGrain& n : f.grains) {
+    // on the throw's free fall: as far along the throw as its speed down says it has fallen
+    const Real fall = (n.v.z - slant.velocity.z) / kGravity.z;
+    EXPECT_NEAR(n.v.x, slant.velocity.x, 1e-12);
+    EXPECT_NEAR(slant.center.z - n.x.z, -slant.velocity.z * fall - kGravity.z * fall * fall / 2,
+                jit + 1e-12);
+    low = std::min(low, slant.center.z - n.x.z);
+    high = std::max(high, slant.center.z - n.x.z);
+  }
+  EXPECT_LT(low, 0.0002);
+  EXPECT_GT(high, 0.0008);
+  EXPECT_GE(closest_gap_in_flight(f), -1e-12);
+
+  // steeper: a wider spacing leaves room for some lead (26.6 degrees off the vertical), or all
+  struct Throw {
+    Vec3 v;
+    Real rate, spacing, lead;
+  };
+  const Throw throws[] = {{{0.5, 0, -1.0}, 15000, 1.05, 0.0},
+                          {{0.5, 0, -1.0}, 15000, 1.2, 0.25},
+                          {{0.5, 0, -1.0}, 15000, 1.5, 1.0},
+                          {{1.5, 0, -0.5}, 30000, 1.05, 0.0},
+                          {{1.0, 0.5, 0}, 4000, 1.05, 0.0}};
+  for (const Throw& t : throws) {
+    EmitterConfig c = sideways_pour(t.v, t.rate);
+    c.spacing = t.spacing;
+    const PourFlight g = pour_flight(c, 30);
+    const std::string what =
+        fmt::format("velocity ({}, {}, {}), spacing {}", t.v.x, t.v.y, t.v.z, t.spacing);
+    ASSERT_GT(g.grains.size(), 100u) << what;
+    EXPECT_EQ(g.lead, t.lead) << what;
+    EXPECT_GE(closest_gap_in_flight(g), -1e-12) << what;
+  }
 }
 
 TEST(Emitters, ABoxTooSmallForItsCountIsRefusedWithWhatItHolds) {
