@@ -188,7 +188,8 @@ struct CompareOptions {
   int seeds = 3;                 ///< runs per mode, seeds s0, s0 + 1, ... (s0: the scene's)
   bool equal_stiffness = false;  ///< and one plain-DEM run at the surface run's k_n and dt
   int run_to_frame = 0;          ///< `compare --resume DIR --frames N`: every run on to N (0: not)
-  bool plan_given = false;  ///< --seeds or --equal-stiffness on the command line (not the defaults)
+  bool seeds_given = false;      ///< --seeds on the command line (not the default)
+  bool equal_stiffness_given = false;  ///< --equal-stiffness on the command line
 };
 
 /// The runs of a scene in both modes and the figures compared (what compare.json holds).

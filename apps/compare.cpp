@@ -14,6 +14,7 @@
 #include "analysis/crater.hpp"
 #include "analysis/statistics.hpp"
 #include "commands.hpp"
+#include "console.hpp"
 #include "core/atomic_file.hpp"
 #include "core/counted.hpp"
 #include "core/error.hpp"
@@ -424,11 +425,12 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
   if (!o.resume.empty()) {
     // the options of the comparison are those its surface run and its plan recorded
     if (!o.scene.empty() || o.grains > 0 || !o.sets.empty() || !o.out.empty() || o.force ||
-        o.exports || !o.up_axis.empty() || given.plan_given)
+        o.exports || !o.up_axis.empty())
       throw InputError(
-          "compare --resume DIR goes on with the comparison in DIR exactly as it was started: it "
-          "takes no scene, --grains, --set, --export, --up-axis, --out, --force, --seeds or "
-          "--equal-stiffness; only --threads, and --frames N to run all its runs on to frame N");
+          "compare --resume DIR goes on with the comparison in DIR as it was started: it takes no "
+          "scene, --grains, --set, --export, --up-axis, --out or --force; only --threads, "
+          "--frames N to run all its runs on to frame N, --seeds K to add seeds up to K and "
+          "--equal-stiffness to add that run");
     out = o.resume;
     std::error_code ec;
     if (!fs::exists(fs::path(out) / "surface" / "run.json", ec))
@@ -437,6 +439,16 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
           "compare SCENE --out {}",
           out, shell_quote(out)));
     co = read_plan(out);
+    // a comparison grows (more seeds, the equal-stiffness run); it never drops runs it has
+    if (given.seeds_given && given.seeds < co.seeds)
+      throw InputError(fmt::format(
+          "{}: --seeds {} is fewer than the {} seeds this comparison has: a resumed comparison "
+          "adds seeds, it does not drop them",
+          out, given.seeds, co.seeds));
+    const int added_from = given.seeds_given && given.seeds > co.seeds ? co.seeds + 1 : 0;
+    const bool adds_equal_stiffness = given.equal_stiffness_given && !co.equal_stiffness;
+    if (given.seeds_given) co.seeds = given.seeds;
+    co.equal_stiffness = co.equal_stiffness || given.equal_stiffness_given;
     nlohmann::json record;
     RunOptions r = read_run_record((fs::path(out) / "surface").string(), record, text);
     r.mode.clear();
@@ -457,6 +469,13 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
               "later frame, not back",
               out, o.frames, reached, dir));
       co.run_to_frame = o.frames;
+    }
+    if (added_from > 0 || adds_equal_stiffness) {
+      fs::remove(fs::path(out) / "compare.json", ec);  // (its figures are of fewer runs)
+      if (added_from > 0)
+        print_to_stderr("{}: adding seeds {} to {} to the comparison\n", out, added_from, co.seeds);
+      if (adds_equal_stiffness)
+        print_to_stderr("{}: adding plain DEM at the surface run's stiffness\n", out);
     }
     if (const int stopped = compare_scene(r, co, out, false, true, &text,
                                           compare_resume_command(out), "", c))

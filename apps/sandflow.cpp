@@ -286,9 +286,10 @@ int main(int argc, char** argv) {
   compare->add_flag("--force", co.force, "replace a comparison in a non-empty output folder");
   compare->get_option("scene")->required(false);  // (not with --resume)
   compare->add_option("--resume", co.resume,
-                      "go on with the comparison in DIR, stopped or killed, from its runs' last "
-                      "checkpoints, exactly as it was started (no scene; --threads may change, "
-                      "and --frames N runs all its runs on to frame N)");
+                      "go on with the comparison in DIR, stopped, killed or finished, from its "
+                      "runs' last checkpoints, as it was started (no scene; --threads may change, "
+                      "--frames N runs all its runs on to frame N, --seeds K adds seeds up to K "
+                      "and --equal-stiffness adds that run)");
   CompareOptions cmp;
   compare
       ->add_option("--seeds", cmp.seeds,
@@ -442,7 +443,8 @@ int main(int argc, char** argv) {
     try {
       if (*run) return run_command(ro);
       if (*compare) {
-        cmp.plan_given = compare->count("--seeds") > 0 || compare->count("--equal-stiffness") > 0;
+        cmp.seeds_given = compare->count("--seeds") > 0;
+        cmp.equal_stiffness_given = compare->count("--equal-stiffness") > 0;
         return compare_command(co, cmp);
       }
       if (*table1) return table1_command(to, command_line(argc, argv));

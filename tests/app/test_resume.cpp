@@ -120,6 +120,17 @@ void expect_same_run(const fs::path& want, const fs::path& got) {
       EXPECT_NE(e.path().extension(), ".tmp") << e.path() << " was left behind";
 }
 
+/// A comparison's compare.json without its timings (which no two runs share).
+nlohmann::json comparison_figures(const fs::path& dir) {
+  auto j = nlohmann::json::parse(read_text(dir / "compare.json"));
+  for (const char* timing :
+       {"speedup", "seconds_per_frame_dem", "seconds_per_frame_surface", "wall_seconds_dem",
+        "wall_seconds_surface", "speedup_equal_stiffness", "wall_seconds_dem_equal_stiffness"})
+    j.erase(timing);
+  for (auto& run : j["runs"]) run.erase("wall_seconds");
+  return j;
+}
+
 /// The straight run every test compares with.
 fs::path straight_run(const Sandbox& box, double* seconds = nullptr) {
   const fs::path out = box.dir / "straight";
@@ -191,11 +202,14 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
             std::string::npos)
       << log;
   EXPECT_FALSE(fs::exists(out / "compare.json"));
-  // options belong to the comparison as it was started; --frames runs it on, never back
-  for (const char* option : {" --grains 100", " --seeds 2", " --seeds 3", " --equal-stiffness"}) {
+  // options belong to the comparison as it was started; --frames runs it on, never back, and
+  // --seeds adds seeds, never drops them
+  for (const char* option : {" --grains 100", " --set simulation.seed=7", " --export none"}) {
     EXPECT_EQ(sandflow("compare --resume " + out.string() + option, &log), 2) << option;
     EXPECT_NE(log.find("takes no scene"), std::string::npos) << option << log;
   }
+  EXPECT_EQ(sandflow("compare --resume " + out.string() + " --seeds 1", &log), 2);
+  EXPECT_NE(log.find("--seeds 1 is fewer than the 2 seeds"), std::string::npos) << log;
   EXPECT_EQ(sandflow("compare --resume " + out.string() + " --frames 3", &log), 2);
   EXPECT_NE(log.find("--frames 3 is before frame 40"), std::string::npos) << log;
   EXPECT_EQ(sandflow("compare --resume " + (box.dir / "nothing").string(), &log), 2);
@@ -209,17 +223,8 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
       << log;
   for (const char* run : {"surface", "dem", "seed-2/surface", "seed-2/dem", "dem-equal-stiffness"})
     expect_same_run(want / run, out / run);
-  auto figures = [](const fs::path& dir) {
-    auto j = nlohmann::json::parse(read_text(dir / "compare.json"));
-    for (const char* timing :
-         {"speedup", "seconds_per_frame_dem", "seconds_per_frame_surface", "wall_seconds_dem",
-          "wall_seconds_surface", "speedup_equal_stiffness", "wall_seconds_dem_equal_stiffness"})
-      j.erase(timing);
-    for (auto& run : j["runs"]) run.erase("wall_seconds");
-    return j;
-  };
-  EXPECT_EQ(figures(out), figures(want));
-  EXPECT_EQ(figures(out)["runs"].size(), 5u);
+  EXPECT_EQ(comparison_figures(out), comparison_figures(want));
+  EXPECT_EQ(comparison_figures(out)["runs"].size(), 5u);
   // one of its runs run on to another frame is no longer the comparison's run
   ASSERT_EQ(
       sandflow(fmt::format("run --resume {} --frames {}", (out / "dem").string(), kFrames + 2),
@@ -254,6 +259,51 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   EXPECT_EQ(sandflow(fmt::format("compare --resume {} --frames {}", out.string(), kFrames), &log),
             2);
   EXPECT_NE(log.find("not back"), std::string::npos) << log;
+}
+
+// A finished comparison grows: `compare --resume DIR --seeds K` adds the seeds it lacks and
+// `--equal-stiffness` the plain-DEM run at the surface run's stiffness, keeping the runs it has
+// (read back, not run again), to the comparison started with them all.
+TEST(Resume, AFinishedComparisonGrowsBySeedsAndTheEqualStiffnessRun) {
+  Sandbox box;
+  box.write("pour.toml", kPourScene);
+  const std::string scene = (box.dir / "pour.toml").string();
+  const fs::path want = box.dir / "straight", out = box.dir / "cmp";
+  std::string log;
+  ASSERT_EQ(sandflow(fmt::format("compare {} --frames {} --seeds 2 --equal-stiffness --out {}",
+                                 scene, kFrames, want.string()),
+                     &log),
+            0)
+      << log;
+  ASSERT_EQ(sandflow(fmt::format("compare {} --frames {} --seeds 1 --out {}", scene, kFrames,
+                                 out.string()),
+                     &log),
+            0)
+      << log;
+  const std::string first_dem = read_text(out / "dem" / "stats.csv");
+  EXPECT_EQ(nlohmann::json::parse(read_text(out / "compare.json"))["seeds"], 1);
+
+  ASSERT_EQ(sandflow("compare --resume " + out.string() + " --seeds 2", &log), 0) << log;
+  EXPECT_NE(log.find(out.string() + ": adding seeds 2 to 2 to the comparison"), std::string::npos)
+      << log;
+  EXPECT_NE(log.find((out / "dem").string() + " is finished"), std::string::npos) << log;
+  EXPECT_EQ(read_text(out / "dem" / "stats.csv"), first_dem);  // read back, not run again
+  EXPECT_EQ(nlohmann::json::parse(read_text(out / "compare_plan.json"))["seeds"], 2);
+  EXPECT_FALSE(fs::exists(out / "dem-equal-stiffness"));
+
+  ASSERT_EQ(sandflow("compare --resume " + out.string() + " --equal-stiffness", &log), 0) << log;
+  EXPECT_NE(log.find("adding plain DEM at the surface run's stiffness"), std::string::npos) << log;
+  EXPECT_EQ(log.find("adding seeds"), std::string::npos) << log;
+  EXPECT_TRUE(nlohmann::json::parse(read_text(out / "compare_plan.json"))["equal_stiffness"]);
+
+  for (const char* run : {"surface", "dem", "seed-2/surface", "seed-2/dem", "dem-equal-stiffness"})
+    expect_same_run(want / run, out / run);
+  EXPECT_EQ(comparison_figures(out), comparison_figures(want));
+  // asked again for what it has, it adds nothing and reads its runs back
+  ASSERT_EQ(sandflow("compare --resume " + out.string() + " --seeds 2 --equal-stiffness", &log), 0)
+      << log;
+  EXPECT_EQ(log.find("adding"), std::string::npos) << log;
+  EXPECT_EQ(comparison_figures(out), comparison_figures(want));
 }
 
 // The exports go on where the checkpoint left them: a resumed run's ParaView series lists every
