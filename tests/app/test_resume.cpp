@@ -131,6 +131,25 @@ nlohmann::json comparison_figures(const fs::path& dir) {
   return j;
 }
 
+/// The runs of a comparison of pour.toml with two seeds and the equal-stiffness run.
+constexpr const char* kComparisonOptions = "--seeds 2 --equal-stiffness";
+constexpr const char* kComparisonRuns[] = {"surface", "dem", "seed-2/surface", "seed-2/dem",
+                                           "dem-equal-stiffness"};
+
+/// Runs that comparison straight into `out`; its exit status.
+int compare_straight(const Sandbox& box, const fs::path& out, std::string& log) {
+  return sandflow(
+      fmt::format("compare {} --frames {} {} --out {}", (box.dir / "pour.toml").string(), kFrames,
+                  kComparisonOptions, out.string()),
+      &log);
+}
+
+/// The same runs (state, statistics, frames) and the same compare.json, timings aside.
+void expect_same_comparison(const fs::path& want, const fs::path& got) {
+  for (const char* run : kComparisonRuns) expect_same_run(want / run, got / run);
+  EXPECT_EQ(comparison_figures(got), comparison_figures(want));
+}
+
 /// The straight run every test compares with.
 fs::path straight_run(const Sandbox& box, double* seconds = nullptr) {
   const fs::path out = box.dir / "straight";
@@ -190,11 +209,10 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   const std::string scene = (box.dir / "pour.toml").string();
   const fs::path want = box.dir / "straight", out = box.dir / "cmp";
   std::string log;
-  const std::string options = fmt::format("--frames {} --seeds 2 --equal-stiffness", kFrames);
-  ASSERT_EQ(sandflow(fmt::format("compare {} {} --out {}", scene, options, want.string()), &log), 0)
-      << log;
-  const pid_t pid =
-      spawn(fmt::format("compare {} {} --out {}", scene, options, out.string()), box.dir / "cmp.log");
+  ASSERT_EQ(compare_straight(box, want, log), 0) << log;
+  const pid_t pid = spawn(fmt::format("compare {} --frames {} {} --out {}", scene, kFrames,
+                                      kComparisonOptions, out.string()),
+                          box.dir / "cmp.log");
   interrupt_once_written(pid, out / "seed-2" / "dem" / "frames" / "0005.ply");
   EXPECT_EQ(wait_for(pid), 130);
   log = read_text(box.dir / "cmp.log");
@@ -221,9 +239,7 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   EXPECT_NE(log.find("resuming " + (out / "seed-2" / "dem").string() + " from its checkpoint"),
             std::string::npos)
       << log;
-  for (const char* run : {"surface", "dem", "seed-2/surface", "seed-2/dem", "dem-equal-stiffness"})
-    expect_same_run(want / run, out / run);
-  EXPECT_EQ(comparison_figures(out), comparison_figures(want));
+  expect_same_comparison(want, out);
   EXPECT_EQ(comparison_figures(out)["runs"].size(), 5u);
   // one of its runs run on to another frame is no longer the comparison's run
   ASSERT_EQ(
@@ -244,8 +260,7 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   EXPECT_NE(log.find((out / "surface").string() + ": running on to frame 42"), std::string::npos)
       << log;
   EXPECT_EQ(log.find((out / "dem").string() + ": running on to frame"), std::string::npos) << log;
-  for (const char* run :
-       {"surface", "dem", "seed-2/surface", "seed-2/dem", "dem-equal-stiffness"}) {
+  for (const char* run : kComparisonRuns) {
     EXPECT_EQ(lines(out / run / "stats.csv").size(), static_cast<std::size_t>(on) + 1) << run;
     EXPECT_EQ(nlohmann::json::parse(read_text(out / run / "run.json"))["run_to_frame"], on) << run;
   }
@@ -270,11 +285,7 @@ TEST(Resume, AFinishedComparisonGrowsBySeedsAndTheEqualStiffnessRun) {
   const std::string scene = (box.dir / "pour.toml").string();
   const fs::path want = box.dir / "straight", out = box.dir / "cmp";
   std::string log;
-  ASSERT_EQ(sandflow(fmt::format("compare {} --frames {} --seeds 2 --equal-stiffness --out {}",
-                                 scene, kFrames, want.string()),
-                     &log),
-            0)
-      << log;
+  ASSERT_EQ(compare_straight(box, want, log), 0) << log;
   ASSERT_EQ(sandflow(fmt::format("compare {} --frames {} --seeds 1 --out {}", scene, kFrames,
                                  out.string()),
                      &log),
@@ -296,9 +307,7 @@ TEST(Resume, AFinishedComparisonGrowsBySeedsAndTheEqualStiffnessRun) {
   EXPECT_EQ(log.find("adding seeds"), std::string::npos) << log;
   EXPECT_TRUE(nlohmann::json::parse(read_text(out / "compare_plan.json"))["equal_stiffness"]);
 
-  for (const char* run : {"surface", "dem", "seed-2/surface", "seed-2/dem", "dem-equal-stiffness"})
-    expect_same_run(want / run, out / run);
-  EXPECT_EQ(comparison_figures(out), comparison_figures(want));
+  expect_same_comparison(want, out);
   // asked again for what it has, it adds nothing and reads its runs back
   ASSERT_EQ(sandflow("compare --resume " + out.string() + " --seeds 2 --equal-stiffness", &log), 0)
       << log;
