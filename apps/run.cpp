@@ -148,7 +148,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
                     const RunControl& control) {
   for (const std::string& w : scene.warnings) warn_once(w);
   World world(scene);
-  for (const std::string& w : world.geometry().warnings()) warn_once(w);
+  for (const std::string& w : world.warnings()) warn_once(w);
   const int frames = world.planned_frames();
   const TimeStep& ts = world.time_step();
   const int threads = thread_count(scene);
@@ -344,12 +344,14 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
                                     {"preloaded_j", energy_preloaded}};
   }
   nlohmann::json emitters = nlohmann::json::array();
-  for (const Emitter& e : world.emitters())
+  for (const Emitter& e : world.emitters()) {
     emitters.push_back({{"name", e.name()},
                         {"count", e.count()},
                         {"emitted", e.emitted()},
                         {"delayed_by_occupied_slots", e.delayed()},
                         {"left_out_by_occupied_slots", e.left_out()}});
+    if (e.type() == EmitterType::Pour) emitters.back()["stream_lead"] = e.stream_lead();
+  }
   summary["emitters"] = emitters;
   nlohmann::json prof;
   for (int s = 0; s < static_cast<int>(Stage::kCount); ++s)
@@ -647,7 +649,7 @@ Started start_new(const RunOptions& o, const std::string& text) {
     run.done = true;
     for (const std::string& w : scene.warnings) warn_once(w);
     World world(scene);
-    for (const std::string& w : world.geometry().warnings()) warn_once(w);
+    for (const std::string& w : world.warnings()) warn_once(w);
     const TimeStep& ts = world.time_step();
     if (!world.dem().boundary().x.empty())
       fmt::print("{}: {} boundary particles of radius {:.3g} m on its meshes\n", scene.path,

@@ -142,6 +142,125 @@ std::optional<bool> stream_is_clear(const std::vector<Vec3>& slots, const std::v
   return true;
 }
 
+// A pour's slots: one layer on a hexagonal pattern of spacing s inside its disk or rectangle (at
+// most kMaxPourSlots, and each step of x and y moves them: emitter_problem saw to both).
+std::vector<Vec3> pour_slot_centres(const EmitterConfig& config, Real d_max, Real s) {
+  std::vector<Vec3> slots;
+  const Vec3 half = half_extent(config);
+  const Real row = s * std::sqrt(3.0) / 2;
+  int k = 0;
+  for (Real y = -half.y + d_max / 2; y <= half.y - d_max / 2 + 1e-12; y += row, ++k) {
+    for (Real x = -half.x + d_max / 2 + (k % 2) * s / 2; x <= half.x - d_max / 2 + 1e-12; x += s) {
+      if (config.shape == PourShape::Disk && std::hypot(x, y) > config.radius - d_max / 2 + 1e-12)
+        continue;
+      slots.push_back(config.center + Vec3{x, y, 0});
+    }
+  }
+  return slots;
+}
+
+// The time between a pour's batches: the next waits until the previous one has fallen one
+// spacing, v0 t + g t^2 / 2 = s (v0 its speed along gravity), or without gravity flown it.
+Real pour_batch_interval(const Vec3& velocity, const Vec3& gravity, Real s) {
+  const Real g = norm(gravity);
+  const Real v0 = g > 0 ? std::max(0.0, dot(velocity, gravity) / g) : norm(velocity);
+  return g > 0 ? (-v0 + std::sqrt(v0 * v0 + 2 * g * s)) / g : s / v0;
+}
+
+// How early each of a pour's slots lets its grains go (see stream_leads).
+struct StreamLeads {
+  std::vector<Real> lead;  // per slot [s]
+  Real part = 0;           // the largest lead, in batch intervals (0: it falls as discs)
+  bool falls = false;      // gravity along z and not thrown up into its own stream
+  bool checked = true;     // false: too many slot pairs to test, so it falls as discs
+};
+
+// A stream, not a stack of discs: each slot's grains leave as if born up to one interval (T)
+// before their batch, a fixed share of it for each slot, so neighbouring slots' grains fall at
+// different heights. Their paths are still free fall from the pour (the same speeds where they
+// land), and one slot's grains are still one interval apart. Straight down, slots a spacing s
+// apart across stay so: nothing overlaps. Thrown sideways, a slot's grains cross its neighbours'
+// paths, so the leads shrink (by halves) until stream_is_clear finds every pair clear (jitter
+// included), or the pour falls as discs, which never meet.
+StreamLeads stream_leads(const EmitterConfig& config, const std::vector<Vec3>& slots, Real T,
+                         const Vec3& gravity, Real d_max, Real s) {
+  StreamLeads out;
+  out.lead.assign(slots.size(), 0);
+  Rng shares(0x5eed57ea3ULL);  // (the same stream for every seed: the emitter's, not the run's)
+  std::vector<Real> share(slots.size());
+  for (Real& u : share) u = shares.uniform();
+  out.falls =
+      norm(gravity) > 0 && gravity.x == 0 && gravity.y == 0 && dot(config.velocity, gravity) >= 0;
+  const Real clearance = d_max + config.jitter * std::max(0.0, s - d_max);
+  for (Real part = 1; out.falls && part >= kLeastStreamLead; part /= 2) {
+    for (std::size_t q = 0; q < slots.size(); ++q) out.lead[q] = part * share[q] * T;
+    const std::optional<bool> clear =
+        stream_is_clear(slots, out.lead, T, config.velocity, gravity, s, clearance);
+    if (clear == true) {
+      out.part = part;
+      return out;
+    }
+    out.lead.assign(slots.size(), 0);
+    if (!clear) {
+      out.checked = false;
+      return out;
+    }
+  }
+  return out;
+}
+
+// The spacings a pour that cannot stream is tried at, for the one to suggest (in diameters).
+constexpr Real kStreamSpacings[] = {1.1, 1.2, 1.3, 1.4, 1.5, 1.75, 2.0, 2.5, 3.0};
+
+// What a pour thrown sideways that cannot fall as a whole stream says at the start of a run, with
+// the smallest wider spacing that would let it, and whether that spacing holds its rate. Its
+// grains would meet in flight as a stream: the wider spacing leaves room between their paths.
+std::string broken_stream_warning(const EmitterConfig& config, const MaterialConfig& material,
+                                  const Vec3& gravity, const std::string& where,
+                                  const StreamLeads& leads) {
+  const Real d_max = material.largest_diameter();
+  const Vec3 down = gravity * (1 / norm(gravity));
+  const Real speed = norm(config.velocity);
+  const Real off_vertical =
+      speed > 0 ? std::acos(std::clamp(dot(config.velocity, down) / speed, -1.0, 1.0)) * 180 /
+                      std::numbers::pi
+                : 0;
+  const std::string how =
+      leads.part > 0 ? fmt::format(
+                           "its grains leave at most {} of a batch interval early, so it falls in "
+                           "layers",
+                           leads.part == 0.5 ? "half" : fmt::format("{:g}", leads.part))
+                     : "it falls as discs (each batch a layer of grains)";
+  const std::string head = fmt::format(
+      "{}: thrown {:.0f} degrees off the vertical, this pour's grains would meet in "
+      "flight as a stream at spacing = {:g}, so {}",
+      where, off_vertical, config.spacing, how);
+  if (!leads.checked) return head + " (its slots are too many to check each pair's paths)";
+  for (const Real spacing : kStreamSpacings) {
+    if (spacing <= config.spacing) continue;
+    EmitterConfig wider = config;
+    wider.spacing = spacing;
+    const Real s = spacing * d_max;
+    const std::vector<Vec3> slots = pour_slot_centres(wider, d_max, s);
+    if (slots.empty()) break;
+    const Real T = pour_batch_interval(config.velocity, gravity, s);
+    const StreamLeads wide = stream_leads(wider, slots, T, gravity, d_max, s);
+    if (!wide.checked) break;
+    if (wide.part < 1) continue;
+    const Real max_rate = static_cast<Real>(slots.size()) / T;
+    return head + (config.rate <= max_rate
+                       ? fmt::format("; spacing = {:g} lets it fall as a stream", spacing)
+                       : fmt::format("; spacing = {:g} lets it fall as a stream, at up to {:.0f} "
+                                     "grains/s from this area: {:.3g} times the area for its "
+                                     "{:.6g} grains/s",
+                                     spacing, max_rate, config.rate / max_rate, config.rate));
+  }
+  return head + fmt::format(
+                    "; no spacing up to {:g} lets it fall as a stream: throw it closer "
+                    "to the vertical",
+                    std::end(kStreamSpacings)[-1]);
+}
+
 }  // namespace
 
 Real pour_slots(const EmitterConfig& e, const MaterialConfig& m) {
@@ -268,30 +387,14 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
   gravity_ = gravity;
 
   if (config.type == EmitterType::Pour) {
-    // one layer of slots on a hexagonal pattern inside the disk or rectangle (at most
-    // kMaxPourSlots, and each step of x and y moves them: emitter_problem saw to both)
-    const Vec3 half = half_extent(config);
-    const Real row = s * std::sqrt(3.0) / 2;
-    int k = 0;
-    for (Real y = -half.y + d_max_ / 2; y <= half.y - d_max_ / 2 + 1e-12; y += row, ++k) {
-      for (Real x = -half.x + d_max_ / 2 + (k % 2) * s / 2; x <= half.x - d_max_ / 2 + 1e-12;
-           x += s) {
-        if (config.shape == PourShape::Disk &&
-            std::hypot(x, y) > config.radius - d_max_ / 2 + 1e-12)
-          continue;
-        slots_.push_back(config.center + Vec3{x, y, 0});
-      }
-    }
+    slots_ = pour_slot_centres(config, d_max_, s);
     if (slots_.empty())
       throw InputError(fmt::format("{}: the pour area is smaller than one grain", where));
-    // the next batch waits until the previous one has fallen one spacing: v0 t + g t^2 / 2 = s
     const Real g = norm(gravity);
-    const Real v0 =
-        g > 0 ? std::max(0.0, dot(config.velocity, gravity) / g) : norm(config.velocity);
-    if (g <= 0 && v0 <= 0)
+    if (g <= 0 && norm(config.velocity) <= 0)
       throw InputError(fmt::format(
           "{}: a pour needs gravity or an initial velocity to carry grains away", where));
-    batch_interval_ = g > 0 ? (-v0 + std::sqrt(v0 * v0 + 2 * g * s)) / g : s / v0;
+    batch_interval_ = pour_batch_interval(config.velocity, gravity, s);
     per_batch_ = config.rate * batch_interval_;
     const Real max_rate = static_cast<Real>(slots_.size()) / batch_interval_;
     if (per_batch_ > static_cast<Real>(slots_.size()))
@@ -305,32 +408,16 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
                             config.rate / config.rate_scale)
               : "",
           max_rate, config.rate_scale != 1 ? ", or ask for fewer grains" : ""));
-    // A stream, not a stack of discs: each slot's grains leave as if born up to one interval
-    // before their batch, a fixed share of it for each slot, so neighbouring slots' grains fall at
-    // different heights. Their paths are still free fall from the pour (the same speeds where
-    // they land), and one slot's grains are still one interval apart. Straight down, slots a
-    // spacing apart across stay so: nothing overlaps. Thrown sideways, a slot's grains cross its
-    // neighbours' paths, so the leads shrink (by halves) until stream_is_clear finds every pair
-    // clear (jitter included), or the pour falls as discs, which never meet.
-    Rng shares(0x5eed57ea3ULL);  // (the same stream for every seed: the emitter's, not the run's)
-    std::vector<Real> share(slots_.size());
-    for (Real& u : share) u = shares.uniform();
-    const bool falls = g > 0 && gravity.x == 0 && gravity.y == 0 &&
-                       dot(config.velocity, gravity) >= 0;  // (not thrown up into its own stream)
-    const Real clearance = d_max_ + config.jitter * std::max(0.0, s - d_max_);
-    slot_lead_.assign(slots_.size(), 0);
-    for (Real part = 1; falls && part >= kLeastStreamLead; part /= 2) {
-      for (std::size_t q = 0; q < slots_.size(); ++q)
-        slot_lead_[q] = part * share[q] * batch_interval_;
-      const std::optional<bool> clear = stream_is_clear(slots_, slot_lead_, batch_interval_,
-                                                        config.velocity, gravity, s, clearance);
-      if (clear == true) {
-        stream_lead_ = part;
-        break;
-      }
-      slot_lead_.assign(slots_.size(), 0);
-      if (!clear) break;  // (too many pairs to test)
-    }
+    const StreamLeads leads = stream_leads(config, slots_, batch_interval_, gravity, d_max_, s);
+    slot_lead_ = leads.lead;
+    stream_lead_ = leads.part;
+    if (stream_lead_ < 1 && leads.falls)
+      warning_ = broken_stream_warning(config, material, gravity, where, leads);
+    else if (!leads.falls)
+      warning_ = fmt::format(
+          "{}: thrown up, or under gravity not along z, this pour falls as discs "
+          "(each batch a layer of grains)",
+          where);
     // a batch is born at the first step past its wait, and a slot leads by up to an interval:
     // bound the fall over two
     const Real wait = 2 * batch_interval_;

@@ -320,6 +320,13 @@ void World::remove_due_geometry(std::int64_t before, bool announce) {
   if (announce) dem_.invalidate();  // its wall lists name the removed solids
 }
 
+std::vector<std::string> World::warnings() const {
+  std::vector<std::string> out = geometry_.warnings();
+  for (const Emitter& e : emitters_)
+    if (!e.warning().empty()) out.push_back(e.warning());
+  return out;
+}
+
 int World::planned_frames() const {
   if (scene_.output.frames) return *scene_.output.frames;
   Real duration = 0;

@@ -130,6 +130,8 @@ class World {
   const DemSolver& dem() const { return dem_; }
   const Profile& profile() const { return profile_; }
   const std::vector<Emitter>& emitters() const { return emitters_; }
+  /// What a run says of its world at the start: the geometry's warnings, then the emitters'.
+  std::vector<std::string> warnings() const;
   Real time() const { return time_; }
   int frame() const { return frame_; }
   std::int64_t total_grains() const {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "cli_runner.hpp"
@@ -328,6 +329,57 @@ TEST(Cli, CheckValidatesWithoutRunning) {
                      &log),
             2);
   EXPECT_NE(log.find("stable bound"), std::string::npos) << log;
+}
+
+// A pour thrown sideways that cannot fall as a stream says so when the run starts (and with
+// --check), naming the spacing that would let it; summary.json records each pour's stream_lead.
+TEST(Cli, APourThatFallsAsDiscsSaysSoAndTheSummaryRecordsItsLead) {
+  Sandbox box;
+  auto scene = [&](const char* name, const char* velocity, double spacing) {
+    return box
+        .write(name, fmt::format(R"(
+[scene]
+name = "slanted pour"
+[material]
+diameter = 0.01
+k_n = 1.0e4
+[output]
+fps = 30
+[[geometry]]
+type = "plane"
+[[emitter]]
+type = "pour"
+count = 60
+center = [0.0, 0.0, 0.1]
+radius = 0.04
+rate = 400
+spacing = {}
+velocity = {}
+)",
+                                 spacing, velocity))
+        .string();
+  };
+  std::string log;
+  const std::string slanted = scene("slanted.toml", "[0.5, 0, -1]", 1.05);
+  ASSERT_EQ(sandflow("run " + slanted + " --check", &log), 0) << log;
+  EXPECT_NE(log.find("warning: " + slanted), std::string::npos) << log;
+  EXPECT_NE(log.find("falls as discs"), std::string::npos) << log;
+  EXPECT_NE(log.find("lets it fall as a stream"), std::string::npos) << log;
+  const auto out = box.dir / "out";
+  ASSERT_EQ(sandflow("run " + slanted + " --mode dem --frames 2 --out " + out.string(), &log), 0)
+      << log;
+  EXPECT_NE(log.find("falls as discs"), std::string::npos) << log;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary["emitters"][0]["stream_lead"], 0.0);
+  // straight down: a whole stream, and nothing said
+  const std::string straight = scene("straight.toml", "[0, 0, -1]", 1.05);
+  const auto out2 = box.dir / "out2";
+  ASSERT_EQ(sandflow("run " + straight + " --mode dem --frames 2 --out " + out2.string(), &log), 0)
+      << log;
+  EXPECT_EQ(log.find("off the vertical"), std::string::npos) << log;
+  EXPECT_EQ(
+      nlohmann::json::parse(std::ifstream(out2 / "summary.json"))["emitters"][0]["stream_lead"],
+      1.0);
 }
 
 }  // namespace

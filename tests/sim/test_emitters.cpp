@@ -246,6 +246,12 @@ EmitterConfig sideways_pour(Vec3 velocity, Real rate) {
   return pour;
 }
 
+EmitterConfig stream_config(Vec3 velocity, Real rate, Real spacing) {
+  EmitterConfig c = sideways_pour(velocity, rate);
+  c.spacing = spacing;
+  return c;
+}
+
 // Thrown a little sideways, a pour still falls as a stream (heights spread over a batch's fall,
 // on free fall from the pour) and its grains never meet in flight; thrown more steeply, its leads
 // shrink or go, as its spacing allows, and still no two grains meet.
@@ -289,6 +295,62 @@ TEST(Emitters, APourThrownSidewaysFallsAsAStreamWhoseGrainsNeverMeetInFlight) {
     EXPECT_EQ(g.lead, t.lead) << what;
     EXPECT_GE(closest_gap_in_flight(g), -1e-12) << what;
   }
+}
+
+// The spacing a pour's warning suggests ("spacing = X lets it fall as a stream"), 0 for none.
+Real suggested_spacing(const std::string& warning) {
+  const std::string key = "; spacing = ";
+  const std::size_t at = warning.find(key);
+  return at == std::string::npos ? 0 : std::stod(warning.substr(at + key.size()));
+}
+
+// A pour that cannot fall as a whole stream says so, and names the smallest of the spacings it
+// tries that would let it: at that spacing the pour streams whole (and its grains never meet in
+// flight), at the one tried before it does not. Straight down, or slightly slanted, it says
+// nothing; thrown up it says it falls as discs.
+TEST(Emitters, APourThatCannotStreamNamesTheSpacingThatLetsIt) {
+  const MaterialConfig grains = millimetre_grains();
+  auto emitter = [&](Vec3 v, Real rate, Real spacing) {
+    EmitterConfig c = sideways_pour(v, rate);
+    c.spacing = spacing;
+    return Emitter(c, grains, kGravity, "s.toml: emitter[0]");
+  };
+  EXPECT_EQ(emitter({0, 0, -1.5}, 80000, 1.05).warning(), "");
+  EXPECT_EQ(emitter({0.2, 0, -1.5}, 80000, 1.05).warning(), "");
+  const Real tried[] = {1.05, 1.1, 1.2, 1.3, 1.4, 1.5, 1.75, 2.0, 2.5, 3.0};
+  struct Throw {
+    Vec3 v;
+    Real rate;
+  };
+  for (const Throw& t :
+       {Throw{{0.5, 0, -1.0}, 4000}, Throw{{1.0, 0, -1.0}, 1000}, Throw{{0.6, 0.6, -1.0}, 500}}) {
+    const std::string what = fmt::format("velocity ({}, {}, {})", t.v.x, t.v.y, t.v.z);
+    const Emitter discs = emitter(t.v, t.rate, 1.05);
+    EXPECT_EQ(discs.stream_lead(), 0.0) << what;
+    const std::string w = discs.warning();
+    EXPECT_EQ(w.rfind("s.toml: emitter[0]: thrown ", 0), 0u) << w;
+    EXPECT_NE(w.find("falls as discs"), std::string::npos) << w;
+    const Real spacing = suggested_spacing(w);
+    ASSERT_GT(spacing, 1.05) << w;
+    EXPECT_EQ(w.find("times the area"), std::string::npos) << w;  // (these rates fit)
+    const Emitter stream = emitter(t.v, t.rate, spacing);
+    EXPECT_EQ(stream.stream_lead(), 1.0) << what << ", spacing " << spacing;
+    EXPECT_EQ(stream.warning(), "") << what;
+    EXPECT_GE(closest_gap_in_flight(pour_flight(stream_config(t.v, t.rate, spacing), 30)), -1e-12)
+        << what;
+    const Real* before = std::find(std::begin(tried), std::end(tried), spacing) - 1;
+    ASSERT_GE(before, std::begin(tried)) << spacing;
+    EXPECT_LT(emitter(t.v, t.rate, *before).stream_lead(), 1.0) << what << ", spacing " << *before;
+  }
+  // a rate the suggested spacing's slots cannot hold: the area it would take
+  const std::string crowded = emitter({0.5, 0, -1.0}, 80000, 1.05).warning();
+  EXPECT_GT(suggested_spacing(crowded), 1.05) << crowded;
+  EXPECT_NE(crowded.find("times the area for its 80000 grains/s"), std::string::npos) << crowded;
+  // thrown level: no spacing tried lets it stream
+  const std::string flat = emitter({1.0, 0.5, 0}, 100, 1.05).warning();
+  EXPECT_NE(flat.find("no spacing up to 3"), std::string::npos) << flat;
+  // thrown up
+  EXPECT_NE(emitter({0, 0, 0.5}, 100, 1.05).warning().find("falls as discs"), std::string::npos);
 }
 
 TEST(Emitters, ABoxTooSmallForItsCountIsRefusedWithWhatItHolds) {
