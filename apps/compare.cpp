@@ -296,6 +296,11 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
     wall_dem += r.wall_seconds / co.seeds;
     over_dem = std::max(over_dem, max_overlap(r));
   }
+  // each seed's own speed-up: its two runs ran one after the other, so their range shows how far
+  // the machine's speed moved between seeds (as well as the seeds' own differences)
+  std::vector<double> speedups;
+  for (std::size_t k = 0; k < c.dem.size(); ++k)
+    speedups.push_back(c.dem[k].wall_seconds / std::max(c.surface[k].wall_seconds, 1e-12));
   const RunResult& surf = c.surface[0];
   const RunResult& dem = c.dem[0];
   const double k_dem = dem.summary["k_n"].get<double>();
@@ -330,6 +335,9 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
       {"seeds", co.seeds},
       {"seed_values", c.seeds},
       {"speedup", wall_dem / std::max(wall_surf, 1e-12)},
+      {"speedup_per_seed", speedups},
+      {"speedup_min", *std::min_element(speedups.begin(), speedups.end())},
+      {"speedup_max", *std::max_element(speedups.begin(), speedups.end())},
       {"simulated_fraction_mean", frac_mean},
       {"simulated_fraction_last_half", frac_half},
       {"simulated_fraction_final", frac_final},
@@ -534,8 +542,12 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
   }
   fmt::print("{:<34}{:>16}{:>16}\n", "largest overlap (of a diameter)",
              pct("max_overlap_dem_rel"), pct("max_overlap_surface_rel"));
-  fmt::print("speed-up {:.2f}x ({})\n", j["speedup"].get<double>(),
-             k_dem == k_surf ? "the same stiffness in both modes" : "each mode at its own stiffness");
+  fmt::print(
+      "speed-up {:.2f}x ({}{})\n", j["speedup"].get<double>(),
+      k_dem == k_surf ? "the same stiffness in both modes" : "each mode at its own stiffness",
+      seeds > 1 ? fmt::format("; {:.2f}x to {:.2f}x by seed", j["speedup_min"].get<double>(),
+                              j["speedup_max"].get<double>())
+                : "");
   if (j.contains("speedup_equal_stiffness"))
     fmt::print("speed-up at equal stiffness {:.2f}x (plain DEM at k_n = {:.4g} N/m, dt = {:.3g} s: "
                "{}, largest overlap {})\n",

@@ -591,6 +591,9 @@ std::string compare_report_html(const CompareReportData& c) {
           "</td></tr>\n";
   };
   kv("speed-up (DEM wall-clock time / surface flow's)", fixed(j, {"speedup"}, 2, "\u00d7"));
+  if (number(j, {"speedup_min"}) && number(j, {"seeds"}).value_or(1) > 1)
+    kv("speed-up by seed, smallest to largest",
+       fixed(j, {"speedup_min"}, 2, "\u00d7") + " to " + fixed(j, {"speedup_max"}, 2, "\u00d7"));
   const auto dt_d = number(j, {"dt_dem"}), dt_s = number(j, {"dt_surface"});
   const auto n_d = number(j, {"n_simulated_mean_dem"}), n_s = number(j, {"n_simulated_mean"});
   const bool ratios = dt_d && dt_s && n_d && n_s && *dt_d > 0 && *n_s > 0;

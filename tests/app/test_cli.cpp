@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
@@ -282,6 +283,18 @@ TEST(Cli, CompareRunsEachSeedInBothModesAndTheEqualStiffnessRun) {
   EXPECT_DOUBLE_EQ(eq["k_n"].get<double>(), j["k_n_surface"].get<double>());
   EXPECT_DOUBLE_EQ(eq["dt_mean"].get<double>(), j["dt_surface"].get<double>());
   EXPECT_NE(log.find("speed-up at equal stiffness"), std::string::npos) << log;
+  // each seed's speed-up: its plain-DEM run's time over its surface run's, and their range
+  std::map<std::int64_t, std::map<std::string, double>> wall;
+  for (const auto& run : j["runs"])
+    wall[run["seed"].get<std::int64_t>()][run["mode"].get<std::string>()] = run["wall_seconds"];
+  ASSERT_EQ(j["speedup_per_seed"].size(), 2u);
+  for (int k = 0; k < 2; ++k)
+    EXPECT_DOUBLE_EQ(j["speedup_per_seed"][k].get<double>(),
+                     wall[5 + k]["dem"] / wall[5 + k]["surface"])
+        << k;
+  EXPECT_EQ(j["speedup_min"], std::min(j["speedup_per_seed"][0], j["speedup_per_seed"][1]));
+  EXPECT_EQ(j["speedup_max"], std::max(j["speedup_per_seed"][0], j["speedup_per_seed"][1]));
+  EXPECT_NE(log.find("x by seed"), std::string::npos) << log;
   EXPECT_EQ(sandflow("compare " + (box.dir / "t.toml").string() + " --seeds 0 --out " +
                      (box.dir / "y").string()),
             2);

@@ -125,7 +125,8 @@ nlohmann::json comparison_figures(const fs::path& dir) {
   auto j = nlohmann::json::parse(read_text(dir / "compare.json"));
   for (const char* timing :
        {"speedup", "seconds_per_frame_dem", "seconds_per_frame_surface", "wall_seconds_dem",
-        "wall_seconds_surface", "speedup_equal_stiffness", "wall_seconds_dem_equal_stiffness"})
+        "wall_seconds_surface", "speedup_equal_stiffness", "wall_seconds_dem_equal_stiffness",
+        "speedup_per_seed", "speedup_min", "speedup_max"})
     j.erase(timing);
   for (auto& run : j["runs"]) run.erase("wall_seconds");
   return j;

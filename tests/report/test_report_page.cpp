@@ -169,6 +169,19 @@ TEST(ReportPage, CompareShowsBothModesOnSharedAxes) {
   EXPECT_EQ(html_problem(html), "");
   for (const char* id : {"summary", "speedup", "plots", "final-frames", "contact-sheet"})
     EXPECT_NE(html.find(std::string("<section id=\"") + id + "\">"), std::string::npos) << id;
+  // one seed: no range of speed-ups by seed; three: their range
+  EXPECT_EQ(html.find("speed-up by seed"), std::string::npos);
+  nlohmann::json seeds = c;
+  seeds["seeds"] = 3;
+  seeds["speedup_min"] = 2.25;
+  seeds["speedup_max"] = 2.75;
+  std::ofstream(t.dir() / "compare.json") << seeds.dump();
+  const std::string three = compare_report_html(load_compare_report_data(t.dir().string()));
+  EXPECT_NE(section_of(three, "speedup")
+                .find("speed-up by seed, smallest to largest</th><td "
+                      "class=\"num\">2.25\u00d7 to 2.75\u00d7"),
+            std::string::npos)
+      << section_of(three, "speedup");
   // surface: total, simulated, interface, static, seconds, dt, 4 transitions; DEM: simulated,
   // seconds, dt (no transitions), each with a point per frame
   const auto lines = polylines(html);
