@@ -51,6 +51,10 @@ class Progress {
     std::fflush(stderr);
   }
 
+  /// What the line says before the frame count, from the next update() on (render: fewer jobs at
+  /// once than asked, once the memory says so).
+  void relabel(std::string label) { label_ = std::move(label); }
+
   /// One frame done at no cost (a picture kept from an earlier render): left out of the speed,
   /// as a resumed run's first frames are. Before the update() that counts it.
   void skip() { ++first_; }

@@ -682,7 +682,10 @@ int render_command(const RenderOptions& o) {
   std::vector<std::string> errors(tasks.size());
   std::mutex progress_mutex;
   int done = 0;
-  Progress progress(fmt::format("render {} ({}, {} at once)", o.dir, o.quality, jobs), n);
+  auto progress_label = [&](int at_once) {
+    return fmt::format("render {} ({}, {} at once)", o.dir, o.quality, at_once);
+  };
+  Progress progress(progress_label(jobs), n);
   // SIGINT or SIGTERM: the pictures being made are stopped and their files removed, no new one
   // starts, and what is done stays
   const StopSignals signals;
@@ -738,13 +741,15 @@ int render_command(const RenderOptions& o) {
     }
     gate.leave(peak);
     const std::lock_guard<std::mutex> lock(progress_mutex);
-    if (!memory_said && gate.allowed() < jobs) {
+    if (gate.allowed() < jobs) {
+      if (!memory_said)
+        progress.note(fmt::format(
+            "render: a picture takes up to {:.0f} MB (POV-Ray and its scene) and {:.0f} MB were "
+            "free: {} at once, not {}",
+            static_cast<double>(gate.largest_peak()) / 1e6, static_cast<double>(free_memory) / 1e6,
+            gate.allowed(), jobs));
       memory_said = true;
-      progress.note(fmt::format(
-          "render: a picture takes up to {:.0f} MB (POV-Ray and its scene) and {:.0f} MB were "
-          "free: {} at once, not {}",
-          static_cast<double>(gate.largest_peak()) / 1e6, static_cast<double>(free_memory) / 1e6,
-          gate.allowed(), jobs));
+      progress.relabel(progress_label(gate.allowed()));  // (the line says what runs)
     }
     if (kept[static_cast<std::size_t>(i)]) progress.skip();  // (its speed is POV-Ray's)
     progress.update(++done, static_cast<std::int64_t>(grains));

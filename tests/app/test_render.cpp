@@ -24,6 +24,7 @@
 #include "io/media_check.hpp"
 #include "io/ply.hpp"
 #include "io/pov_writer.hpp"
+#include "support/memory_cgroup.hpp"
 #include "support/small_disk.hpp"
 
 namespace fs = std::filesystem;
@@ -523,6 +524,35 @@ TEST_F(Render, AFullDiskIsSaidNotLeftToPovraysCutLog) {
   EXPECT_EQ(sandflow("render " + (small / "run").string() + " --width 320 --height 240", &log), 0)
       << log;
   EXPECT_TRUE(fs::exists(small / "run" / "render" / "0001.png"));
+}
+
+// Under a memory limit (a control group of 150 MB, here), render runs no more POV-Rays at once
+// than the memory left holds by the largest picture so far, says so, and its line says how many
+// run; the kernel kills none, and every picture is made. (Large pictures: POV-Ray holds about
+// 50 MB for one of 1600 x 1200, so four at once would not fit.)
+TEST_F(Render, UnderAMemoryLimitFewerRunAtOnceAndNoneIsKilled) {
+  sandflow::test::MemoryCgroup group("sandflow-test-" + std::to_string(::getpid()), 150'000'000);
+  if (!group.ready()) GTEST_SKIP() << group.why_not();
+  const fs::path run = tiny_run(4);
+  std::string log;
+  ASSERT_EQ(sandflow("render " + run.string() +
+                         " --frames all --jobs 4 --width 1600 --height 1200 --quality draft",
+                     &log, group.wrapper()),
+            0)
+      << log;
+  const std::size_t said = log.find("render: a picture takes up to ");
+  ASSERT_NE(said, std::string::npos) << log;
+  const std::size_t colon = log.find(" were free: ", said);
+  ASSERT_NE(colon, std::string::npos) << log;
+  const int at_once = std::stoi(log.substr(colon + 12));
+  EXPECT_LT(at_once, 4) << log;
+  EXPECT_GE(at_once, 1) << log;
+  EXPECT_NE(log.find(fmt::format("{} at once, not 4", at_once)), std::string::npos) << log;
+  EXPECT_NE(log.find(fmt::format("draft, {} at once) frame 4/4", at_once)), std::string::npos)
+      << log;
+  EXPECT_EQ(group.oom_kills(), 0);
+  for (const char* name : {"0001", "0002", "0003", "0004"})
+    EXPECT_GT(sand_pixels(read_rgb_png(run / "render" / (std::string(name) + ".png"))), 50) << name;
 }
 
 TEST_F(Render, SceneCameraIsUsed) {
