@@ -167,11 +167,16 @@ Real pour_batch_interval(const Vec3& velocity, const Vec3& gravity, Real s) {
   return g > 0 ? (-v0 + std::sqrt(v0 * v0 + 2 * g * s)) / g : s / v0;
 }
 
+// Whether a pour falls along z and is not thrown up into its own stream: only such a pour can
+// fall as a stream (stream_leads).
+bool pour_falls(const Vec3& velocity, const Vec3& gravity) {
+  return norm(gravity) > 0 && gravity.x == 0 && gravity.y == 0 && dot(velocity, gravity) >= 0;
+}
+
 // How early each of a pour's slots lets its grains go (see stream_leads).
 struct StreamLeads {
   std::vector<Real> lead;  // per slot [s]
   Real part = 0;           // the largest lead, in batch intervals (0: it falls as discs)
-  bool falls = false;      // gravity along z and not thrown up into its own stream
   bool checked = true;     // false: too many slot pairs to test, so it falls as discs
 };
 
@@ -189,10 +194,9 @@ StreamLeads stream_leads(const EmitterConfig& config, const std::vector<Vec3>& s
   Rng shares(0x5eed57ea3ULL);  // (the same stream for every seed: the emitter's, not the run's)
   std::vector<Real> share(slots.size());
   for (Real& u : share) u = shares.uniform();
-  out.falls =
-      norm(gravity) > 0 && gravity.x == 0 && gravity.y == 0 && dot(config.velocity, gravity) >= 0;
+  const bool falls = pour_falls(config.velocity, gravity);
   const Real clearance = d_max + config.jitter * std::max(0.0, s - d_max);
-  for (Real part = 1; out.falls && part >= kLeastStreamLead; part /= 2) {
+  for (Real part = 1; falls && part >= kLeastStreamLead; part /= 2) {
     for (std::size_t q = 0; q < slots.size(); ++q) out.lead[q] = part * share[q] * T;
     const std::optional<bool> clear =
         stream_is_clear(slots, out.lead, T, config.velocity, gravity, s, clearance);
@@ -212,12 +216,14 @@ StreamLeads stream_leads(const EmitterConfig& config, const std::vector<Vec3>& s
 // The spacings a pour that cannot stream is tried at, for the one to suggest (in diameters).
 constexpr Real kStreamSpacings[] = {1.1, 1.2, 1.3, 1.4, 1.5, 1.75, 2.0, 2.5, 3.0};
 
-// What a pour thrown sideways that cannot fall as a whole stream says at the start of a run, with
-// the smallest wider spacing that would let it, and whether that spacing holds its rate. Its
-// grains would meet in flight as a stream: the wider spacing leaves room between their paths.
+// What a pour thrown sideways that cannot fall as a whole stream (its slots lead by `part` of a
+// batch interval at most; `checked`: its slot pairs were few enough to test) says at the start
+// of a run, with the smallest wider spacing that would let it, and whether that spacing holds its
+// rate. Its grains would meet in flight as a stream: the wider spacing leaves room between their
+// paths.
 std::string broken_stream_warning(const EmitterConfig& config, const MaterialConfig& material,
-                                  const Vec3& gravity, const std::string& where,
-                                  const StreamLeads& leads) {
+                                  const Vec3& gravity, const std::string& where, Real part,
+                                  bool checked) {
   const Real d_max = material.largest_diameter();
   const Vec3 down = gravity * (1 / norm(gravity));
   const Real speed = norm(config.velocity);
@@ -226,16 +232,16 @@ std::string broken_stream_warning(const EmitterConfig& config, const MaterialCon
                       std::numbers::pi
                 : 0;
   const std::string how =
-      leads.part > 0 ? fmt::format(
-                           "its grains leave at most {} of a batch interval early, so it falls in "
-                           "layers",
-                           leads.part == 0.5 ? "half" : fmt::format("{:g}", leads.part))
-                     : "it falls as discs (each batch a layer of grains)";
+      part > 0 ? fmt::format(
+                     "its grains leave at most {} of a batch interval early, so it falls in "
+                     "layers",
+                     part == 0.5 ? "half" : fmt::format("{:g}", part))
+               : "it falls as discs (each batch a layer of grains)";
   const std::string head = fmt::format(
       "{}: thrown {:.0f} degrees off the vertical, this pour's grains would meet in "
       "flight as a stream at spacing = {:g}, so {}",
       where, off_vertical, config.spacing, how);
-  if (!leads.checked) return head + " (its slots are too many to check each pair's paths)";
+  if (!checked) return head + " (its slots are too many to check each pair's paths)";
   for (const Real spacing : kStreamSpacings) {
     if (spacing <= config.spacing) continue;
     EmitterConfig wider = config;
@@ -408,16 +414,11 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
                             config.rate / config.rate_scale)
               : "",
           max_rate, config.rate_scale != 1 ? ", or ask for fewer grains" : ""));
-    const StreamLeads leads = stream_leads(config, slots_, batch_interval_, gravity, d_max_, s);
-    slot_lead_ = leads.lead;
+    StreamLeads leads = stream_leads(config, slots_, batch_interval_, gravity, d_max_, s);
+    slot_lead_ = std::move(leads.lead);
     stream_lead_ = leads.part;
-    if (stream_lead_ < 1 && leads.falls)
-      warning_ = broken_stream_warning(config, material, gravity, where, leads);
-    else if (!leads.falls)
-      warning_ = fmt::format(
-          "{}: thrown up, or under gravity not along z, this pour falls as discs "
-          "(each batch a layer of grains)",
-          where);
+    stream_checked_ = leads.checked;
+    where_ = where;
     // a batch is born at the first step past its wait, and a slot leads by up to an interval:
     // bound the fall over two
     const Real wait = 2 * batch_interval_;
@@ -603,6 +604,17 @@ bool Emitter::near_slots(const Vec3& x, Real r) const {
   const Real m = reach_ + drop_ + r;
   return x.x > slot_lo_.x - m && x.x < slot_hi_.x + m && x.y > slot_lo_.y - m &&
          x.y < slot_hi_.y + m && x.z > slot_lo_.z - m && x.z < slot_hi_.z + m;
+}
+
+std::string Emitter::warning() const {
+  if (config_.type != EmitterType::Pour || stream_lead_ >= 1) return "";
+  if (!pour_falls(config_.velocity, gravity_))
+    return fmt::format(
+        "{}: thrown up, or under gravity not along z, this pour falls as discs (each batch a layer "
+        "of grains)",
+        where_);
+  // (the wider spacings are searched only here: a World built to read a run back never asks)
+  return broken_stream_warning(config_, material_, gravity_, where_, stream_lead_, stream_checked_);
 }
 
 Real Emitter::end_time() const {

@@ -134,8 +134,8 @@ class Emitter {
   /// share of it: 1 for a stream straight down, less for one thrown sideways, 0 for discs.
   Real stream_lead() const { return stream_lead_; }
   /// What a run says of this emitter at its start (empty: nothing): a pour that cannot fall as a
-  /// whole stream, and the spacing that would let it.
-  const std::string& warning() const { return warning_; }
+  /// whole stream, and the spacing that would let it (searched for at each call).
+  std::string warning() const;
   /// Time the last grain is emitted [s].
   Real end_time() const;
   std::int64_t emitted() const { return emitted_; }
@@ -156,7 +156,8 @@ class Emitter {
   std::vector<Vec3> slots_;  ///< pour: slot centres (one layer)
   std::vector<Real> slot_lead_;  ///< pour: how long each slot's grains have fallen at birth [s]
   Real stream_lead_ = 0;     ///< pour: the largest lead, in batch intervals (0: it falls as discs)
-  std::string warning_;      ///< see warning()
+  bool stream_checked_ = true;  ///< pour: its slot pairs were few enough to check their paths
+  std::string where_;           ///< where its table is in the scene file (for warning())
   Real batch_interval_ = 0;  ///< pour: time between batches [s]
   Real per_batch_ = 0;       ///< pour: grains per batch (fractional)
   Real owed_ = 0;            ///< pour: fractional grains carried to the next batch
