@@ -22,18 +22,6 @@ std::int64_t peak_memory_bytes() {
   return 0;
 }
 
-namespace {
-
-// The first number in `path`, or -1 ("max", absent, unreadable).
-std::int64_t number_in(const char* path) {
-  std::ifstream in(path);
-  std::int64_t v = -1;
-  if (!(in >> v) || v < 0) return -1;
-  return v;
-}
-
-// The cgroup path of this process for the v1 memory controller ("4:memory:/a/b") or the v2
-// hierarchy ("0::/a/b"), or "" when it is in neither.
 std::string own_cgroup(bool v2) {
   std::ifstream in("/proc/self/cgroup");
   for (std::string line; std::getline(in, line);) {
@@ -43,6 +31,16 @@ std::string own_cgroup(bool v2) {
     if (v2 ? line.rfind("0::", 0) == 0 : controllers == "memory") return line.substr(b + 1);
   }
   return "";
+}
+
+namespace {
+
+// The first number in `path`, or -1 ("max", absent, unreadable).
+std::int64_t number_in(const char* path) {
+  std::ifstream in(path);
+  std::int64_t v = -1;
+  if (!(in >> v) || v < 0) return -1;
+  return v;
 }
 
 // What the limits of this process's control group and of its ancestors leave [bytes], or -1

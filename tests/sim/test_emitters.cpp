@@ -246,6 +246,7 @@ EmitterConfig sideways_pour(Vec3 velocity, Real rate) {
   return pour;
 }
 
+// sideways_pour at a slot spacing of its own (in diameters)
 EmitterConfig stream_config(Vec3 velocity, Real rate, Real spacing) {
   EmitterConfig c = sideways_pour(velocity, rate);
   c.spacing = spacing;
@@ -286,9 +287,7 @@ TEST(Emitters, APourThrownSidewaysFallsAsAStreamWhoseGrainsNeverMeetInFlight) {
                           {{1.5, 0, -0.5}, 30000, 1.05, 0.0},
                           {{1.0, 0.5, 0}, 4000, 1.05, 0.0}};
   for (const Throw& t : throws) {
-    EmitterConfig c = sideways_pour(t.v, t.rate);
-    c.spacing = t.spacing;
-    const PourFlight g = pour_flight(c, 30);
+    const PourFlight g = pour_flight(stream_config(t.v, t.rate, t.spacing), 30);
     const std::string what =
         fmt::format("velocity ({}, {}, {}), spacing {}", t.v.x, t.v.y, t.v.z, t.spacing);
     ASSERT_GT(g.grains.size(), 100u) << what;
@@ -311,9 +310,7 @@ Real suggested_spacing(const std::string& warning) {
 TEST(Emitters, APourThatCannotStreamNamesTheSpacingThatLetsIt) {
   const MaterialConfig grains = millimetre_grains();
   auto emitter = [&](Vec3 v, Real rate, Real spacing) {
-    EmitterConfig c = sideways_pour(v, rate);
-    c.spacing = spacing;
-    return Emitter(c, grains, kGravity, "s.toml: emitter[0]");
+    return Emitter(stream_config(v, rate, spacing), grains, kGravity, "s.toml: emitter[0]");
   };
   EXPECT_EQ(emitter({0, 0, -1.5}, 80000, 1.05).warning(), "");
   EXPECT_EQ(emitter({0.2, 0, -1.5}, 80000, 1.05).warning(), "");

@@ -9,28 +9,22 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <thread>
+
+#include "core/memory.hpp"
 
 namespace sandflow::test {
 
 class MemoryCgroup {
  public:
-  /// A group `name` (unique to the test) limited to `limit_bytes`; see made() and why_not().
+  /// A group `name` (unique to the test) limited to `limit_bytes`; see ready() and why_not().
   MemoryCgroup(const std::string& name, std::int64_t limit_bytes) {
     if (::geteuid() != 0) {
       why_not_ = "making a control group needs root";
       return;
     }
-    std::string own;  // "4:memory:/a/b" -> "/a/b"
-    std::ifstream cgroups("/proc/self/cgroup");
-    for (std::string line; std::getline(cgroups, line);) {
-      const std::size_t a = line.find(':'), b = line.find(':', a + 1);
-      if (a != std::string::npos && b != std::string::npos &&
-          line.substr(a + 1, b - a - 1) == "memory")
-        own = line.substr(b + 1);
-    }
+    const std::string own = own_cgroup(false);
     const std::filesystem::path parent = "/sys/fs/cgroup/memory" + (own == "/" ? "" : own);
     if (own.empty() || !std::filesystem::exists(parent / "memory.limit_in_bytes")) {
       why_not_ = "no cgroup v1 memory controller here";
