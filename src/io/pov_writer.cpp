@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <iterator>
+#include <limits>
 #include <stdexcept>
 #include <string_view>
 #include <type_traits>
@@ -611,6 +612,19 @@ void write_static_layer(std::string& s, const SandSurface& sf) {
       faces.push_back({a, d, c});
     }
   if (faces.empty()) return;
+  // Sand does not climb what stands beside it: a column without sand next to sand (a wall, a
+  // shelf, an obstacle) is drawn no higher than the highest sand around it, so the surface's edge
+  // runs into the solid there rather than up its face.
+  std::vector<Real> z = sf.z;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      if (sf.sand[at(i, j)]) continue;
+      Real top = -std::numeric_limits<Real>::infinity();
+      for (int b = std::max(j - 1, 0); b <= std::min(j + 1, ny - 1); ++b)
+        for (int a = std::max(i - 1, 0); a <= std::min(i + 1, nx - 1); ++a)
+          if (sf.sand[at(a, b)]) top = std::max(top, sf.z[at(a, b)]);
+      if (top > -std::numeric_limits<Real>::infinity()) z[at(i, j)] = std::min(z[at(i, j)], top);
+    }
   const Real grain = sf.grain_diameter > 0 ? sf.grain_diameter : sf.cell;
   const Vec3 lo = sand_srgb(0), hi = sand_srgb(kSandShades - 1);
   line(s,
@@ -624,15 +638,15 @@ void write_static_layer(std::string& s, const SandSurface& sf) {
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i)
       line(s, "    <", sf.origin_x + (i + 0.5) * sf.cell, ",", sf.origin_y + (j + 0.5) * sf.cell,
-           ",", sf.z[at(i, j)], ">");
+           ",", z[at(i, j)], ">");
   line(s, "  }");
   line(s, "  normal_vectors { ", sf.z.size(), ",");
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
       const int i0 = std::max(i - 1, 0), i1 = std::min(i + 1, nx - 1);
       const int j0 = std::max(j - 1, 0), j1 = std::min(j + 1, ny - 1);
-      const Real gx = (sf.z[at(i1, j)] - sf.z[at(i0, j)]) / ((i1 - i0) * sf.cell);
-      const Real gy = (sf.z[at(i, j1)] - sf.z[at(i, j0)]) / ((j1 - j0) * sf.cell);
+      const Real gx = (z[at(i1, j)] - z[at(i0, j)]) / ((i1 - i0) * sf.cell);
+      const Real gy = (z[at(i, j1)] - z[at(i, j0)]) / ((j1 - j0) * sf.cell);
       line(s, "    ", normalized(Vec3{-gx, -gy, 1}));
     }
   line(s, "  }");

@@ -193,6 +193,24 @@ TEST_F(PovTest, TheStaticLayerIsASmoothSurfaceOverTheCellsThatTouchSand) {
   EXPECT_EQ(read_bytes(p).find("mesh2 {"), std::string::npos);
 }
 
+// Sand does not climb a wall: a column without sand beside the sand, standing higher (a wall's
+// top, a shelf), is drawn at the sand's height, not its own; a lower one (the floor at a heap's
+// foot) keeps its height; one with no sand around keeps its own, and is in no face.
+TEST_F(PovTest, TheStaticLayerRunsIntoAWallBesideItNotUpItsFace) {
+  SandSurface sf = two_sand_columns();
+  for (int j = 0; j < 5; ++j) sf.z[j * 6 + 4] = 0.5;  // a wall 0.5 m tall along x cell 4
+  sf.z[2 * 6 + 0] = 0.3;                              // and a post away from the sand
+  const std::string p = path("wall.pov");
+  write_pov_scene(p, small_mound(), {floor_plane()}, PovOptions{}, {}, &sf);
+  const std::string text = read_bytes(p);
+  EXPECT_NE(text.find("<0.015,0.005,0.02>"), std::string::npos) << "the wall beside the sand";
+  EXPECT_NE(text.find("<0.015,0.015,0.02>"), std::string::npos);
+  EXPECT_EQ(text.find("<0.015,0.005,0.5>"), std::string::npos);
+  EXPECT_NE(text.find("<0.015,-0.015,0.5>"), std::string::npos) << "the wall away from it";
+  EXPECT_NE(text.find("<-0.015,0.005,0>"), std::string::npos) << "the floor at the foot";
+  EXPECT_NE(text.find("<-0.025,0.005,0.3>"), std::string::npos) << "the post";
+}
+
 TEST(PovCamera, CoreBoundsLeaveOutAStrayGrain) {
   FrameData f;
   Rng rng(5);
