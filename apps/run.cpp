@@ -350,7 +350,10 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
                         {"emitted", e.emitted()},
                         {"delayed_by_occupied_slots", e.delayed()},
                         {"left_out_by_occupied_slots", e.left_out()}});
-    if (e.type() == EmitterType::Pour) emitters.back()["stream_lead"] = e.stream_lead();
+    if (e.type() == EmitterType::Pour) {
+      emitters.back()["facing"] = e.facing() == PourFacing::Velocity ? "velocity" : "up";
+      emitters.back()["stream_lead"] = e.stream_lead();
+    }
   }
   summary["emitters"] = emitters;
   nlohmann::json prof;

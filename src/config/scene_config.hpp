@@ -182,6 +182,8 @@ struct GeometryConfig {
 
 enum class EmitterType { Pour, Block, Lattice, Bed };
 enum class PourShape { Disk, Rect };
+/// Which way a pour's area faces: up z (it lies level) or along its velocity (a nozzle).
+enum class PourFacing { Up, Velocity };
 
 struct EmitterConfig {
   EmitterType type = EmitterType::Pour;
@@ -192,9 +194,10 @@ struct EmitterConfig {
   Real jitter = 0.25;               ///< random offset, as a fraction of the free gap [-], [0, 1]
   // pour
   PourShape shape = PourShape::Disk;
+  PourFacing facing = PourFacing::Up;
   Vec3 center{0, 0, 0};             ///< pour: centre of the disk/rectangle; block: box centre
   Real radius = 0.05;               ///< pour disk radius [m]
-  Vec3 size{0.1, 0.1, 0.1};         ///< pour rect: x, y extents (z ignored); block/lattice: box
+  Vec3 size{0.1, 0.1, 0.1};         ///< pour rect: its two extents (z ignored); block/lattice: box
   Real rate = 1000.0;               ///< pour rate [grains/s]
   Real rate_scale = 1.0;            ///< what scale_grain_count multiplied the scene's rate by
   Real spacing = 1.05;              ///< lattice/slot spacing as a multiple of the largest diameter

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "config/emitter_region.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/ply.hpp"
@@ -28,10 +29,10 @@ struct EmitterBox {
 };
 
 EmitterBox emitter_box(const EmitterConfig& e, Real d) {
-  if (e.type == EmitterType::Pour)  // a disk or rectangle of slots, one grain high
-    return {e.center, e.shape == PourShape::Disk ? Vec3{e.radius, e.radius, d}
-                                                 : Vec3{e.size.x / 2, e.size.y / 2, d}};
-  return {e.center, e.size * 0.5};
+  const Vec3 half = emitter_half_extent(e);
+  if (e.type == EmitterType::Pour)  // a disk or rectangle of slots, a grain thick at least
+    return {e.center, {half.x, half.y, std::max(half.z, d)}};
+  return {e.center, half};
 }
 
 std::string frame_name(int frame, const char* ext) {

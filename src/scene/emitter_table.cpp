@@ -14,6 +14,8 @@ constexpr Choices<EmitterType> kEmitterTypes[] = {{"pour", EmitterType::Pour},
                                                   {"lattice", EmitterType::Lattice},
                                                   {"bed", EmitterType::Bed}};
 constexpr Choices<PourShape> kPourShapes[] = {{"disk", PourShape::Disk}, {"rect", PourShape::Rect}};
+constexpr Choices<PourFacing> kPourFacings[] = {{"up", PourFacing::Up},
+                                                {"velocity", PourFacing::Velocity}};
 
 }  // namespace
 
@@ -53,6 +55,11 @@ EmitterConfig read_emitter(TableReader r, std::size_t index, const MaterialConfi
   switch (e.type) {
     case EmitterType::Pour:
       r.read("shape", e.shape, kPourShapes);
+      r.read("facing", e.facing, kPourFacings);
+      if (e.facing == PourFacing::Velocity && norm(e.velocity) <= 0)
+        r.fail_at("facing", r.name("facing") +
+                                " = \"velocity\" lays the area across the velocity, but velocity "
+                                "is zero: give the throw's velocity, or leave the area facing up");
       r.read("rate", e.rate, kPositive);
       if (e.shape == PourShape::Disk) {
         r.read("radius", e.radius, kPositive);

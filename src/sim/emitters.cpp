@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <compare>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <tuple>
 
 #include <fmt/format.h>
 
+#include "config/emitter_region.hpp"
 #include "core/error.hpp"
 #include "core/threads.hpp"
 #include "geometry/heightmap.hpp"
@@ -143,34 +145,52 @@ std::optional<bool> stream_is_clear(const std::vector<Vec3>& slots, const std::v
 }
 
 // A pour's slots: one layer on a hexagonal pattern of spacing s inside its disk or rectangle (at
-// most kMaxPourSlots, and each step of x and y moves them: emitter_problem saw to both).
+// most kMaxPourSlots, and each step of x and y moves them: emitter_problem saw to both), level or
+// across its velocity (pour_axes).
 std::vector<Vec3> pour_slot_centres(const EmitterConfig& config, Real d_max, Real s) {
   std::vector<Vec3> slots;
   const Vec3 half = half_extent(config);
+  const PourAxes axes = pour_axes(config);
   const Real row = s * std::sqrt(3.0) / 2;
   int k = 0;
   for (Real y = -half.y + d_max / 2; y <= half.y - d_max / 2 + 1e-12; y += row, ++k) {
     for (Real x = -half.x + d_max / 2 + (k % 2) * s / 2; x <= half.x - d_max / 2 + 1e-12; x += s) {
       if (config.shape == PourShape::Disk && std::hypot(x, y) > config.radius - d_max / 2 + 1e-12)
         continue;
-      slots.push_back(config.center + Vec3{x, y, 0});
+      slots.push_back(config.center + axes.along * x + axes.across * y);
     }
   }
   return slots;
 }
 
-// The time between a pour's batches: the next waits until the previous one has fallen one
-// spacing, v0 t + g t^2 / 2 = s (v0 its speed along gravity), or without gravity flown it.
-Real pour_batch_interval(const Vec3& velocity, const Vec3& gravity, Real s) {
+// The time between a pour's batches: the next waits until the previous one has gone one spacing
+// from the area, u t + a t^2 / 2 = s: a level area's batch falls it (u, a: the speed and gravity
+// along gravity, u at least 0), a nozzle's flies it along its aim n (u = |v|, a = g.n, which may
+// be against it), and without gravity either flies it. NaN when a nozzle's grains stop before
+// (thrown up too slowly to clear their own nozzle).
+Real pour_batch_interval(const EmitterConfig& config, const Vec3& gravity, Real s) {
+  const Vec3& velocity = config.velocity;
   const Real g = norm(gravity);
-  const Real v0 = g > 0 ? std::max(0.0, dot(velocity, gravity) / g) : norm(velocity);
-  return g > 0 ? (-v0 + std::sqrt(v0 * v0 + 2 * g * s)) / g : s / v0;
+  Real u = 0, a = 0;
+  if (config.facing == PourFacing::Velocity) {
+    u = norm(velocity);
+    a = u > 0 ? dot(gravity, velocity) / u : 0;
+  } else {
+    u = g > 0 ? std::max(0.0, dot(velocity, gravity) / g) : norm(velocity);
+    a = g;
+  }
+  if (a == 0) return s / u;
+  const Real disc = u * u + 2 * a * s;
+  if (disc < 0) return std::numeric_limits<Real>::quiet_NaN();
+  return (-u + std::sqrt(disc)) / a;  // (the first root: with a < 0 both are positive)
 }
 
-// Whether a pour falls along z and is not thrown up into its own stream: only such a pour can
-// fall as a stream (stream_leads).
-bool pour_falls(const Vec3& velocity, const Vec3& gravity) {
-  return norm(gravity) > 0 && gravity.x == 0 && gravity.y == 0 && dot(velocity, gravity) >= 0;
+// Whether a level pour falls along z and is not thrown up into its own stream: only such a pour
+// needs its slots to lead to fall as a stream (stream_leads). A nozzle's batches leave one behind
+// the other along its aim: a stream without leads.
+bool pour_falls(const EmitterConfig& config, const Vec3& gravity) {
+  return config.facing == PourFacing::Up && norm(gravity) > 0 && gravity.x == 0 && gravity.y == 0 &&
+         dot(config.velocity, gravity) >= 0;
 }
 
 // How early each of a pour's slots lets its grains go (see stream_leads).
@@ -194,7 +214,7 @@ StreamLeads stream_leads(const EmitterConfig& config, const std::vector<Vec3>& s
   Rng shares(0x5eed57ea3ULL);  // (the same stream for every seed: the emitter's, not the run's)
   std::vector<Real> share(slots.size());
   for (Real& u : share) u = shares.uniform();
-  const bool falls = pour_falls(config.velocity, gravity);
+  const bool falls = pour_falls(config, gravity);
   const Real clearance = d_max + config.jitter * std::max(0.0, s - d_max);
   for (Real part = 1; falls && part >= kLeastStreamLead; part /= 2) {
     for (std::size_t q = 0; q < slots.size(); ++q) out.lead[q] = part * share[q] * T;
@@ -212,6 +232,11 @@ StreamLeads stream_leads(const EmitterConfig& config, const std::vector<Vec3>& s
   }
   return out;
 }
+
+// What a level pour thrown sideways or up is told it could be instead.
+constexpr const char* kNozzleAdvice =
+    "; facing = \"velocity\" turns its area across its throw (a nozzle), whose batches leave "
+    "one behind the other along it as a stream";
 
 // The spacings a pour that cannot stream is tried at, for the one to suggest (in diameters).
 constexpr Real kStreamSpacings[] = {1.1, 1.2, 1.3, 1.4, 1.5, 1.75, 2.0, 2.5, 3.0};
@@ -241,7 +266,8 @@ std::string broken_stream_warning(const EmitterConfig& config, const MaterialCon
       "{}: thrown {:.0f} degrees off the vertical, this pour's grains would meet in "
       "flight as a stream at spacing = {:g}, so {}",
       where, off_vertical, config.spacing, how);
-  if (!checked) return head + " (its slots are too many to check each pair's paths)";
+  if (!checked)
+    return head + " (its slots are too many to check each pair's paths)" + kNozzleAdvice;
   for (const Real spacing : kStreamSpacings) {
     if (spacing <= config.spacing) continue;
     EmitterConfig wider = config;
@@ -249,22 +275,26 @@ std::string broken_stream_warning(const EmitterConfig& config, const MaterialCon
     const Real s = spacing * d_max;
     const std::vector<Vec3> slots = pour_slot_centres(wider, d_max, s);
     if (slots.empty()) break;
-    const Real T = pour_batch_interval(config.velocity, gravity, s);
+    const Real T = pour_batch_interval(config, gravity, s);
     const StreamLeads wide = stream_leads(wider, slots, T, gravity, d_max, s);
     if (!wide.checked) break;
     if (wide.part < 1) continue;
     const Real max_rate = static_cast<Real>(slots.size()) / T;
-    return head + (config.rate <= max_rate
-                       ? fmt::format("; spacing = {:g} lets it fall as a stream", spacing)
-                       : fmt::format("; spacing = {:g} lets it fall as a stream, at up to {:.0f} "
-                                     "grains/s from this area: {:.3g} times the area for its "
-                                     "{:.6g} grains/s",
-                                     spacing, max_rate, config.rate / max_rate, config.rate));
+    return head +
+           (config.rate <= max_rate
+                ? fmt::format("; spacing = {:g} lets it fall as a stream", spacing)
+                : fmt::format("; spacing = {:g} lets it fall as a stream, at up to {:.0f} "
+                              "grains/s from this area: {:.3g} times the area for its "
+                              "{:.6g} grains/s",
+                              spacing, max_rate, config.rate / max_rate, config.rate)) +
+           kNozzleAdvice;
   }
-  return head + fmt::format(
-                    "; no spacing up to {:g} lets it fall as a stream: throw it closer "
-                    "to the vertical",
-                    std::end(kStreamSpacings)[-1]);
+  return head +
+         fmt::format(
+             "; no spacing up to {:g} lets it fall as a stream: throw it closer to the "
+             "vertical",
+             std::end(kStreamSpacings)[-1]) +
+         kNozzleAdvice;
 }
 
 }  // namespace
@@ -400,20 +430,32 @@ Emitter::Emitter(const EmitterConfig& config, const MaterialConfig& material, co
     if (g <= 0 && norm(config.velocity) <= 0)
       throw InputError(fmt::format(
           "{}: a pour needs gravity or an initial velocity to carry grains away", where));
-    batch_interval_ = pour_batch_interval(config.velocity, gravity, s);
+    const bool nozzle = config.facing == PourFacing::Velocity;
+    if (nozzle && norm(config.velocity) <= 0)
+      throw InputError(fmt::format(
+          "{}: a pour facing its velocity needs a velocity (its area lies across it)", where));
+    batch_interval_ = pour_batch_interval(config, gravity, s);
+    if (!std::isfinite(batch_interval_))
+      throw InputError(fmt::format(
+          "{}: thrown at {:.4g} m/s against gravity's {:.4g} m/s^2 along its aim, this nozzle's "
+          "grains stop within one spacing ({:.4g} m) of it and would meet the next batch there; "
+          "throw it at least {:.4g} m/s or aim it lower",
+          where, norm(config.velocity), -dot(gravity, config.velocity) / norm(config.velocity), s,
+          std::sqrt(-2 * s * dot(gravity, config.velocity) / norm(config.velocity))));
     per_batch_ = config.rate * batch_interval_;
     const Real max_rate = static_cast<Real>(slots_.size()) / batch_interval_;
     if (per_batch_ > static_cast<Real>(slots_.size()))
       throw InputError(fmt::format(
           "{}: rate {:.6g} grains/s{} is more than this pour can emit without overlaps ({:.0f} "
-          "grains/s); enlarge the pour area or its downward speed{}",
+          "grains/s); enlarge the pour area or its {}speed{}",
           where, config.rate,
           config.rate_scale != 1
               ? fmt::format(" (the scene's {:.6g} scaled with the count by --grains, which keeps "
                             "a pour's duration)",
                             config.rate / config.rate_scale)
               : "",
-          max_rate, config.rate_scale != 1 ? ", or ask for fewer grains" : ""));
+          max_rate, nozzle ? "" : "downward ",
+          config.rate_scale != 1 ? ", or ask for fewer grains" : ""));
     StreamLeads leads = stream_leads(config, slots_, batch_interval_, gravity, d_max_, s);
     slot_lead_ = std::move(leads.lead);
     stream_lead_ = leads.part;
@@ -608,11 +650,12 @@ bool Emitter::near_slots(const Vec3& x, Real r) const {
 
 std::string Emitter::warning() const {
   if (config_.type != EmitterType::Pour || stream_lead_ >= 1) return "";
-  if (!pour_falls(config_.velocity, gravity_))
+  if (config_.facing == PourFacing::Velocity) return "";  // (a stream without leads)
+  if (!pour_falls(config_, gravity_))
     return fmt::format(
         "{}: thrown up, or under gravity not along z, this pour falls as discs (each batch a layer "
-        "of grains)",
-        where_);
+        "of grains){}",
+        where_, norm(config_.velocity) > 0 ? kNozzleAdvice : "");
   // (the wider spacings are searched only here: a World built to read a run back never asks)
   return broken_stream_warning(config_, material_, gravity_, where_, stream_lead_, stream_checked_);
 }

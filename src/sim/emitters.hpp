@@ -113,6 +113,8 @@ class Emitter {
   std::int64_t left_out() const { return left_out_; }
   const std::string& name() const { return config_.name; }
   EmitterType type() const { return config_.type; }
+  /// Pour: which way its area faces (up: level; velocity: a nozzle).
+  PourFacing facing() const { return config_.facing; }
 
   /// How far the emitter has got: what a restart needs (the rest follows from the scene).
   struct Progress {
@@ -131,7 +133,8 @@ class Emitter {
   }
 
   /// A pour's slots lead their batches by up to this share of a batch interval, each its own
-  /// share of it: 1 for a stream straight down, less for one thrown sideways, 0 for discs.
+  /// share of it: 1 for a stream straight down, less for one thrown sideways, 0 for discs and for
+  /// a nozzle (its batches leave one behind the other along its throw: a stream without leads).
   Real stream_lead() const { return stream_lead_; }
   /// What a run says of this emitter at its start (empty: nothing): a pour that cannot fall as a
   /// whole stream, and the spacing that would let it (searched for at each call).

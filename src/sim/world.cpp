@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "config/emitter_region.hpp"
 #include "core/assert.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
@@ -222,9 +223,7 @@ void scene_domain(const SceneConfig& scene, const Geometry& geometry, Vec3& lo, 
   for (const GeometryConfig& g : scene.geometry)
     if (g.type == GeometryType::Plane) add(g.point, g.point);
   for (const EmitterConfig& e : scene.emitters) {
-    Vec3 half = e.size * 0.5;
-    if (e.type == EmitterType::Pour)
-      half = e.shape == PourShape::Disk ? Vec3{e.radius, e.radius, 0} : Vec3{half.x, half.y, 0};
+    const Vec3 half = emitter_half_extent(e);
     add(e.center - half, e.center + half);
   }
   if (const auto& x = scene.surface.extent) add({(*x)[0], (*x)[1], lo.z}, {(*x)[2], (*x)[3], hi.z});

@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "config/emitter_region.hpp"
 #include "core/error.hpp"
 
 namespace sandflow {
@@ -104,14 +105,14 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   };
   const Real heap = largest_heap(scene).radius + 4 * d;
   for (const EmitterConfig& e : scene.emitters) {
-    const Real hx = e.type == EmitterType::Pour && e.shape == PourShape::Disk ? e.radius : e.size.x / 2;
-    const Real hy = e.type == EmitterType::Pour && e.shape == PourShape::Disk ? e.radius : e.size.y / 2;
+    const Vec3 half = emitter_half_extent(e);
+    const Real hx = half.x, hy = half.y;
     // (a bed lies in its footprint: the heap of every grain around it would be a grid many times
     // its area)
     const Real m = e.type == EmitterType::Bed ? 4 * d : heap;
     grow(e.center.x - hx - m, e.center.y - hy - m, e.center.x + hx + m, e.center.y + hy + m);
-    z_top = std::max(z_top, e.center.z + e.size.z);
-    z_floor = std::min(z_floor, e.center.z - e.size.z);
+    z_top = std::max(z_top, e.center.z + std::max(e.size.z, half.z));
+    z_floor = std::min(z_floor, e.center.z - std::max(e.size.z, half.z));
   }
   Vec3 lo, hi;
   if (geometry.finite_bounds(lo, hi)) {

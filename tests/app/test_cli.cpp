@@ -378,6 +378,8 @@ velocity = {}
   EXPECT_NE(log.find("warning: " + slanted), std::string::npos) << log;
   EXPECT_NE(log.find("falls as discs"), std::string::npos) << log;
   EXPECT_NE(log.find("lets it fall as a stream"), std::string::npos) << log;
+  EXPECT_NE(log.find("facing = \"velocity\" turns its area across its throw"), std::string::npos)
+      << log;
   const auto out = box.dir / "out";
   ASSERT_EQ(sandflow("run " + slanted + " --mode dem --frames 2 --out " + out.string(), &log), 0)
       << log;
@@ -393,6 +395,16 @@ velocity = {}
   EXPECT_EQ(
       nlohmann::json::parse(std::ifstream(out2 / "summary.json"))["emitters"][0]["stream_lead"],
       1.0);
+  // the slanted pour as a nozzle: its batches one behind the other along the throw, nothing said
+  const std::string nozzle = scene("nozzle.toml", "[0.5, 0, -1]", 1.05);
+  std::ofstream(nozzle, std::ios::app) << "facing = \"velocity\"\n";
+  const auto out3 = box.dir / "out3";
+  ASSERT_EQ(sandflow("run " + nozzle + " --mode dem --frames 2 --out " + out3.string(), &log), 0)
+      << log;
+  EXPECT_EQ(log.find("off the vertical"), std::string::npos) << log;
+  const auto emitter3 = nlohmann::json::parse(std::ifstream(out3 / "summary.json"))["emitters"][0];
+  EXPECT_EQ(emitter3["facing"], "velocity");
+  EXPECT_GT(emitter3["emitted"].get<int>(), 0);
 }
 
 }  // namespace

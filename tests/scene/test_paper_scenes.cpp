@@ -53,6 +53,25 @@ INSTANTIATE_TEST_SUITE_P(Scenes, PaperScene,
                          ::testing::Values("floor", "terrain", "bowl", "dragon", "armadillo"));
 INSTANTIATE_TEST_SUITE_P(StlObstacle, PaperScene, ::testing::Values("pyramid"));
 INSTANTIATE_TEST_SUITE_P(ThinWalls, PaperScene, ::testing::Values("bin"));
+INSTANTIATE_TEST_SUITE_P(Nozzle, PaperScene, ::testing::Values("jet"));
+
+TEST(JetScene, TheNozzlesStreamCrossesToTheWallAndHeapsAtItsFoot) {
+  // scenes/jet.toml at 600 grains (its jet's 2.5 s kept): thrown level from x = 0.3 m, the grains
+  // cross 0.575 m in 0.23 s to the wall's face at x = -0.275 m, none passes it
+  SceneConfig s = load_scene(std::string(SANDFLOW_SOURCE_DIR) + "/scenes/jet.toml", {});
+  scale_grain_count(s, 600);
+  s.output.frames = 45;
+  World w(s);
+  const std::vector<Vec3> x = grains_after(w, 45);
+  ASSERT_GT(x.size(), 300u);
+  std::size_t at_wall = 0;
+  for (const Vec3& p : x) {
+    EXPECT_GT(p.x, -0.275);  // (a centre stays off the face by about its radius)
+    at_wall += p.x < -0.15;
+  }
+  EXPECT_GT(at_wall, x.size() * 8 / 10);
+  EXPECT_EQ(w.geometry().count_inside(x), 0u);
+}
 
 TEST(BinScene, WithWallsAGrainThickEveryGrainSleepsOnceItsColumnsClose) {
   // 1 cm walls, run to 4.3 s, 3 s after the pour (columns close 2 s after the last grain moved

@@ -216,6 +216,23 @@ TEST(SceneLoader, OneSidedRangesSayWhatIsExpected) {
                {"t.toml:3:1: emitter[0].jitter = 1.5 is outside [0, 1]"});
 }
 
+// A pour's area faces up (it lies level) unless it faces its velocity (a nozzle), which it needs
+// to have; only a pour has the key.
+TEST(SceneLoader, APourFacesUpOrAlongItsVelocity) {
+  const std::string pour = "[[emitter]]\ntype = \"pour\"\ncount = 10\n";
+  EXPECT_EQ(load_scene_from_string(pour, "t.toml").emitters[0].facing, PourFacing::Up);
+  const SceneConfig nozzle =
+      load_scene_from_string(pour + "facing = \"velocity\"\nvelocity = [1, 0, 0]\n", "t.toml");
+  EXPECT_EQ(nozzle.emitters[0].facing, PourFacing::Velocity);
+  expect_error(pour + "facing = \"velocity\"\n",
+               {"t.toml:4:1: emitter[0].facing = \"velocity\" lays the area across the velocity, "
+                "but velocity is zero"});
+  expect_error(pour + "facing = \"sideways\"\n",
+               {"t.toml:4:1: emitter[0].facing = \"sideways\" is not one of \"up\", \"velocity\""});
+  expect_error("[[emitter]]\ntype = \"block\"\ncount = 10\nfacing = \"up\"\n",
+               {"t.toml:4:1: emitter[0].facing is not a key of a block emitter"});
+}
+
 TEST(SceneLoader, UnknownKeyIsNamedWithItsPlace) {
   const std::string text =
       "[material]\n"

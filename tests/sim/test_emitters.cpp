@@ -350,6 +350,60 @@ TEST(Emitters, APourThatCannotStreamNamesTheSpacingThatLetsIt) {
   EXPECT_NE(emitter({0, 0, 0.5}, 100, 1.05).warning().find("falls as discs"), std::string::npos);
 }
 
+// A nozzle (facing = "velocity") lays its area across its throw, so its batches leave one
+// behind the other along it, a spacing apart: thrown level or down at a slant, it holds as many
+// grains a second as its slots times |v| / s allow (a level area thrown level holds only what
+// falls a spacing in a batch's time), its grains never meet in flight, and it warns of nothing.
+// Thrown up too slowly to clear its own slots it is refused.
+TEST(Emitters, ANozzleStreamsAlongItsThrowAtAnyAngleAndItsGrainsNeverMeetInFlight) {
+  const MaterialConfig grains = millimetre_grains();
+  for (const Vec3 v : {Vec3{2.0, 0, 0}, Vec3{1.0, 1.0, -1.0}, Vec3{0, 0, -1.5}}) {
+    const std::string what = fmt::format("velocity ({}, {}, {})", v.x, v.y, v.z);
+    EmitterConfig nozzle = sideways_pour(v, 100);
+    nozzle.facing = PourFacing::Velocity;
+    const Emitter probe(nozzle, grains, kGravity, "s.toml: emitter[0]");
+    EXPECT_EQ(probe.warning(), "") << what;
+    const Real max_rate = probe.max_rate();
+    EmitterConfig level = sideways_pour(v, 100);
+    const Real level_rate = Emitter(level, grains, kGravity, "level").max_rate();
+    if (v.z == 0) {
+      // level: s / |v| against sqrt(2 s / g) between batches, 28 times the rate here
+      const Real s = nozzle.spacing * 0.001;
+      EXPECT_NEAR(max_rate / level_rate, std::sqrt(2 * s / 9.81) / (s / norm(v)), 1e-9) << what;
+      level.rate = 0.9 * max_rate;
+      EXPECT_THROW(Emitter(level, grains, kGravity, "level"), InputError) << what;
+    }
+    // at nine tenths of what it holds, 30 batches: every grain in flight a diameter clear of every
+    // other; the first batch (no jitter) lies across the throw, within the disk
+    nozzle.rate = 0.9 * max_rate;
+    nozzle.jitter = 0;
+    Emitter first(nozzle, grains, kGravity, "first");
+    Rng rng(5);
+    std::vector<NewGrain> out;
+    first.emit(first.next_time(), rng, out);
+    ASSERT_GT(out.size(), 50u) << what;
+    for (const NewGrain& g : out) {
+      EXPECT_NEAR(dot(g.x - nozzle.center, v / norm(v)), 0, 1e-12) << what;
+      EXPECT_LE(norm(g.x - nozzle.center), nozzle.radius - 0.0005 + 1e-12) << what;
+    }
+    nozzle.jitter = 0.5;
+    const PourFlight f = pour_flight(nozzle, 30);
+    ASSERT_GT(f.grains.size(), 1500u) << what;
+    EXPECT_GE(closest_gap_in_flight(f), -1e-12) << what;
+  }
+  // thrown up at 0.1 m/s, a grain stops within 0.5 mm: short of its own slot spacing
+  EmitterConfig up = sideways_pour({0, 0, 0.1}, 100);
+  up.facing = PourFacing::Velocity;
+  try {
+    Emitter(up, grains, kGravity, "s.toml: emitter[0]");
+    ADD_FAILURE() << "a nozzle that cannot clear its slots was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("stop within one spacing"), std::string::npos) << e.what();
+  }
+  up.velocity = {0, 0, 0.5};  // clears them
+  EXPECT_GT(Emitter(up, grains, kGravity, "s.toml: emitter[0]").max_rate(), 0);
+}
+
 TEST(Emitters, ABoxTooSmallForItsCountIsRefusedWithWhatItHolds) {
   // 3 x 3 x 3 slots at 1.05 mm in a 3.2 mm box
   const EmitterConfig e = block({0, 0, 1}, {0.0032, 0.0032, 0.0032}, 28);
