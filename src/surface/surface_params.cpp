@@ -17,6 +17,22 @@ namespace sandflow {
 
 namespace {
 Real gravity_magnitude(const SceneConfig& s) { return norm(s.simulation.gravity); }
+// Where an emitter's throw comes down on the ground under it (gravity g along -z): from its
+// centre, on the free fall of its velocity, to the solid top below where it lands (looked up
+// twice: under the centre, then under the first landing). Nothing where there is no ground.
+std::optional<Vec3> throw_landing(const EmitterConfig& e, Real g, const Geometry& geometry) {
+  const Vec3 p = e.center;
+  const Vec3 v = e.velocity;
+  Vec3 landing = p;
+  for (int pass = 0; pass < 2; ++pass) {
+    const Real ground = geometry.top_below(landing.x, landing.y, p.z, p.z - 1e3);
+    if (!(ground > p.z - 1e3)) return std::nullopt;
+    const Real t = (v.z + std::sqrt(v.z * v.z + 2 * g * (p.z - ground))) / g;
+    landing = {p.x + v.x * t, p.y + v.y * t, ground};
+  }
+  return landing;
+}
+
 }  // namespace
 
 Real rolling_min(const SceneConfig& scene) {
@@ -94,7 +110,7 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   p.update_interval = p.update_steps * dt;
 
   // the extent: the scene's finite geometry and every emitter with room for the largest heap
-  Real x0, y0, x1, y1, z_top = 0, z_floor = 0;
+  Real x0 = 0, y0 = 0, x1 = 0, y1 = 0, z_top = 0, z_floor = 0;
   bool have = false;
   auto grow = [&](Real ax, Real ay, Real bx, Real by) {
     x0 = have ? std::min(x0, ax) : ax;
@@ -120,6 +136,19 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
     z_top = std::max(z_top, hi.z);
     z_floor = std::min(z_floor, lo.z);
   }
+  // a throw that comes down beyond all that (a jet, a pour or a block thrown sideways over open
+  // ground): room for its heap where it lands, or its grains would stay simulated
+  const Vec3 gravity = scene.simulation.gravity;
+  for (const EmitterConfig& e : scene.emitters) {
+    if (e.type == EmitterType::Bed || (e.velocity.x == 0 && e.velocity.y == 0) || g <= 0 ||
+        gravity.x != 0 || gravity.y != 0 || gravity.z >= 0)
+      continue;
+    const std::optional<Vec3> at = throw_landing(e, g, geometry);
+    if (!at || (have && at->x >= x0 && at->x <= x1 && at->y >= y0 && at->y <= y1)) continue;
+    const Vec3 half = emitter_half_extent(e);
+    grow(at->x - half.x - heap, at->y - half.y - heap, at->x + half.x + heap,
+         at->y + half.y + heap);
+  }
   if (sc.extent) {
     x0 = (*sc.extent)[0], y0 = (*sc.extent)[1], x1 = (*sc.extent)[2], y1 = (*sc.extent)[3];
     have = true;
@@ -133,7 +162,8 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
         scene.place({"surface.extent", "surface.cell_size"}), nxf, nyf, hf.cell,
         kMaxHeightFieldColumns,
         sc.extent ? ""
-                  : fmt::format(" to cover the emitters, the heap of {} grains and the geometry",
+                  : fmt::format(" to cover the emitters, where they throw, the heap of {} grains "
+                                "and the geometry",
                                 scene.total_grains()),
         sc.extent ? "" : ", or ask for fewer grains"));
   hf.nx = std::max(1, static_cast<int>(nxf));

@@ -188,6 +188,35 @@ TEST(TerrainIntervals, ABoxContainersInsideIsCentredOnWholeColumns) {
   }
 }
 
+// A jet or a block thrown sideways over open ground heaps where it comes down: the grid reaches
+// there with room for the heap (without it every grain there stayed simulated); a pour straight
+// down keeps its grid around the pour.
+TEST(TerrainIntervals, TheGridReachesWhereAThrowComesDown) {
+  SceneConfig s = test::grains_on_floor("jet", Mode::Surface, 0.01);
+  EmitterConfig jet = test::disk_pour({0.3, 0.2, 0.3}, 0.03, 2000, 2000, {-2.5, 1.0, 0.5});
+  jet.facing = PourFacing::Velocity;
+  EmitterConfig block;
+  block.type = EmitterType::Block;
+  block.center = {0.3, 0.2, 0.3};
+  block.size = {0.1, 0.1, 0.1};
+  block.count = 500;
+  block.velocity = {-2.5, 1.0, 0.5};
+  const Geometry geo = Geometry::from_config(s.geometry, s.material);
+  const Real t = (0.5 + std::sqrt(0.25 + 2 * 9.81 * 0.3)) / 9.81;  // up 0.5 m/s, down 0.3 m
+  const Real land_x = 0.3 - 2.5 * t, land_y = 0.2 + 1.0 * t;
+  for (const EmitterConfig& e : {jet, block}) {
+    s.emitters = {e};
+    const Real heap = largest_heap(s).radius;
+    const HeightFieldParams g = surface_params(s, geo, 1e-4).grid;
+    EXPECT_LE(g.x0, land_x - heap);
+    EXPECT_GE(g.y0 + g.ny * g.cell, land_y + heap);
+    EXPECT_GE(g.x0 + g.nx * g.cell, 0.3 + heap);  // and the emitter still
+  }
+  s.emitters = {test::disk_pour({0.3, 0.2, 0.3}, 0.03, 2000, 2000, {0, 0, -1})};
+  const HeightFieldParams g = surface_params(s, geo, 1e-4).grid;
+  EXPECT_GT(g.x0, land_x);
+}
+
 TEST(TerrainLevels, EmptyColumnRestsOnTheHighestSolid) {
   HeightField hf = shelf_column();
   hf.measure(Grains{}, kNoStatic);
