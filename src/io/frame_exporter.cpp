@@ -72,9 +72,15 @@ PovOptions fixed_pov_camera(const World& world) {
     have = true;
   };
   // where the grains can go: each emitter's region widened by the largest heap, down to the
-  // ground below it (or a heap's height below it when there is none)
+  // ground below it (or a heap's height below it when there is none), and where its throw comes
+  // down
   for (const EmitterConfig& e : scene.emitters) {
     const EmitterBox b = emitter_box(e, d);
+    if (const std::optional<Vec3> at = throw_landing(scene, e, geometry)) {
+      const Vec3 spread{heap.radius, heap.radius, 0};
+      grow(*at - Vec3{b.half.x, b.half.y, 0} - spread,
+           *at + Vec3{b.half.x, b.half.y, heap.height} + spread);
+    }
     const Real bottom = b.centre.z - b.half.z;
     const Real deepest = bottom - 1000;  // [m] a ground further down is not framed
     Real ground = geometry.top_below(b.centre.x, b.centre.y, bottom, deepest);

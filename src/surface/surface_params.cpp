@@ -16,23 +16,9 @@
 namespace sandflow {
 
 namespace {
-Real gravity_magnitude(const SceneConfig& s) { return norm(s.simulation.gravity); }
-// Where an emitter's throw comes down on the ground under it (gravity g along -z): from its
-// centre, on the free fall of its velocity, to the solid top below where it lands (looked up
-// twice: under the centre, then under the first landing). Nothing where there is no ground.
-std::optional<Vec3> throw_landing(const EmitterConfig& e, Real g, const Geometry& geometry) {
-  const Vec3 p = e.center;
-  const Vec3 v = e.velocity;
-  Vec3 landing = p;
-  for (int pass = 0; pass < 2; ++pass) {
-    const Real ground = geometry.top_below(landing.x, landing.y, p.z, p.z - 1e3);
-    if (!(ground > p.z - 1e3)) return std::nullopt;
-    const Real t = (v.z + std::sqrt(v.z * v.z + 2 * g * (p.z - ground))) / g;
-    landing = {p.x + v.x * t, p.y + v.y * t, ground};
-  }
-  return landing;
+Real gravity_magnitude(const SceneConfig& s) {
+  return norm(s.simulation.gravity);
 }
-
 }  // namespace
 
 Real rolling_min(const SceneConfig& scene) {
@@ -47,6 +33,26 @@ Real interface_thickness(const SceneConfig& scene) {
   // half a diameter: the invariant of the layers, not the band, keeps grains out of the static
   // layer (docs/physics.md), and a thinner band simulates fewer grains
   return scene.surface.interface_thickness.value_or(0.5 * scene.material.diameter);
+}
+
+std::optional<Vec3> throw_landing(const SceneConfig& scene, const EmitterConfig& e,
+                                  const Geometry& geometry) {
+  const Vec3 gravity = scene.simulation.gravity;
+  const Vec3 p = e.center;
+  const Vec3 v = e.velocity;
+  if (e.type == EmitterType::Bed || (v.x == 0 && v.y == 0) || gravity.x != 0 || gravity.y != 0 ||
+      !(gravity.z < 0))
+    return std::nullopt;
+  const Real g = -gravity.z;
+  // the ground looked up twice: under the centre, then under the first landing
+  Vec3 landing = p;
+  for (int pass = 0; pass < 2; ++pass) {
+    const Real ground = geometry.top_below(landing.x, landing.y, p.z, p.z - 1e3);
+    if (!(ground > p.z - 1e3)) return std::nullopt;
+    const Real t = (v.z + std::sqrt(v.z * v.z + 2 * g * (p.z - ground))) / g;
+    landing = {p.x + v.x * t, p.y + v.y * t, ground};
+  }
+  return landing;
 }
 
 HeapSize largest_heap(const SceneConfig& scene) {
@@ -138,12 +144,8 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   }
   // a throw that comes down beyond all that (a jet, a pour or a block thrown sideways over open
   // ground): room for its heap where it lands, or its grains would stay simulated
-  const Vec3 gravity = scene.simulation.gravity;
   for (const EmitterConfig& e : scene.emitters) {
-    if (e.type == EmitterType::Bed || (e.velocity.x == 0 && e.velocity.y == 0) || g <= 0 ||
-        gravity.x != 0 || gravity.y != 0 || gravity.z >= 0)
-      continue;
-    const std::optional<Vec3> at = throw_landing(e, g, geometry);
+    const std::optional<Vec3> at = throw_landing(scene, e, geometry);
     if (!at || (have && at->x >= x0 && at->x <= x1 && at->y >= y0 && at->y <= y1)) continue;
     const Vec3 half = emitter_half_extent(e);
     grow(at->x - half.x - heap, at->y - half.y - heap, at->x + half.x + heap,

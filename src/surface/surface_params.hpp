@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "config/scene_config.hpp"
@@ -39,6 +40,13 @@ struct HeapSize {
   Real height, radius;
 };
 HeapSize largest_heap(const SceneConfig& scene);
+
+/// Where an emitter's throw comes down on the ground (a jet, a pour or a block thrown sideways):
+/// from its centre, on the free fall of its velocity, to the solid top below where it lands.
+/// Nothing for a bed, for a throw straight up or down, under gravity not along -z, or where no
+/// ground lies below.
+std::optional<Vec3> throw_landing(const SceneConfig& scene, const EmitterConfig& e,
+                                  const Geometry& geometry);
 
 /// Every parameter, resolved for a run with time step dt.
 SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry, Real dt);

@@ -374,6 +374,20 @@ TEST(PovGrains, FrameLinesAreTheSceneWritersLines) {
   EXPECT_EQ(test::pov_grains(lines).size(), 3u);
 }
 
+// p lies inside the picture of the camera opt.
+void expect_in_view(const PovOptions& opt, const Vec3& p) {
+  const Vec3 fwd =
+      (opt.camera_look_at - opt.camera_position) / norm(opt.camera_look_at - opt.camera_position);
+  const Vec3 right = cross(fwd, Vec3{0, 0, 1}) / norm(cross(fwd, Vec3{0, 0, 1}));
+  const Vec3 up = cross(right, fwd);
+  const double tan_h = std::tan(deg_to_rad(opt.fov_deg) / 2);
+  const double tan_v = tan_h * opt.height / opt.width;
+  const Vec3 d = p - opt.camera_position;
+  ASSERT_GT(dot(d, fwd), 0);
+  EXPECT_LT(std::abs(dot(d, right)) / dot(d, fwd), tan_h) << p.x << " " << p.y << " " << p.z;
+  EXPECT_LT(std::abs(dot(d, up)) / dot(d, fwd), tan_v) << p.x << " " << p.y << " " << p.z;
+}
+
 // The POV-Ray frames' fixed camera keeps in view the pour and the ground under it, with the width
 // of the largest heap around it (a pour above a floor: the floor is infinite, so only the emitter
 // and the ground found under it say where to look).
@@ -394,20 +408,34 @@ rate = 1000
   const World world(scene);
   const PovOptions opt = fixed_pov_camera(world);
   EXPECT_FALSE(opt.auto_camera);
-  const Vec3 fwd =
-      (opt.camera_look_at - opt.camera_position) / norm(opt.camera_look_at - opt.camera_position);
-  const Vec3 right = cross(fwd, Vec3{0, 0, 1}) / norm(cross(fwd, Vec3{0, 0, 1}));
-  const Vec3 up = cross(right, fwd);
-  const double tan_h = std::tan(deg_to_rad(opt.fov_deg) / 2);
-  const double tan_v = tan_h * opt.height / opt.width;
   const Real r = largest_heap(scene).radius;
   for (const Vec3 p : {Vec3{0.2, -0.1, 0.45}, Vec3{0.2, -0.1, 0}, Vec3{0.2 + r, -0.1, 0},
-                       Vec3{0.2 - r, -0.1, 0}, Vec3{0.2, -0.1 + r, 0}, Vec3{0.2, -0.1 - r, 0}}) {
-    const Vec3 d = p - opt.camera_position;
-    ASSERT_GT(dot(d, fwd), 0);
-    EXPECT_LT(std::abs(dot(d, right)) / dot(d, fwd), tan_h) << p.x << " " << p.y << " " << p.z;
-    EXPECT_LT(std::abs(dot(d, up)) / dot(d, fwd), tan_v) << p.x << " " << p.y << " " << p.z;
-  }
+                       Vec3{0.2 - r, -0.1, 0}, Vec3{0.2, -0.1 + r, 0}, Vec3{0.2, -0.1 - r, 0}})
+    expect_in_view(opt, p);
+}
+
+// A jet thrown level over open ground heaps where it comes down: the camera frames that too.
+TEST(PovCamera, FramesWhereAJetComesDown) {
+  const SceneConfig scene = load_scene_from_string(R"(
+[material]
+diameter = 0.01
+[[geometry]]
+type = "plane"
+[[emitter]]
+type = "pour"
+facing = "velocity"
+count = 3000
+center = [0.2, -0.1, 0.45]
+radius = 0.03
+rate = 1000
+velocity = [-6, 0, 0]
+)",
+                                                   "jet.toml");
+  const PovOptions opt = fixed_pov_camera(World(scene));
+  const Real x = 0.2 - 6 * std::sqrt(2 * 0.45 / 9.81), r = largest_heap(scene).radius;
+  for (const Vec3 p : {Vec3{x, -0.1, 0}, Vec3{x - r, -0.1, 0}, Vec3{x, -0.1 + r, 0},
+                       Vec3{x, -0.1 - r, 0}, Vec3{0.2, -0.1, 0.45}})
+    expect_in_view(opt, p);
 }
 
 // ---- Height fields ------------------------------------------------------------------------------
