@@ -143,13 +143,19 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
     z_floor = std::min(z_floor, lo.z);
   }
   // a throw that comes down beyond all that (a jet, a pour or a block thrown sideways over open
-  // ground): room for its heap where it lands, or its grains would stay simulated
+  // ground): room for its heap where it lands and along the way its grains run out on, or they
+  // would stay simulated. A grain keeps its speed across the throw, v_h, and rolls on against the
+  // ground's rolling resistance mu_r for at most v_h^2 / (2 mu_r g) (ten heaps' radii without it)
   for (const EmitterConfig& e : scene.emitters) {
     const std::optional<Vec3> at = throw_landing(scene, e, geometry);
     if (!at || (have && at->x >= x0 && at->x <= x1 && at->y >= y0 && at->y <= y1)) continue;
     const Vec3 half = emitter_half_extent(e);
-    grow(at->x - half.x - heap, at->y - half.y - heap, at->x + half.x + heap,
-         at->y + half.y + heap);
+    const Real vh = std::hypot(e.velocity.x, e.velocity.y);
+    const Real mu_r = scene.material.wall_rolling_friction;
+    const Real run = mu_r > 0 ? std::min(vh * vh / (2 * mu_r * g), 10 * heap) : 10 * heap;
+    const Real ex = at->x + e.velocity.x / vh * run, ey = at->y + e.velocity.y / vh * run;
+    grow(std::min(at->x, ex) - half.x - heap, std::min(at->y, ey) - half.y - heap,
+         std::max(at->x, ex) + half.x + heap, std::max(at->y, ey) + half.y + heap);
   }
   if (sc.extent) {
     x0 = (*sc.extent)[0], y0 = (*sc.extent)[1], x1 = (*sc.extent)[2], y1 = (*sc.extent)[3];

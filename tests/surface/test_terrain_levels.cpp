@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "core/error.hpp"
 #include "geometry/shapes.hpp"
 #include "sim/world.hpp"
@@ -188,9 +190,9 @@ TEST(TerrainIntervals, ABoxContainersInsideIsCentredOnWholeColumns) {
   }
 }
 
-// A jet or a block thrown sideways over open ground heaps where it comes down: the grid reaches
-// there with room for the heap (without it every grain there stayed simulated); a pour straight
-// down keeps its grid around the pour.
+// A jet or a block thrown sideways over open ground heaps where it comes down and its grains roll
+// on: the grid reaches there and along their run with room for the heap (without it every grain
+// there stayed simulated); a pour straight down keeps its grid around the pour.
 TEST(TerrainIntervals, TheGridReachesWhereAThrowComesDown) {
   SceneConfig s = test::grains_on_floor("jet", Mode::Surface, 0.01);
   EmitterConfig jet = test::disk_pour({0.3, 0.2, 0.3}, 0.03, 2000, 2000, {-2.5, 1.0, 0.5});
@@ -204,13 +206,20 @@ TEST(TerrainIntervals, TheGridReachesWhereAThrowComesDown) {
   const Geometry geo = Geometry::from_config(s.geometry, s.material);
   const Real t = (0.5 + std::sqrt(0.25 + 2 * 9.81 * 0.3)) / 9.81;  // up 0.5 m/s, down 0.3 m
   const Real land_x = 0.3 - 2.5 * t, land_y = 0.2 + 1.0 * t;
-  for (const EmitterConfig& e : {jet, block}) {
-    s.emitters = {e};
-    const Real heap = largest_heap(s).radius;
-    const HeightFieldParams g = surface_params(s, geo, 1e-4).grid;
-    EXPECT_LE(g.x0, land_x - heap);
-    EXPECT_GE(g.y0 + g.ny * g.cell, land_y + heap);
-    EXPECT_GE(g.x0 + g.nx * g.cell, 0.3 + heap);  // and the emitter still
+  for (const Real mu_r : {0.1, 2.0}) {
+    s.material.wall_rolling_friction = mu_r;
+    for (const EmitterConfig& e : {jet, block}) {
+      s.emitters = {e};
+      const Real heap = largest_heap(s).radius;
+      const HeightFieldParams g = surface_params(s, geo, 1e-4).grid;
+      // and on from there, as far as a grain rolls at 2.7 m/s (ten heaps' radii at the most)
+      const Real run = std::min(7.25 / (2 * mu_r * 9.81), 10 * heap);
+      const std::string what = fmt::format("mu_r {}, run {:.3f} m", mu_r, run);
+      EXPECT_LE(g.x0, land_x - 2.5 / std::sqrt(7.25) * run - heap) << what;
+      EXPECT_GE(g.y0 + g.ny * g.cell, land_y + 1.0 / std::sqrt(7.25) * run + heap) << what;
+      EXPECT_LT(g.x0, land_x - 2.5 / std::sqrt(7.25) * run - heap + 0.1) << what;  // not farther
+      EXPECT_GE(g.x0 + g.nx * g.cell, 0.3 + heap) << what;  // and the emitter still
+    }
   }
   s.emitters = {test::disk_pour({0.3, 0.2, 0.3}, 0.03, 2000, 2000, {0, 0, -1})};
   const HeightFieldParams g = surface_params(s, geo, 1e-4).grid;
