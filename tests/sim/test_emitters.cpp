@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "checkpoint/checkpoint.hpp"
+#include "config/emitter_region.hpp"
 #include "core/error.hpp"
 #include "sim/emitters.hpp"
 #include "sim/world.hpp"
@@ -402,6 +403,47 @@ TEST(Emitters, ANozzleStreamsAlongItsThrowAtAnyAngleAndItsGrainsNeverMeetInFligh
   }
   up.velocity = {0, 0, 0.5};  // clears them
   EXPECT_GT(Emitter(up, grains, kGravity, "s.toml: emitter[0]").max_rate(), 0);
+}
+
+// The box around a pour's area that the grid, the camera and the world's bounds use holds every
+// slot of it, level or facing any throw, a disk or a rectangle, and is no larger than the area
+// needs (within a slot of it along each axis).
+TEST(Emitters, ThePourRegionBoundsItsSlotsAtAnyAim) {
+  const MaterialConfig grains = millimetre_grains();
+  const Vec3 none{0, 0, 0};  // (no gravity: no slot leads its batch, each grain is at its slot)
+  for (const Vec3 v : {Vec3{0, 0, -1}, Vec3{2, 0, 0}, Vec3{1, 1, -1}, Vec3{0.3, -2, 1}})
+    for (const PourShape shape : {PourShape::Disk, PourShape::Rect})
+      for (const PourFacing facing : {PourFacing::Up, PourFacing::Velocity}) {
+        EmitterConfig e = sideways_pour(v, 1);
+        e.shape = shape;
+        e.size = {0.02, 0.008, 0};
+        e.facing = facing;
+        e.jitter = 0;
+        const std::string what = fmt::format("velocity ({}, {}, {}), {}, {}", v.x, v.y, v.z,
+                                             shape == PourShape::Disk ? "disk" : "rect",
+                                             facing == PourFacing::Up ? "up" : "velocity");
+        e.rate = 0.999 * Emitter(e, grains, none, "probe").max_rate();  // every slot
+        Emitter emitter(e, grains, none, "test");
+        Rng rng(2);
+        std::vector<NewGrain> out;
+        emitter.emit(emitter.next_time(), rng, out);
+        ASSERT_GT(out.size(), 10u) << what;
+        const Vec3 half = emitter_half_extent(e);
+        Vec3 lo = out[0].x, hi = out[0].x;
+        for (const NewGrain& g : out) {
+          lo = min(lo, g.x);
+          hi = max(hi, g.x);
+        }
+        for (int k = 0; k < 3; ++k) {
+          const Real c = k == 0 ? e.center.x : k == 1 ? e.center.y : e.center.z;
+          const Real l = k == 0 ? lo.x : k == 1 ? lo.y : lo.z;
+          const Real h = k == 0 ? hi.x : k == 1 ? hi.y : hi.z;
+          const Real r = k == 0 ? half.x : k == 1 ? half.y : half.z;
+          EXPECT_GE(l, c - r - 1e-12) << what << ", axis " << k;
+          EXPECT_LE(h, c + r + 1e-12) << what << ", axis " << k;
+          EXPECT_LE(r - std::max(c - l, h - c), 0.0005 + 0.00105 * 1.5) << what << ", axis " << k;
+        }
+      }
 }
 
 TEST(Emitters, ABoxTooSmallForItsCountIsRefusedWithWhatItHolds) {
