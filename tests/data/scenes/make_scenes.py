@@ -67,6 +67,9 @@ CASES = {
                                     + EMITTER),
     "negative_diameter.toml": ("material.diameter = -0.01 is not > 0",
                                "[material]\ndiameter = -0.01\n\n" + EMITTER),
+    "nozzle_without_velocity.toml": ('emitter[0].facing = "velocity" lays the area across the '
+                                     'velocity, but velocity is zero',
+                                     EMITTER + 'facing = "velocity"\n'),
     "zero_pour_radius.toml": ("emitter[0].radius = 0 is not > 0",
                               EMITTER + "radius = 0\n"),
     # wrong types
