@@ -128,11 +128,11 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   const Real heap = largest_heap(scene).radius + 4 * d;
   for (const EmitterConfig& e : scene.emitters) {
     const Vec3 half = emitter_half_extent(e);
-    const Real hx = half.x, hy = half.y;
     // (a bed lies in its footprint: the heap of every grain around it would be a grid many times
     // its area)
     const Real m = e.type == EmitterType::Bed ? 4 * d : heap;
-    grow(e.center.x - hx - m, e.center.y - hy - m, e.center.x + hx + m, e.center.y + hy + m);
+    grow(e.center.x - half.x - m, e.center.y - half.y - m, e.center.x + half.x + m,
+         e.center.y + half.y + m);
     z_top = std::max(z_top, e.center.z + std::max(e.size.z, half.z));
     z_floor = std::min(z_floor, e.center.z - std::max(e.size.z, half.z));
   }

@@ -391,8 +391,8 @@ void expect_in_view(const PovOptions& opt, const Vec3& p) {
 // The POV-Ray frames' fixed camera keeps in view the pour and the ground under it, with the width
 // of the largest heap around it (a pour above a floor: the floor is infinite, so only the emitter
 // and the ground found under it say where to look).
-TEST(PovCamera, FramesThePourAndTheGroundUnderIt) {
-  const SceneConfig scene = load_scene_from_string(R"(
+// A pour 0.45 m above a floor (its [[emitter]] table last, open to more keys).
+const char* kPourAboveFloor = R"(
 [material]
 diameter = 0.01
 [[geometry]]
@@ -403,8 +403,10 @@ count = 3000
 center = [0.2, -0.1, 0.45]
 radius = 0.06
 rate = 1000
-)",
-                                                   "pour.toml");
+)";
+
+TEST(PovCamera, FramesThePourAndTheGroundUnderIt) {
+  const SceneConfig scene = load_scene_from_string(kPourAboveFloor, "pour.toml");
   const World world(scene);
   const PovOptions opt = fixed_pov_camera(world);
   EXPECT_FALSE(opt.auto_camera);
@@ -416,21 +418,8 @@ rate = 1000
 
 // A jet thrown level over open ground heaps where it comes down: the camera frames that too.
 TEST(PovCamera, FramesWhereAJetComesDown) {
-  const SceneConfig scene = load_scene_from_string(R"(
-[material]
-diameter = 0.01
-[[geometry]]
-type = "plane"
-[[emitter]]
-type = "pour"
-facing = "velocity"
-count = 3000
-center = [0.2, -0.1, 0.45]
-radius = 0.03
-rate = 1000
-velocity = [-6, 0, 0]
-)",
-                                                   "jet.toml");
+  const SceneConfig scene = load_scene_from_string(
+      std::string(kPourAboveFloor) + "facing = \"velocity\"\nvelocity = [-6, 0, 0]\n", "jet.toml");
   const PovOptions opt = fixed_pov_camera(World(scene));
   const Real x = 0.2 - 6 * std::sqrt(2 * 0.45 / 9.81), r = largest_heap(scene).radius;
   for (const Vec3 p : {Vec3{x, -0.1, 0}, Vec3{x - r, -0.1, 0}, Vec3{x, -0.1 + r, 0},
