@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "surface/surface_params.hpp"
 
@@ -37,8 +38,13 @@ Stiffness choose_stiffness(const SceneConfig& scene, Mode mode, const Geometry& 
     if (c.impact_speed) {
       speed = *c.impact_speed;
     } else {
+      // the fall to the lower of the ground under the emitter and where its throw comes down (a
+      // jet off a ledge lands on the floor below it)
       const Real z = e.center.z + (e.type == EmitterType::Pour ? 0 : e.size.z / 2);
-      const Real fall = std::max(z - geometry.top_below(e.center.x, e.center.y, z, z - 1e3), 0.0);
+      Real ground = geometry.top_below(e.center.x, e.center.y, z, z - 1e3);
+      if (const std::optional<Vec3> landing = throw_landing(scene, e, geometry))
+        ground = std::min(ground, landing->z);
+      const Real fall = std::max(z - ground, 0.0);
       speed = std::sqrt(norm2(e.velocity) + 2 * g * fall);
     }
     const bool body = e.type == EmitterType::Block || e.type == EmitterType::Lattice;
