@@ -2,6 +2,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -228,12 +229,16 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
           o.source, h->capped_queries());
   double simulated_sum = 0;
   Real max_overlap = 0;
+  std::int64_t max_overlap_frame = 0;
   TransitionCounts transitions;
   Real energy_trapped = 0, energy_woken = 0, energy_preloaded = 0, energy_inside = 0;
   for (const FrameStats& st : res.frames) {
     simulated_sum += static_cast<double>(st.n_active + st.n_interface);
     res.wall_seconds += st.wall_seconds;
-    max_overlap = std::max(max_overlap, st.max_overlap_rel);
+    if (st.max_overlap_rel > max_overlap) {
+      max_overlap = st.max_overlap_rel;
+      max_overlap_frame = st.frame;
+    }
     transitions += st.transitions;
     energy_trapped += st.energy_trapped;
     energy_woken += st.energy_woken;
@@ -279,6 +284,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
       {"stiffness", stiffness_json(world.stiffness())},
       {"threads", threads},
       {"max_overlap_rel", max_overlap},
+      {"max_overlap_frame", max_overlap_frame},
       {"repose_angle_deg", fit.ok ? nlohmann::json(fit.repose_angle_deg) : nlohmann::json()},
       {"heap", heap_json(fit)},
       {"grains_inside_geometry", inside},
@@ -761,6 +767,41 @@ int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
   return status;
 }
 
+namespace {
+/// The largest overlap of the run; where k_n was sized from the load, whether it stayed within
+/// stiffness.impact_overlap, and if not, the impact speed that sizes k_n to hold it (a spring's
+/// overlap at a given impact goes as 1 / sqrt(k_n); 5 % more, as another run's impacts differ).
+void print_overlap(const nlohmann::json& s, const SceneConfig& scene) {
+  const double reached = s["max_overlap_rel"].get<double>();
+  const auto frame = s.value("max_overlap_frame", std::int64_t{0});
+  const nlohmann::json& k = s["stiffness"];
+  const double limit = scene.stiffness.impact_overlap;
+  if (!k["from_load"].get<bool>() || !(reached > limit)) {
+    fmt::print("max overlap      {:.2f} % of a diameter\n", 100 * reached);
+    return;
+  }
+  fmt::print(
+      "max overlap      {:.2f} % of a diameter (frame {}), above stiffness.impact_overlap = "
+      "{:.4g} %\n",
+      100 * reached, frame, 100 * limit);
+  const double speed = k["impact_speed"].get<double>(), k_impact = k["k_impact"].get<double>();
+  const std::string remedy =
+      speed > 0 && k_impact > 0
+          ? fmt::format(
+                ": set stiffness.impact_speed = {:.3g} (k_n was sized for {:.3g} m/s) to "
+                "size the spring for it",
+                1.05 * speed * reached / limit * std::sqrt(k["k_n"].get<double>() / k_impact),
+                speed)
+          : ": set stiffness.impact_speed to the speed of the scene's hardest impact";
+  print_to_stderr(
+      "warning: the largest overlap, {:.1f} % of a diameter in frame {}, passed "
+      "stiffness.impact_overlap = {:.4g} %: an impact harder than the one k_n was sized for (a "
+      "grain landing on one the ground or a wall backs, a wave piling against a wall: "
+      "docs/known-issues.md){}\n",
+      100 * reached, frame, 100 * limit, remedy);
+}
+}  // namespace
+
 int run_command(const RunOptions& o) {
   if (o.resume.empty() && o.scene.empty())
     throw InputError("run: give a scene file (sandflow run SCENE), or --resume DIR to continue a run");
@@ -832,7 +873,7 @@ int run_command(const RunOptions& o) {
                  counted(delayed, "grain"));
   }
   fmt::print("inside geometry  {}\n", s["grains_inside_geometry"].get<std::int64_t>());
-  fmt::print("max overlap      {:.2f} % of a diameter\n", 100 * s["max_overlap_rel"].get<double>());
+  print_overlap(s, scene);
   fmt::print("memory           {:.1f} bytes per static grain, peak {:.1f} MB\n",
              s["bytes_per_static_grain"].get<double>(),
              static_cast<double>(s["peak_memory_bytes"].get<std::int64_t>()) / 1e6);

@@ -102,13 +102,12 @@ inline std::string read_text(const fs::path& path) {
   return ss.str();
 }
 
-/// The command tests' tiny scene: a block of `count` 1 cm grains, `height` tall and centred at
-/// `z`, settling on a floor; a fraction of a second a run.
-inline std::string tiny_block_scene(int count, double fps = 30, double z = 0.05,
-                                    double height = 0.06) {
+/// A scene's tables up to a floor at z = 0 (1 cm grains, k_n given, 30 frames a second), for the
+/// tiny scenes below to add their emitter to.
+inline std::string tiny_floor_scene(const std::string& name, double fps = 30) {
   return fmt::format(R"(
 [scene]
-name = "tiny"
+name = "{}"
 [material]
 diameter = 0.01
 k_n = 1.0e4
@@ -116,13 +115,37 @@ k_n = 1.0e4
 fps = {}
 [[geometry]]
 type = "plane"
-[[emitter]]
+)",
+                     name, fps);
+}
+
+/// The command tests' tiny scene: a block of `count` 1 cm grains, `height` tall and centred at
+/// `z`, settling on a floor; a fraction of a second a run.
+inline std::string tiny_block_scene(int count, double fps = 30, double z = 0.05,
+                                    double height = 0.06) {
+  return tiny_floor_scene("tiny", fps) + fmt::format(R"([[emitter]]
 type = "block"
 count = {}
 center = [0.0, 0.0, {}]
 size = [0.1, 0.1, {}]
 )",
-                     fps, count, z, height);
+                                                     count, z, height);
+}
+
+/// `count` grains of 1 cm poured at `rate` from a disk of 4 cm radius `z` above a floor; `emitter`
+/// adds keys to the pour, `tables` tables after it.
+inline std::string tiny_pour_scene(int count, double z, double rate,
+                                   const std::string& emitter = "",
+                                   const std::string& tables = "") {
+  return tiny_floor_scene("tiny pour") + fmt::format(R"([[emitter]]
+type = "pour"
+count = {}
+center = [0.0, 0.0, {}]
+radius = 0.04
+rate = {}
+{}
+{})",
+                                                     count, z, rate, emitter, tables);
 }
 
 /// A tetrahedron as an ASCII STL, 0.1 m across, its apex at height `apex` [m]; `face_twice`

@@ -346,30 +346,50 @@ TEST(Cli, CheckValidatesWithoutRunning) {
 
 // A pour thrown sideways that cannot fall as a stream says so when the run starts (and with
 // --check), naming the spacing that would let it; summary.json records each pour's stream_lead.
+TEST(Cli, AnOverlapPastTheImpactLimitIsNamedWithTheSpeedThatHoldsIt) {
+  // 20 grains poured from 0.3 m land at 2.4 m/s: sized for that, they stay under 10 % of a
+  // diameter; sized for 1 m/s they reach 19 %, and the run names the frame and an impact speed
+  // whose spring holds them under 10 % again
+  Sandbox box;
+  const auto scene =
+      box.write("landing.toml",
+                sandflow_test::tiny_pour_scene(
+                    20, 0.3, 100, "", "[stiffness]\nfrom_load = true\nimpact_overlap = 0.1\n"));
+  const auto out = box.dir / "out";
+  const std::string run = "run " + scene.string() + " --mode dem --frames 12 --force --out " +
+                          out.string() + " --export none";
+  std::string log;
+  ASSERT_EQ(sandflow(run, &log), 0) << log;
+  EXPECT_EQ(log.find("passed stiffness.impact_overlap"), std::string::npos) << log;
+
+  ASSERT_EQ(sandflow(run + " --set stiffness.impact_speed=1", &log), 0) << log;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const double reached = summary["max_overlap_rel"].get<double>();
+  EXPECT_GT(reached, 0.1);
+  const std::string named = fmt::format(
+      "{:.1f} % of a diameter in frame {}, passed "
+      "stiffness.impact_overlap = 10 %",
+      100 * reached, summary["max_overlap_frame"].get<int>());
+  EXPECT_NE(log.find("warning: the largest overlap, " + named), std::string::npos) << log;
+  const std::string key = "set stiffness.impact_speed = ";
+  const std::size_t at = log.find(key);
+  ASSERT_NE(at, std::string::npos) << log;
+  const std::string speed =
+      log.substr(at + key.size(), log.find(' ', at + key.size()) - at - key.size());
+  ASSERT_EQ(sandflow(run + " --set stiffness.impact_speed=" + speed, &log), 0) << log;
+  EXPECT_LE(
+      nlohmann::json::parse(std::ifstream(out / "summary.json"))["max_overlap_rel"].get<double>(),
+      0.1);
+  EXPECT_EQ(log.find("passed stiffness.impact_overlap"), std::string::npos) << log;
+}
+
 TEST(Cli, APourThatFallsAsDiscsSaysSoAndTheSummaryRecordsItsLead) {
   Sandbox box;
   auto scene = [&](const char* name, const char* velocity, double spacing) {
     return box
-        .write(name, fmt::format(R"(
-[scene]
-name = "slanted pour"
-[material]
-diameter = 0.01
-k_n = 1.0e4
-[output]
-fps = 30
-[[geometry]]
-type = "plane"
-[[emitter]]
-type = "pour"
-count = 60
-center = [0.0, 0.0, 0.1]
-radius = 0.04
-rate = 400
-spacing = {}
-velocity = {}
-)",
-                                 spacing, velocity))
+        .write(name,
+               sandflow_test::tiny_pour_scene(
+                   60, 0.1, 400, fmt::format("spacing = {}\nvelocity = {}", spacing, velocity)))
         .string();
   };
   std::string log;
