@@ -344,8 +344,6 @@ TEST(Cli, CheckValidatesWithoutRunning) {
   EXPECT_NE(log.find("stable bound"), std::string::npos) << log;
 }
 
-// A pour thrown sideways that cannot fall as a stream says so when the run starts (and with
-// --check), naming the spacing that would let it; summary.json records each pour's stream_lead.
 TEST(Cli, AnOverlapPastTheImpactLimitIsNamedWithTheSpeedThatHoldsIt) {
   // 20 grains poured from 0.3 m land at 2.4 m/s: sized for that, they stay under 10 % of a
   // diameter; sized for 1 m/s they reach 19 %, and the run names the frame and an impact speed
@@ -383,6 +381,8 @@ TEST(Cli, AnOverlapPastTheImpactLimitIsNamedWithTheSpeedThatHoldsIt) {
   EXPECT_EQ(log.find("passed stiffness.impact_overlap"), std::string::npos) << log;
 }
 
+// A pour thrown sideways that cannot fall as a stream says so when the run starts (and with
+// --check), naming the spacing that would let it; summary.json records each pour's stream_lead.
 TEST(Cli, APourThatFallsAsDiscsSaysSoAndTheSummaryRecordsItsLead) {
   Sandbox box;
   auto scene = [&](const char* name, const char* velocity, double spacing) {
