@@ -519,6 +519,7 @@ struct Started {
   std::optional<Checkpoint> checkpoint;
   bool resumed = false;  ///< `out` holds a stopped run
   bool done = false;     ///< nothing to run (--check, or a finished run)
+  bool report_missing = false;  ///< a finished run killed before its report.html was written
 };
 
 /// How a run was started and how long it is, from its run.json: what its checkpoints' seal covers
@@ -584,6 +585,10 @@ Started start_resumed(const RunOptions& o, bool reload_finished = false) {
   if (finished && !reload_finished && o.frames == 0) {
     print_to_stderr("{}: this run is finished (its summary.json is written); nothing to resume\n",
                     dir);
+    // killed after its summary was written: what it was writing then is finished here
+    remove_partial_files(dir);
+    run.report_missing = !fs::exists(fs::path(dir) / "report.html", ec);
+    run.out = dir;
     run.done = true;
     return run;
   }
@@ -815,7 +820,12 @@ int run_command(const RunOptions& o) {
         "frame: nothing measured was kept; the same command starts it again\n");
     return 128 + e.signal;
   }
-  if (run.done) return 0;
+  if (run.done) {
+    if (run.report_missing)
+      fmt::print("report           {} (written now: the run was stopped before it)\n",
+                 write_report({run.out, 6, false}));
+    return 0;
+  }
   const SceneConfig& scene = run.scene;
   const std::string& out = run.out;
   RunResult res;

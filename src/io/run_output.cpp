@@ -17,12 +17,14 @@ namespace fs = std::filesystem;
 namespace {
 
 /// Whether the folder `dir` holds anything but what a start stopped before its run.json leaves
-/// (an empty frames/: a run interrupted while it calibrated, say), which no --force need replace.
+/// (an empty frames/: a run interrupted while it calibrated, say; a half-written run.json.tmp:
+/// one killed as it wrote it), which no --force need replace.
 bool holds_something(const std::string& dir) {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(dir, ec))
-    if (e.path().filename() != "frames" || !fs::is_directory(e.path(), ec) ||
-        !fs::is_empty(e.path(), ec))
+    if (e.path().filename() != "run.json.tmp" &&
+        (e.path().filename() != "frames" || !fs::is_directory(e.path(), ec) ||
+         !fs::is_empty(e.path(), ec)))
       return true;
   return static_cast<bool>(ec);
 }
@@ -45,6 +47,7 @@ void prepare_output_dir(const std::string& dir, bool force) {
                              "run.json"})
       fs::remove_all(fs::path(dir) / name, ec);
   }
+  if (fs::is_directory(dir, ec)) remove_partial_files(dir);
   const bool existed = fs::is_directory(dir, ec);
   fs::create_directories(fs::path(dir) / "frames", ec);
   if (ec)
@@ -55,28 +58,37 @@ void prepare_output_dir(const std::string& dir, bool force) {
                                             ec.message()));
 }
 
-void prepare_resumed_dir(const std::string& dir, int frame) {
+void remove_partial_files(const std::string& dir) {
   std::error_code ec;
-  fs::create_directories(fs::path(dir) / "frames", ec);
-  if (ec) throw OutputError(fmt::format("{}: cannot create {}/frames: {}", dir, dir, ec.message()));
   for (const fs::path& folder : {fs::path(dir), fs::path(dir) / "frames"}) {
     std::vector<fs::path> stale;
-    for (const auto& e : fs::directory_iterator(folder, ec)) {
-      const fs::path& p = e.path();
-      if (p.extension() == ".tmp") {
-        stale.push_back(p);
-      } else if (folder != fs::path(dir) && p.extension() == ".ply") {
-        // NNNN.ply after the checkpoint's frame
-        const std::string stem = p.stem().string();
-        if (!stem.empty() && stem.find_first_not_of("0123456789") == std::string::npos &&
-            stem.size() < 10 && std::stoi(stem) > frame)
-          stale.push_back(p);
-      }
-    }
+    for (const auto& e : fs::directory_iterator(folder, ec))
+      if (e.path().extension() == ".tmp") stale.push_back(e.path());
     for (const fs::path& p : stale) {
       fs::remove(p, ec);
       if (ec) throw OutputError(fmt::format("{}: cannot remove: {}", p.string(), ec.message()));
     }
+  }
+}
+
+void prepare_resumed_dir(const std::string& dir, int frame) {
+  std::error_code ec;
+  fs::create_directories(fs::path(dir) / "frames", ec);
+  if (ec) throw OutputError(fmt::format("{}: cannot create {}/frames: {}", dir, dir, ec.message()));
+  remove_partial_files(dir);
+  // NNNN.ply after the checkpoint's frame
+  std::vector<fs::path> stale;
+  for (const auto& e : fs::directory_iterator(fs::path(dir) / "frames", ec)) {
+    const fs::path& p = e.path();
+    const std::string stem = p.stem().string();
+    if (p.extension() == ".ply" && !stem.empty() &&
+        stem.find_first_not_of("0123456789") == std::string::npos && stem.size() < 10 &&
+        std::stoi(stem) > frame)
+      stale.push_back(p);
+  }
+  for (const fs::path& p : stale) {
+    fs::remove(p, ec);
+    if (ec) throw OutputError(fmt::format("{}: cannot remove: {}", p.string(), ec.message()));
   }
 }
 

@@ -17,6 +17,9 @@ namespace sandflow {
 /// unless `force`, in which case the old run's files are removed first.
 void prepare_output_dir(const std::string& dir, bool force);
 
+/// Removes the temporary files (NAME.tmp) a killed run left in DIR and DIR/frames.
+void remove_partial_files(const std::string& dir);
+
 /// Prepares the folder of a run resumed at frame `frame`: removes the temporary files a killed
 /// run left, and the frames after `frame` (the resumed run writes them again).
 void prepare_resumed_dir(const std::string& dir, int frame);

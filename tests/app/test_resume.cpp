@@ -201,6 +201,28 @@ TEST(Resume, SigintFinishesTheFrameCheckpointsAndSaysHowToResume) {
   EXPECT_NE(resumed.find("this run is finished"), std::string::npos) << resumed;
 }
 
+// A kill after summary.json but inside report.html's writing leaves the run finished with its
+// report half written: resuming it removes the half and writes the report
+TEST(Resume, AFinishedRunKilledWhileWritingItsReportGetsItsReportOnResume) {
+  Sandbox box;
+  box.write("pour.toml", kPourScene);
+  const fs::path out = straight_run(box);
+  const std::string report = read_text(out / "report.html");
+  fs::remove(out / "report.html");
+  box.write("straight/report.html.tmp", "<html><head>");
+  box.write("straight/frames/0003.ply.tmp", "ply\n");
+  std::string log;
+  ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  EXPECT_NE(log.find("this run is finished"), std::string::npos) << log;
+  EXPECT_NE(log.find("written now"), std::string::npos) << log;
+  EXPECT_EQ(read_text(out / "report.html"), report);
+  EXPECT_FALSE(fs::exists(out / "report.html.tmp"));
+  EXPECT_FALSE(fs::exists(out / "frames" / "0003.ply.tmp"));
+  // and once it is there, nothing is written again
+  ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  EXPECT_EQ(log.find("written now"), std::string::npos) << log;
+}
+
 // `compare` is resumable runs: stopped in the plain-DEM run of its second seed, it goes on with
 // `compare --resume DIR` (its seeds and equal-stiffness run as it was started) to the comparison
 // it would have made uninterrupted.
@@ -582,6 +604,18 @@ TEST(Resume, AStartStoppedBeforeItsRecordNeedsNoForce) {
   const std::string cmd = fmt::format("run {} --frames 1 --out {}", scene, out.string());
   std::string log;
   EXPECT_EQ(sandflow(cmd, &log), 0) << log;
+  // killed as it wrote its record: the half-written record is nothing to keep, and goes
+  fs::remove_all(out);
+  fs::create_directories(out / "frames");
+  box.write("run/run.json.tmp", "{\"sta");
+  EXPECT_EQ(sandflow(cmd, &log), 0) << log;
+  EXPECT_FALSE(fs::exists(out / "run.json.tmp"));
+  // a run replaced with --force leaves none of the old run's half-written files
+  box.write("run/checkpoint.bin.tmp", "half");
+  box.write("run/frames/0002.ply.tmp", "half");
+  EXPECT_EQ(sandflow(cmd + " --force", &log), 0) << log;
+  EXPECT_FALSE(fs::exists(out / "checkpoint.bin.tmp"));
+  EXPECT_FALSE(fs::exists(out / "frames" / "0002.ply.tmp"));
   fs::remove_all(out);
   fs::create_directories(out / "frames");
   box.write("run/frames/0001.ply", "not a frame");
