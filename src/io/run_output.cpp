@@ -60,7 +60,8 @@ void prepare_output_dir(const std::string& dir, bool force) {
 
 void remove_partial_files(const std::string& dir) {
   std::error_code ec;
-  for (const fs::path& folder : {fs::path(dir), fs::path(dir) / "frames"}) {
+  for (const fs::path& folder :
+       {fs::path(dir), fs::path(dir) / "frames", fs::path(dir) / "heightfield"}) {
     std::vector<fs::path> stale;
     for (const auto& e : fs::directory_iterator(folder, ec))
       if (e.path().extension() == ".tmp") stale.push_back(e.path());

@@ -17,7 +17,8 @@ namespace sandflow {
 /// unless `force`, in which case the old run's files are removed first.
 void prepare_output_dir(const std::string& dir, bool force);
 
-/// Removes the temporary files (NAME.tmp) a killed run left in DIR and DIR/frames.
+/// Removes the temporary files (NAME.tmp) a killed run left in DIR, DIR/frames and
+/// DIR/heightfield.
 void remove_partial_files(const std::string& dir);
 
 /// Prepares the folder of a run resumed at frame `frame`: removes the temporary files a killed
