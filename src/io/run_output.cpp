@@ -29,6 +29,15 @@ bool holds_something(const std::string& dir) {
   return static_cast<bool>(ec);
 }
 
+/// Removes each of `paths`. Throws OutputError naming the first that cannot go.
+void remove_each(const std::vector<fs::path>& paths) {
+  std::error_code ec;
+  for (const fs::path& p : paths) {
+    fs::remove(p, ec);
+    if (ec) throw OutputError(fmt::format("{}: cannot remove: {}", p.string(), ec.message()));
+  }
+}
+
 }  // namespace
 
 void prepare_output_dir(const std::string& dir, bool force) {
@@ -47,8 +56,8 @@ void prepare_output_dir(const std::string& dir, bool force) {
                              "run.json"})
       fs::remove_all(fs::path(dir) / name, ec);
   }
-  if (fs::is_directory(dir, ec)) remove_partial_files(dir);
   const bool existed = fs::is_directory(dir, ec);
+  if (existed) remove_partial_files(dir);
   fs::create_directories(fs::path(dir) / "frames", ec);
   if (ec)
     throw OutputError(existed ? fmt::format("{}: cannot write into the output folder (creating "
@@ -65,10 +74,7 @@ void remove_partial_files(const std::string& dir) {
     std::vector<fs::path> stale;
     for (const auto& e : fs::directory_iterator(folder, ec))
       if (e.path().extension() == ".tmp") stale.push_back(e.path());
-    for (const fs::path& p : stale) {
-      fs::remove(p, ec);
-      if (ec) throw OutputError(fmt::format("{}: cannot remove: {}", p.string(), ec.message()));
-    }
+    remove_each(stale);
   }
 }
 
@@ -87,10 +93,7 @@ void prepare_resumed_dir(const std::string& dir, int frame) {
         std::stoi(stem) > frame)
       stale.push_back(p);
   }
-  for (const fs::path& p : stale) {
-    fs::remove(p, ec);
-    if (ec) throw OutputError(fmt::format("{}: cannot remove: {}", p.string(), ec.message()));
-  }
+  remove_each(stale);
 }
 
 std::string frame_path(const std::string& dir, int frame) {
