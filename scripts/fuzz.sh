@@ -114,8 +114,10 @@ for t in "${targets[@]}"; do
     "${limits[@]}" -print_final_stats=1 -artifact_prefix="$findings/" > "$log" 2>&1
   rc=$?
   set -e
-  # the scene and mesh targets' own files (libFuzzer ends a timed run without running atexit)
-  rm -rf /dev/shm/sandflow_fuzz_* "${TMPDIR:-/tmp}"/sandflow_fuzz_*
+  # the scene and mesh targets' own files (libFuzzer ends a timed run without running atexit),
+  # named sandflow_fuzz_PID (fuzz/fuzz_common.hpp); only those: scripts/fuzz_cli.py's folder,
+  # sandflow_fuzz_cli_*, was removed under it when the two ran side by side
+  rm -rf /dev/shm/sandflow_fuzz_[0-9]* "${TMPDIR:-/tmp}"/sandflow_fuzz_[0-9]*
   tried[$t]=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' | tail -1)
   found=$(find "$findings" -type f -newer "$mark" | sort)
   earlier=$(find "$findings" -type f ! -newer "$mark" | wc -l)
