@@ -65,7 +65,7 @@ struct SurfaceConfig {
   /// or "" (the scene's, or the built-in defaults where it sets none)
   std::string angles_source;
   std::optional<Real> rolling_min;          ///< R_min [m]; default one mean diameter
-  std::optional<Real> flowing_min;          ///< R_min under a flowing layer [m]; default 4 d
+  std::optional<Real> flowing_min;          ///< R_min under a flowing layer [m]; default 2 d
   Real flowing_hold = 0.5;                  ///< how long a stopped flow keeps flowing_min [s]
   Real close_after = 2.0;                   ///< rest after which a column's top freezes [s]
   /// a body striking the bed opens it as far as its whole momentum reaches (the blow rule)

@@ -26,7 +26,7 @@ Real rolling_min(const SceneConfig& scene) {
 }
 
 Real flowing_min(const SceneConfig& scene) {
-  return scene.surface.flowing_min.value_or(4 * scene.material.diameter);
+  return scene.surface.flowing_min.value_or(2 * scene.material.diameter);
 }
 
 Real interface_thickness(const SceneConfig& scene) {
