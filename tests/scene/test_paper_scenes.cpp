@@ -97,10 +97,10 @@ TEST(BinScene, WithWallsAGrainThickEveryGrainSleepsOnceItsColumnsClose) {
   // them). Along a wall a column's ray meets mostly the grains touching the wall, with voids
   // between them; taken for grains in flight, the grains at rest above such a void held H and
   // the static top low, and 254 grains stayed simulated above it for good. At rest on the pile,
-  // they count across the void: 4 stay. θ_max is the floor material's calibrated 45° (the tests
-  // run without the calibration, whose built-in 38° is lower): grains at rest on a slope steeper
-  // than θ_max stay simulated by design (the static layer cannot hold it), and with the 2 d
-  // flowing layer 31 grains came to rest against the wall between 38° and 45°.
+  // they count across the void: none stays. θ_max is the floor material's calibrated 45° (the
+  // tests run without the calibration, whose built-in 38° is lower): grains at rest on a slope
+  // steeper than θ_max stay simulated by design (the static layer cannot hold it), and with the
+  // 2 d flowing layer 31 grains came to rest against the wall between 38° and 45°.
   SceneConfig s = load_scene(std::string(SANDFLOW_SOURCE_DIR) + "/scenes/bin.toml",
                              {{"geometry.1.wall_thickness", "0.01"}, {"surface.max_angle", "45"}});
   s.output.frames = 130;
