@@ -44,7 +44,6 @@ void SurfaceFlow::update_height_field(const Grains& hot, const StaticStore& st,
   // and deposits up to theta_max.
   if (flowing_.columns() != hf_.columns()) flowing_.resize(hf_.columns());
   flowing_.clear();
-  fast_.clear();
   // (the threads flag the grains, which are then taken in grain order)
   moving_.resize(n);
 #pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
@@ -53,7 +52,6 @@ void SurfaceFlow::update_height_field(const Grains& hot, const StaticStore& st,
                  moves_pile(p_.interface.seat, hot, i, contacts_[i]) && !below_level(hot.x[i]);
   for (std::size_t i = 0; i < n; ++i) {
     if (!moving_[i]) continue;
-    fast_.push_back(static_cast<std::uint32_t>(i));
     hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) {
       flowing_.add(static_cast<std::uint32_t>(c));
     });
@@ -120,18 +118,17 @@ void SurfaceFlow::apply_impacts(const Grains& hot, Real dt) {
                            [&](std::size_t c, Real, Real) { hf_.limit_static_top(c, floor_z); });
     }
   };
-  // Impacts: a grain moving over the pile sets the grains beneath it in motion in DEM, so the
-  // static top stays a grain's diameter below the bottom of every such grain in contact. Without
-  // this the stream of a pour would hit a frozen apex and build a spike where DEM digs a plateau,
-  // and slow grains would run out over a bed that does not yield. It reaches below the grain as
-  // far as the grain can fall before the next update. (Dynamics, not safety: the invariant of the
-  // layers keeps grains out of the static layer.)
+  // A grain in flight about to strike: the static top a grain's diameter below its bottom, as
+  // far down as it falls before the next update. (Grains in contact that move the pile are not
+  // struck: the flowing layer, flowing_min deep under them, is the bed that yields. Struck too,
+  // each pitted h a grain below itself, and the pits' steep edges eroded the static top around
+  // them: the 100,000-grain floor kept 38 % of its grains simulated over the last half against
+  // 31 %, and came out no nearer plain DEM: docs/physics.md, "Impacts".)
   auto strike = [&](std::size_t i) {
     const Vec3& x = hot.x[i];
     const Vec3& v = hot.v[i];
     clear_path(x, v, hot.r[i], x.z - 3 * hot.r[i] - std::max(-v.z, 0.0) * dt);
   };
-  for (std::uint32_t i : fast_) strike(i);
   if (p_.interface.blows) strike_with_blows(hot, dt, strike);
 }
 

@@ -53,8 +53,8 @@ class SurfaceFlow {
   /// h there (BCRE with theta0) and elsewhere (deposit up to theta_max) through the exchange.
   void update_height_field(const Grains& hot, const StaticStore& st, const DemSolver& dem,
                            const Geometry& geometry, Real dt);
-  /// Stage "impacts": the static top retreats under the grains that move the pile (found by
-  /// update_height_field, on the same grains), along their way until the next update.
+  /// Stage "impacts", the blow rule (surface.blows; nothing without it): the static top retreats
+  /// under grains in flight about to strike it and under the blows under way.
   void apply_impacts(const Grains& hot, Real dt);
   /// Stage "transfer" after an update: trap, dislodge, sleep and wake against the new h. Only
   /// trapping keeps the pair list: unless `dem` rebuilds it at this step anyway, the rest waits
@@ -113,7 +113,6 @@ class SurfaceFlow {
   std::vector<std::uint8_t> contacts_, counts_, moving_;
   ColumnSet flowing_;                 ///< the columns where grains move the pile
   std::vector<std::uint32_t> moved_;  ///< scratch of take_moved()
-  std::vector<std::uint32_t> fast_;  ///< the hot grains that move the pile, at the last update
   template <class Strike>
   void strike_with_blows(const Grains& hot, Real dt, Strike&& strike);
   std::vector<Blow> blows_;              ///< the blows under way (the blow rule)

@@ -170,7 +170,7 @@ TEST(Seat, AGrainWithTheEnergyToLeaveItsSeatMovesThePileAndDigs) {
   EXPECT_FALSE(g.held);
   EXPECT_TRUE(g.moves);
   EXPECT_EQ(top_grain(1.5 * kEscape, 0, true, true).state, GrainState::Active);
-  // the impact rule: the static top goes a diameter below its bottom
+  // the flowing layer under it (flowing_min, 2 d): the static top goes a diameter below its bottom
   EXPECT_LE(g.h_minus_bottom, -kD + 1e-12);
   // rotation counts: slower than the bound, but spinning with the energy of a rolling grain
   // (2/5 of the translational) that takes it over
