@@ -95,12 +95,14 @@ TEST(JetScene, ThrownOffALedgeItsStiffnessHoldsTheLandingOnTheFloorBelow) {
 TEST(BinScene, WithWallsAGrainThickEveryGrainSleepsOnceItsColumnsClose) {
   // 1 cm walls, run to 4.3 s, 3 s after the pour (columns close 2 s after the last grain moved
   // them): a grain at rest below h in a closed column is trapped, seated or not, and every grain
-  // ends static (1,985 of 2,000; without that trap, 1,790). θ_max is the floor material's
-  // calibrated 45° (the tests run without the calibration, whose built-in 38° is lower): grains
-  // at rest on a slope steeper than θ_max stay simulated by design (the static layer cannot hold
-  // it), and with the 2 d flowing layer 31 grains came to rest against the wall between 38° and
-  // 45°. (The grains at rest above a void along a wall, below, no longer change this end state:
-  // once the columns close they are trapped either way.)
+  // ends static (1,997 of 2,000; without that trap, 1,838). Along a wall a column's ray meets
+  // mostly the grains touching the wall, with voids between them: grains at rest on the pile
+  // count across such a void; taken for grains in flight, they held H and the static top low,
+  // and 1,933 ended static. θ_max is the floor material's calibrated 45° (the tests run without
+  // the calibration, whose built-in 38° is lower): grains at rest on a slope steeper than θ_max
+  // stay simulated by design (the static layer cannot hold it). With the strikes of grains in
+  // contact (0424ab9), 31 grains came to rest against the wall between 38° and 45°; without
+  // them 3 stay simulated at 38° as at 45°.
   SceneConfig s = load_scene(std::string(SANDFLOW_SOURCE_DIR) + "/scenes/bin.toml",
                              {{"geometry.1.wall_thickness", "0.01"}, {"surface.max_angle", "45"}});
   s.output.frames = 130;
@@ -114,16 +116,15 @@ TEST(BinScene, ThePourIntoTheThinWalledBinComesToRestInTheStaticLayer) {
   // scenes/bin.toml as shipped (2,000 grains, walls 0.3 d, 85 frames, 1.5 s after the pour).
   // What stays simulated is the surface's R_min of a grain over about 230 columns, the interface
   // band under it and grains at rest that no seat holds (trapped when their columns close, 2 s
-  // after the pour): 1,480 grains end static. Without the walls between columns the height field
-  // eroded the sand through the walls: 497 did. Along a wall a column's ray meets mostly the
-  // grains touching the wall, with voids between them: grains at rest on the pile count across
-  // such a void; taken for grains in flight, they held H and the static top low, and 1,277 did.
+  // after the pour): 1,528 grains end static. Without the walls between columns the height field
+  // eroded the sand through the walls: 497 did; with the grains at rest above a wall's void taken
+  // for grains in flight (above), 1,421.
   SceneConfig s = load_scene(std::string(SANDFLOW_SOURCE_DIR) + "/scenes/bin.toml", {});
   World w(s);
   FrameStats last;
   for (int f = 0; f < w.planned_frames(); ++f) last = w.advance_frame();
   EXPECT_EQ(last.n_total, 2000);
-  EXPECT_GE(last.n_static, 1400);
+  EXPECT_GE(last.n_static, 1475);
   std::vector<Vec3> x;
   std::vector<Real> r;
   w.all_grains(x, r);
