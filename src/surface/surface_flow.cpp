@@ -105,6 +105,7 @@ SurfaceFlow::Seating SurfaceFlow::seat_bed(Grains& hot, StaticStore& st,
 }
 
 void SurfaceFlow::apply_impacts(const Grains& hot, Real dt) {
+  if (!p_.interface.blows) return;  // (only the blow rule strikes)
   // The static layer retreats to `floor_z` under a grain at x moving at v, along its way until
   // the next update: a grain skidding sideways at 3 m/s crosses a column between two updates, and
   // the bed of the column it enters must be moving when it arrives, as its contacts would set it.
@@ -129,7 +130,7 @@ void SurfaceFlow::apply_impacts(const Grains& hot, Real dt) {
     const Vec3& v = hot.v[i];
     clear_path(x, v, hot.r[i], x.z - 3 * hot.r[i] - std::max(-v.z, 0.0) * dt);
   };
-  if (p_.interface.blows) strike_with_blows(hot, dt, strike);
+  strike_with_blows(hot, dt, strike);
 }
 
 template <class Strike>
