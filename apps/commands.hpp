@@ -175,6 +175,9 @@ int run_part(const RunOptions& o, bool resume, const std::string* scene_text,
              const std::string& resume_with, const std::string& label, RunResult& res,
              SceneConfig& scene, int run_to_frame = 0);
 
+/// The command that continues the run in `dir`: `sandflow run --resume DIR`.
+std::string resume_command(const std::string& dir);
+
 /// InputError when o.out holds a run (run.json) started otherwise than `o` with scene `text`
 /// would start it, or, unless `run_on`, run on to another frame: run_part could not resume it as
 /// that run. Returns the frame it was run on to (0: none, or no run there).
@@ -190,6 +193,9 @@ struct CompareOptions {
   int run_to_frame = 0;          ///< `compare --resume DIR --frames N`: every run on to N (0: not)
   bool seeds_given = false;      ///< --seeds on the command line (not the default)
   bool equal_stiffness_given = false;  ///< --equal-stiffness on the command line
+  /// --dem-from DIR: an earlier comparison whose plain-DEM runs, where they were started as this
+  /// comparison's would be, are copied in and read back instead of made again ("": none)
+  std::string dem_from;
 };
 
 /// The runs of a scene in both modes and the figures compared (what compare.json holds).

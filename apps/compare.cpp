@@ -104,6 +104,7 @@ std::unique_ptr<FolderLock> prepare_compare_dir(const std::string& out, bool for
 void write_plan(const std::string& out, const CompareOptions& co) {
   nlohmann::json plan{{"seeds", co.seeds}, {"equal_stiffness", co.equal_stiffness}};
   if (co.run_to_frame > 0) plan["run_to_frame"] = co.run_to_frame;
+  if (!co.dem_from.empty()) plan["dem_from"] = co.dem_from;
   write_file_atomic((fs::path(out) / kPlanFile).string(), plan.dump(2) + "\n");
 }
 
@@ -129,6 +130,7 @@ CompareOptions read_plan(const std::string& out) {
     co.seeds = j.at("seeds").get<int>();
     co.equal_stiffness = j.at("equal_stiffness").get<bool>();
     co.run_to_frame = j.value("run_to_frame", 0);
+    co.dem_from = j.value("dem_from", std::string());
   } catch (const nlohmann::json::exception& e) {
     throw InputError(fmt::format("{}: not a comparison plan sandflow can read: {}", path.string(),
                                  e.what()));
@@ -152,6 +154,75 @@ int frames_written(const std::string& dir) {
   for (std::string line; std::getline(in, line);)
     if (!line.empty()) ++rows;
   return std::max(rows, 0);
+}
+
+/// What --dem-from offers for the plain-DEM run `part`: nothing (no run in `from`), the same run
+/// (started as `part` would start it, ending where this comparison's runs end), or another.
+enum class DemSource { None, Same, Other };
+
+DemSource dem_source_run(const RunOptions& part, const std::string& text, int run_to_frame,
+                         const std::string& from) {
+  std::error_code ec;
+  if (!fs::exists(fs::path(from) / "run.json", ec)) return DemSource::None;
+  RunOptions probe = part;
+  probe.out = from;
+  try {
+    const int ran_to = check_resumable(probe, text, true);
+    return ran_to > 0 && ran_to != run_to_frame ? DemSource::Other : DemSource::Same;
+  } catch (const InputError&) {
+    return DemSource::Other;
+  }
+}
+
+/// Copies the run in `from` into `to` (not yet a run), so that run_part reads it back (or goes on
+/// with it) instead of making it again. Copied whole into a folder beside `to`, then renamed: a
+/// copy cut short is never taken for a run (render/ stays behind: its pictures are not needed).
+void copy_dem_run(const std::string& from, const std::string& to) {
+  const FolderLock in_use(from, {"run", "wait for it to end or stop it before its run is taken"});
+  std::error_code ec;
+  const fs::path partial(to + ".copying");
+  fs::remove_all(partial, ec);
+  fs::remove_all(to, ec);
+  fs::create_directories(partial, ec);
+  for (const auto& e : fs::directory_iterator(from, ec)) {
+    if (e.path().filename() == "render") continue;
+    fs::copy(e.path(), partial / e.path().filename(), fs::copy_options::recursive, ec);
+    if (ec) break;
+  }
+  if (!ec) fs::rename(partial, to, ec);
+  if (ec) {
+    std::error_code rm;
+    fs::remove_all(partial, rm);
+    throw OutputError(
+        fmt::format("--dem-from: cannot copy {} into {}: {}", from, to, ec.message()));
+  }
+  // its record continues it where it is now
+  nlohmann::json record;
+  std::string recorded_text;
+  read_run_record(to, record, recorded_text);
+  record["resume_with"] = resume_command(to);
+  write_file_atomic((fs::path(to) / "run.json").string(), record.dump(2) + "\n");
+  print_to_stderr("{}: plain DEM taken from {} (its wall time as measured there)\n", to, from);
+}
+
+/// Takes the plain-DEM run `part` from the --dem-from folder `from` when it holds the same run and
+/// part.out holds none yet; true when taken. `other` says why a run there that differs is not.
+bool take_dem_run(const RunOptions& part, const std::string& text, const CompareOptions& co,
+                  const std::string& from, const char* other) {
+  std::error_code ec;
+  if (co.dem_from.empty() || fs::exists(fs::path(part.out) / "run.json", ec)) return false;
+  switch (dem_source_run(part, text, co.run_to_frame, from)) {
+    case DemSource::Same:
+      copy_dem_run(from, part.out);
+      return true;
+    case DemSource::None:
+      print_to_stderr("{}: --dem-from has no run in {}: made here\n", part.out, from);
+      return false;
+    case DemSource::Other:
+      print_to_stderr("{}: the run in {} {}: made here\n", part.out, from, other);
+      return false;
+  }
+  return false;
 }
 
 /// Mean RMS distance of the surfaces of each pair (a[i], b[j]) from `pairs`, on `grid`.
@@ -185,6 +256,30 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
   const std::string text = scene_text ? *scene_text : read_scene_file(o.scene);
   const std::int64_t seed0 = load_for_run(o).simulation.seed;
 
+  // each seed's run, in `mode`, with its seed set (the first has the scene's own)
+  auto seed_part = [&](int k, const char* mode) {
+    RunOptions part = o;
+    if (k > 0) part.sets.push_back(fmt::format("simulation.seed={}", seed0 + k));
+    part.mode = mode;
+    part.out = compare_run_dir(out, mode, k, seed0 + k);
+    return part;
+  };
+  // a --dem-from run of a seed started otherwise (another scene, --set, --grains, ...) is
+  // refused before any run is made: the comparison asked for is not the one those runs made
+  for (int k = 0; k < co.seeds && !co.dem_from.empty(); ++k) {
+    const RunOptions part = seed_part(k, "dem");
+    const std::string from = compare_run_dir(co.dem_from, "dem", k, seed0 + k);
+    std::error_code ec;
+    if (!fs::exists(fs::path(part.out) / "run.json", ec) &&
+        dem_source_run(part, text, co.run_to_frame, from) == DemSource::Other)
+      throw InputError(fmt::format(
+          "--dem-from: {} holds a plain-DEM run started otherwise than this comparison's {} "
+          "would be (another scene text, --set, --grains, --frames, --export or --up-axis, or run "
+          "on to another frame): it cannot stand for it; compare without --dem-from, or with the "
+          "options that run was made with",
+          from, part.out));
+  }
+
   // each seed in both modes, surface flow first
   c.seeds.clear();
   c.surface.assign(co.seeds, {});
@@ -193,17 +288,17 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
   for (int k = 0; k < co.seeds; ++k) {
     const std::int64_t seed = seed0 + k;
     c.seeds.push_back(seed);
-    RunOptions part = o;
-    if (k > 0) part.sets.push_back(fmt::format("simulation.seed={}", seed));
     const std::string tag = co.seeds > 1 ? fmt::format("{}seed {} of {}: ", label, k + 1, co.seeds)
                                          : label;
     SceneConfig scene;
     for (const char* mode : {"surface", "dem"}) {
-      part.mode = mode;
-      part.out = compare_run_dir(out, mode, k, seed);
+      const RunOptions part = seed_part(k, mode);
       RunResult& res = part.mode == "surface" ? c.surface[k] : c.dem[k];
+      const bool taken = part.mode == "dem" &&
+                         take_dem_run(part, text, co, compare_run_dir(co.dem_from, mode, k, seed),
+                                      "was started otherwise");
       if (const int stopped =
-              run_part(part, resume, &text, resume_with, tag, res, scene, co.run_to_frame))
+              run_part(part, resume || taken, &text, resume_with, tag, res, scene, co.run_to_frame))
         return stopped;
       if (k == 0 && part.mode == "surface") surface_scene = scene;
     }
@@ -226,7 +321,10 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
       part.sets.push_back(set);
     RunResult res;
     SceneConfig s;
-    if (const int stopped = run_part(part, resume, &text, resume_with,
+    const bool taken =
+        take_dem_run(part, text, co, compare_run_dir(co.dem_from, kEqualStiffnessDir, 0, seed0),
+                     "ran at another k_n or dt than this surface run's");
+    if (const int stopped = run_part(part, resume || taken, &text, resume_with,
                                      label + "equal stiffness: ", res, s, co.run_to_frame))
       return stopped;
     c.dem_equal_stiffness = std::move(res);
@@ -334,6 +432,7 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
       {"n_total", surf.frames.back().n_total},
       {"seeds", co.seeds},
       {"seed_values", c.seeds},
+      {"dem_from", co.dem_from.empty() ? nlohmann::json() : nlohmann::json(co.dem_from)},
       {"speedup", wall_dem / std::max(wall_surf, 1e-12)},
       {"speedup_per_seed", speedups},
       {"speedup_min", *std::min_element(speedups.begin(), speedups.end())},
@@ -422,6 +521,25 @@ int compare_scene(const RunOptions& o, const CompareOptions& co, const std::stri
   return 0;
 }
 
+namespace {
+/// The folder --dem-from names, checked and made absolute (the plan records it): a comparison
+/// with a plain-DEM run in it, not within the one about to be made (--force would remove its runs,
+/// seed-S/ included).
+std::string dem_source(const std::string& from, const std::string& out) {
+  std::error_code ec;
+  if (!fs::exists(fs::path(from) / "dem" / "run.json", ec))
+    throw InputError(fmt::format(
+        "--dem-from {}: not a comparison folder with a plain-DEM run (no dem/run.json)", from));
+  const fs::path a = fs::weakly_canonical(from, ec), b = fs::weakly_canonical(out, ec);
+  if (std::mismatch(b.begin(), b.end(), a.begin(), a.end()).first == b.end())
+    throw InputError(fmt::format(
+        "--dem-from {}: within the comparison's own output folder {}; give the new comparison "
+        "another --out",
+        from, out));
+  return fs::absolute(from, ec).lexically_normal().string();
+}
+}  // namespace
+
 std::string compare_resume_command(const std::string& dir) {
   return "sandflow compare --resume " + shell_quote(dir);
 }
@@ -433,10 +551,11 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
   if (!o.resume.empty()) {
     // the options of the comparison are those its surface run and its plan recorded
     if (!o.scene.empty() || o.grains > 0 || !o.sets.empty() || !o.out.empty() || o.force ||
-        o.exports || !o.up_axis.empty())
+        o.exports || !o.up_axis.empty() || !given.dem_from.empty())
       throw InputError(
           "compare --resume DIR goes on with the comparison in DIR as it was started: it takes no "
-          "scene, --grains, --set, --export, --up-axis, --out or --force; only --threads, "
+          "scene, --grains, --set, --export, --up-axis, --out, --force or --dem-from; only "
+          "--threads, "
           "--frames N to run all its runs on to frame N, --seeds K to add seeds up to K and "
           "--equal-stiffness to add that run");
     out = o.resume;
@@ -493,6 +612,7 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
     text = read_scene_file(o.scene);
     const SceneConfig named = load_for_run(o);  // the scene's name, for the default folder
     out = o.out.empty() ? fmt::format("out/{}-compare", named.name) : o.out;
+    if (!co.dem_from.empty()) co.dem_from = dem_source(co.dem_from, out);
     if (const int stopped = compare_scene(o, co, out, o.force, false, &text,
                                           compare_resume_command(out), "", c))
       return stopped;
@@ -548,6 +668,9 @@ int compare_command(const RunOptions& o, const CompareOptions& given) {
       seeds > 1 ? fmt::format("; {:.2f}x to {:.2f}x by seed", j["speedup_min"].get<double>(),
                               j["speedup_max"].get<double>())
                 : "");
+  if (j["dem_from"].is_string())
+    fmt::print("plain DEM's runs taken from {}: the speed-ups pair wall times measured then\n",
+               j["dem_from"].get<std::string>());
   if (j.contains("speedup_equal_stiffness"))
     fmt::print("speed-up at equal stiffness {:.2f}x (plain DEM at k_n = {:.4g} N/m, dt = {:.3g} s: "
                "{}, largest overlap {})\n",

@@ -470,13 +470,13 @@ SceneConfig recorded_scene(const RunOptions& r, const std::string& text,
   return scene;
 }
 
-namespace {
-
 // ---- Resumable runs (docs/checkpoints.md) -------------------------------------------------------
 
 std::string resume_command(const std::string& dir) {
   return "sandflow run --resume " + shell_quote(dir);
 }
+
+namespace {
 
 /// "the last checkpoint (frame K)", or what there is instead, for the messages of a failed run.
 std::string last_checkpoint(const std::string& dir) {

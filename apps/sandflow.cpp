@@ -296,6 +296,13 @@ int main(int argc, char** argv) {
                    "runs per mode, with seeds S, S+1, ... (S: the scene's simulation.seed); the "
                    "spread of the plain-DEM runs is the noise floor of the comparison (default 3)")
       ->check(whole(1, kMaxSeeds));
+  compare->add_option(
+      "--dem-from", cmp.dem_from,
+      "an earlier comparison whose plain-DEM runs stand for this one's: each run there started "
+      "as this one's would be (the same scene text, --set, --grains, --frames, --export, "
+      "--up-axis) is copied into DIR and read back, not made again; the others are made. For a "
+      "changed surface flow against plain DEM that did not change; the speed-ups pair wall times "
+      "measured at different times");
   compare->add_flag("--equal-stiffness", cmp.equal_stiffness,
                     "also run plain DEM at the surface run's k_n and dt (DIR/dem-equal-stiffness): "
                     "the speed-up without the softer springs");

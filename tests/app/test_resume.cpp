@@ -342,6 +342,78 @@ TEST(Resume, AFinishedComparisonGrowsBySeedsAndTheEqualStiffnessRun) {
   EXPECT_EQ(comparison_figures(out), comparison_figures(want));
 }
 
+// `compare --dem-from DIR` takes an earlier comparison's plain-DEM runs that were started as its
+// own would be (copied in, read back, not made again) and makes the others: the comparison is
+// the one made whole. A run of a seed started otherwise is refused before anything runs, and so
+// is a source within the comparison's own folder.
+TEST(Resume, AComparisonTakesAnEarlierOnesPlainDemRunsWithDemFrom) {
+  Sandbox box;
+  box.write("pour.toml", kPourScene);
+  const std::string scene = (box.dir / "pour.toml").string();
+  const fs::path want = box.dir / "straight", first = box.dir / "first", out = box.dir / "cmp";
+  std::string log;
+  ASSERT_EQ(compare_straight(box, want, log), 0) << log;
+  ASSERT_EQ(sandflow(fmt::format("compare {} --frames {} --seeds 1 --out {}", scene, kFrames,
+                                 first.string()),
+                     &log),
+            0)
+      << log;
+  ASSERT_EQ(sandflow(fmt::format("compare {} --frames {} {} --dem-from {} --out {}", scene, kFrames,
+                                 kComparisonOptions, first.string(), out.string()),
+                     &log),
+            0)
+      << log;
+  EXPECT_NE(log.find((out / "dem").string() + ": plain DEM taken from " + (first / "dem").string()),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find((out / "seed-2" / "dem").string() + ": --dem-from has no run in"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("plain DEM's runs taken from " + first.string()), std::string::npos) << log;
+  // taken, not made again: its wall times too are the first comparison's
+  EXPECT_EQ(read_text(out / "dem" / "stats.csv"), read_text(first / "dem" / "stats.csv"));
+  EXPECT_EQ(nlohmann::json::parse(read_text(out / "dem" / "run.json"))["resume_with"],
+            "sandflow run --resume " + (out / "dem").string());
+  EXPECT_FALSE(fs::exists(out / "dem.copying"));
+  for (const char* run : kComparisonRuns) expect_same_run(want / run, out / run);
+  nlohmann::json got = comparison_figures(out), wanted = comparison_figures(want);
+  EXPECT_EQ(got["dem_from"], first.string());
+  EXPECT_TRUE(wanted["dem_from"].is_null());
+  got.erase("dem_from");
+  wanted.erase("dem_from");
+  EXPECT_EQ(got, wanted);
+  // the plan keeps the source: resumed, the comparison reads its runs back
+  EXPECT_EQ(nlohmann::json::parse(read_text(out / "compare_plan.json"))["dem_from"],
+            first.string());
+  fs::remove(out / "compare.json");
+  ASSERT_EQ(sandflow("compare --resume " + out.string(), &log), 0) << log;
+  EXPECT_EQ(log.find("taken from " + (first / "dem").string()), std::string::npos) << log;
+  EXPECT_EQ(sandflow("compare --resume " + out.string() + " --dem-from " + first.string(), &log),
+            2);
+  EXPECT_NE(log.find("takes no scene"), std::string::npos) << log;
+
+  // refused: runs of another scene's options, before any run is made; its own folder; no runs
+  const fs::path other = box.dir / "other";
+  EXPECT_EQ(sandflow(fmt::format("compare {} --frames {} --seeds 1 --set material.friction=0.5 "
+                                 "--dem-from {} --out {}",
+                                 scene, kFrames, first.string(), other.string()),
+                     &log),
+            2);
+  EXPECT_NE(log.find("cannot stand for it"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(other / "surface" / "run.json"));
+  EXPECT_EQ(sandflow(fmt::format("compare {} --frames {} --seeds 1 --force --dem-from {} --out {}",
+                                 scene, kFrames, first.string(), first.string()),
+                     &log),
+            2);
+  EXPECT_NE(log.find("within the comparison's own output folder"), std::string::npos) << log;
+  EXPECT_TRUE(fs::exists(first / "dem" / "run.json"));
+  EXPECT_EQ(sandflow(fmt::format("compare {} --frames {} --dem-from {} --out {}", scene, kFrames,
+                                 (box.dir / "nothing").string(), other.string()),
+                     &log),
+            2);
+  EXPECT_NE(log.find("not a comparison folder with a plain-DEM run"), std::string::npos) << log;
+}
+
 // The exports go on where the checkpoint left them: a resumed run's ParaView series lists every
 // frame, the ones before the interruption too, as the same run uninterrupted does.
 TEST(Resume, TheExportsOfAResumedRunAreThoseOfTheRunUninterrupted) {
