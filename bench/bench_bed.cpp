@@ -223,6 +223,8 @@ int main(int argc, char** argv) {
   std::int64_t n = 100000;
   int threads = 1, steps = 2000, settle_frames = 60;
   std::string bench_case = "bed", bed_path, lammps_path;
+  double skin = 0.2, skin_max = 0;  // [d]
+  int skin_steps = 0;
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
     auto next = [&]() -> std::string {
@@ -241,10 +243,17 @@ int main(int argc, char** argv) {
     else if (a == "--settle-frames") settle_frames = std::stoi(next());
     else if (a == "--bed") bed_path = next();
     else if (a == "--write-lammps") lammps_path = next();
+    else if (a == "--skin")
+      skin = std::stod(next());
+    else if (a == "--skin-steps")
+      skin_steps = std::stoi(next());
+    else if (a == "--skin-max")
+      skin_max = std::stod(next());
     else {
       std::fprintf(stderr,
                    "usage: bench_bed [--case bed|pour] [--grains N] [--threads T] [--steps S] "
-                   "[--settle-frames F] [--bed FILE] [--write-lammps FILE]\n");
+                   "[--settle-frames F] [--bed FILE] [--write-lammps FILE] [--skin S] "
+                   "[--skin-steps K] [--skin-max M]\n");
       return 2;
     }
   }
@@ -254,6 +263,10 @@ int main(int argc, char** argv) {
   }
   if (n < 1 || steps < 1) {
     std::fprintf(stderr, "--grains and --steps must be at least 1\n");
+    return 2;
+  }
+  if (!(skin > 0) || skin_steps < 0 || !(skin_max >= 0)) {
+    std::fprintf(stderr, "--skin must be above 0, --skin-steps and --skin-max at least 0\n");
     return 2;
   }
   const bool pour = bench_case == "pour";
@@ -273,7 +286,9 @@ int main(int argc, char** argv) {
   const MaterialConfig mat = bed_material();
   DemParams params;
   params.contact = contact_params(mat);
-  params.skin = 0.2 * kD;
+  params.skin = skin * kD;
+  params.skin_steps = skin_steps;
+  params.skin_max = skin_max * kD;
   const Geometry geometry = Geometry::from_config(bed_walls(bed.side), mat);
   DemSolver dem(params);
   Profile profile;
@@ -286,11 +301,15 @@ int main(int argc, char** argv) {
   for (int s = 0; s < steps; ++s) dem.step(bed.grains, geometry, kDt, profile);
   const double seconds = clock.seconds();
   const auto grains = static_cast<double>(bed.grains.size());
-  std::printf("stages: neighbours %.3f s, forces and integration %.3f s, rebuilds %lld\n",
-              profile[Stage::Neighbours], profile[Stage::Forces],
-              static_cast<long long>(dem.counters().rebuilds));
-  std::printf("listed pairs per grain %.2f (half list, skin 0.2 d)\n",
-              static_cast<double>(dem.pairs().pairs()) / grains);
+  std::printf(
+      "stages: neighbours %.3f s, forces and integration %.3f s, rebuilds %lld, near lists %lld\n",
+      profile[Stage::Neighbours], profile[Stage::Forces],
+      static_cast<long long>(dem.counters().rebuilds),
+      static_cast<long long>(dem.counters().near_builds));
+  double near_pairs = 0;
+  for (std::uint32_t c : dem.pairs().near_count) near_pairs += c;
+  std::printf("listed pairs per grain %.2f (half list, skin %.3g d), %.2f near\n",
+              static_cast<double>(dem.pairs().pairs()) / grains, skin, near_pairs / grains);
   std::printf("damping beta=%.12g (restitution %.2f under the clamped law)\n", params.contact.beta,
               kE);
   // where the grains ended: a pour's two engines do not follow the same chaotic paths, but they

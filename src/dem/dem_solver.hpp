@@ -47,6 +47,7 @@ struct DemCounters {
   std::int64_t wall_contacts = 0;
   Real max_overlap_rel = 0;      ///< largest overlap / smaller diameter, since the last reset
   std::int64_t rebuilds = 0;     ///< neighbour-list rebuilds, since the last reset
+  std::int64_t near_builds = 0;  ///< near lists made (at each rebuild and between), since then
   // Energy through the changes of state (surface mode), since the last reset [J]:
   Real energy_inert = 0;      ///< in the springs of contacts that went inert as both grains froze
   Real energy_released = 0;   ///< added: energy_inside, and the work of the springs of
@@ -167,15 +168,19 @@ class DemSolver {
     need_rebuild_ = true;
   }
   void rebuild(Grains& grains, const Geometry& geometry, Real dt);
+  /// The near list: the listed pairs that may touch before some grain moves further than its
+  /// near margin, with the contacts of those left out ended as the sweep would end them now.
+  void build_near(const Grains& grains, Real dt);
   /// At a rebuild for steps of dt: the contacts of the released grains that open inside another
   /// grain.
   void open_released_contacts(const Grains& grains, Real dt);
   void set_wall_params(const Geometry& geometry);
   void sort_by_cell(Grains& grains);
   /// Forces and integration in one sweep (its kernels: dem_solver.cpp); returns whether some
-  /// grain has moved further than its allowance since the last rebuild.
+  /// grain has moved further than its allowance since the last rebuild, or than its near margin
+  /// since the near list was made (flags: dem_solver.cpp).
   template <bool kRolling>
-  bool sweep(Grains& grains, const Geometry& geometry, Real dt);
+  int sweep(Grains& grains, const Geometry& geometry, Real dt);
   /// Splits the grains into `threads` contiguous ranges of about equal time for the sweep: each
   /// thread's share of the estimated work follows the speed it showed since the last split.
   void balance_ranges(const Grains& grains, std::size_t threads);
@@ -195,6 +200,9 @@ class DemSolver {
   std::vector<Vec3> x_at_build_;
   std::vector<Real> allow_, allow2_;  ///< per grain: how far it may move before a rebuild [m, m^2]
   std::vector<Vec3> acc_f_, acc_q_, acc_t_;  ///< per grain: reversed pair results of this step
+  std::vector<Vec3> x_at_near_;  ///< per grain: where it stood when the near list was made
+  std::vector<Real> near2_;      ///< per grain: its near margin, squared [m^2]
+  bool need_near_ = true;
   /// The sweep's ranges, one per thread, of about equal work (set after each rebuild).
   std::vector<std::size_t> range_start_;
   std::vector<std::uint32_t> cross_rows_;  ///< ascending: rows with pairs past their range's end

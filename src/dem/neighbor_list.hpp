@@ -6,7 +6,8 @@
 // them from forcing a rebuild every few steps. Contact history lives beside the list, one entry
 // per pair slot, and is carried across rebuilds by grain id. The candidate contacts with the
 // geometry, obstacles and boundary particles within reach, are listed beside the pairs at each
-// rebuild, their history carried the same way.
+// rebuild, their history carried the same way. The sweep visits the near list, the slots of each
+// row that can touch before a grain moves further than its near margin (DemSolver::build_near).
 //
 // How the forces of the pairs reach both grains without atomics, identically for any thread
 // count, is told in dem_solver.cpp (DemSolver::sweep).
@@ -43,6 +44,10 @@ struct PairList {
   std::vector<Vec3> force;               ///< force on i [N]
   std::vector<Vec3> q;                   ///< n x F_t (torque = -arm * q) [N]
   std::vector<Vec3> t_roll;              ///< rolling torque on i (empty without rolling) [N m]
+  /// The near list, the slots that may touch before it is made again (DemSolver::build_near):
+  /// row i's are near[start[i]] .. near[start[i] + near_count[i]), ascending.
+  std::vector<std::uint32_t> near;
+  std::vector<std::uint32_t> near_count;
 
   std::size_t pairs() const { return j.size(); }
 };

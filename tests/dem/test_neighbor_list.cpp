@@ -24,6 +24,18 @@ Grains random_grains(int n, std::uint64_t seed, Real box) {
   return g;
 }
 
+/// Damped frictional grains (beta 0.3, mu 0.5) in no gravity, with a skin of 2 mm.
+DemParams frictional_without_gravity(Real k_n, Real k_t) {
+  DemParams p;
+  p.contact.k_n = k_n;
+  p.contact.k_t = k_t;
+  p.contact.beta = 0.3;
+  p.contact.mu = 0.5;
+  p.gravity = {0, 0, 0};
+  p.skin = 0.002;
+  return p;
+}
+
 std::vector<std::pair<std::uint32_t, std::uint32_t>> listed_pairs(const PairList& pl) {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
   for (std::uint32_t i = 0; i + 1 < pl.start.size(); ++i)
@@ -281,13 +293,7 @@ TEST(NeighbourList, AGrainAFasterPartnerCanReachGetsThePartnersAllowance) {
 TEST(NeighbourList, HistorySurvivesARebuildWithResorting) {
   // a compressed random packing, so that many contacts carry tangential history
   Grains g = random_grains(2000, 11, 0.08);
-  DemParams p;
-  p.contact.k_n = 1e4;
-  p.contact.k_t = 3e3;
-  p.contact.beta = 0.3;
-  p.contact.mu = 0.5;
-  p.gravity = {0, 0, 0};
-  p.skin = 0.002;
+  DemParams p = frictional_without_gravity(1e4, 3e3);
   p.sort_every = 1;  // every rebuild re-sorts
   DemSolver dem(p);
   Geometry none;
@@ -327,6 +333,54 @@ TEST(NeighbourList, HistorySurvivesARebuildWithResorting) {
       }
     }
   EXPECT_EQ(found, static_cast<int>(before.size()));
+}
+
+TEST(NeighbourList, TheNearListHoldsEveryTouchingPairAtEveryStep) {
+  // a loose gas of slow grains (a jittered lattice, 1 to 5 mm apart, at up to 0.2 m/s in each
+  // direction, no gravity), whose pairs keep meeting and parting: before each step's sweep every
+  // pair that overlaps must be in its row's near list, and the near list must be much shorter
+  // than the Verlet rows (or it proves little)
+  Rng rng(3);
+  Grains g;
+  GrainId id = 0;
+  for (int a = 0; a < 12; ++a)
+    for (int b = 0; b < 12; ++b)
+      for (int c = 0; c < 10; ++c)
+        g.add(
+            id++,
+            Vec3{a * 0.013, b * 0.013, c * 0.013} +
+                Vec3{rng.uniform(-5e-4, 5e-4), rng.uniform(-5e-4, 5e-4), rng.uniform(-5e-4, 5e-4)},
+            {rng.uniform(-0.2, 0.2), rng.uniform(-0.2, 0.2), rng.uniform(-0.2, 0.2)},
+            rng.uniform(0.004, 0.0055), 2600);
+  DemParams p = frictional_without_gravity(1e3, 300);
+  p.skin_steps = 32;
+  p.skin_max = 0.005;
+  DemSolver dem(p);
+  const Geometry none;
+  const Real dt = 2e-5;
+  std::int64_t touching = 0, near = 0, listed = 0;
+  for (int step = 0; step < 1500; ++step) {
+    dem.update_lists(g, none, dt);
+    const PairList& pl = dem.pairs();
+    for (std::uint32_t i = 0; i + 1 < pl.start.size(); ++i) {
+      const std::uint32_t* row = pl.near.data() + pl.start[i];
+      near += pl.near_count[i];
+      listed += pl.start[i + 1] - pl.start[i];
+      for (std::uint32_t s = pl.start[i]; s < pl.start[i + 1]; ++s) {
+        const std::uint32_t j = pl.j[s];
+        const Real rsum = g.r[i] + g.r[j];
+        if (norm2(g.x[i] - g.x[j]) >= rsum * rsum) continue;
+        ++touching;
+        ASSERT_TRUE(std::binary_search(row, row + pl.near_count[i], s))
+            << "step " << step << ": grains " << i << " and " << j
+            << " overlap but are not in the near list";
+      }
+    }
+    dem.advance(g, none, dt);
+  }
+  EXPECT_GT(touching, 1000);
+  EXPECT_LT(near, listed / 2) << "the near list is not shorter than the Verlet rows";
+  EXPECT_GT(dem.counters().rebuilds, 1);
 }
 
 }  // namespace
