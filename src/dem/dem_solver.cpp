@@ -64,6 +64,16 @@ constexpr std::size_t kPairCheckMaxGrains = 2000;
 /// margin (the near list is made again).
 constexpr int kLeftAllowance = 2, kLeftNearMargin = 1;
 
+/// Forgets the contact of pair slot s: its flags and its memory (the rolling one with kRolling).
+/// `pl` is the PairList or the sweep's view of its arrays.
+template <bool kRolling, class Pairs>
+[[gnu::always_inline]] inline void forget_contact(Pairs& pl, std::uint32_t s) {
+  pl.touch[s] = 0;
+  pl.delta0[s] = 0;
+  pl.xi[s] = {};
+  if constexpr (kRolling) pl.psi[s] = {};
+}
+
 /// The first slot of grain i's row that reaches past `end` (rows are sorted by j); `pl` is the
 /// PairList or the sweep's view of its arrays.
 template <class Pairs>
@@ -139,10 +149,7 @@ void DemSolver::build_near(const Grains& grains, Real dt) {
       if (norm2(grains.x[i] - grains.x[j]) < reach * reach) {
         pl.near[k++] = s;
       } else if (pl.touch[s]) {  // apart now: the sweep would end the contact in this step
-        pl.touch[s] = 0;
-        pl.delta0[s] = 0;
-        pl.xi[s] = {};
-        if (rolling_) pl.psi[s] = {};
+        rolling_ ? forget_contact<true>(pl, s) : forget_contact<false>(pl, s);
       }
     }
     pl.near_count[i] = k - pl.start[i];
@@ -829,10 +836,7 @@ template <bool kRolling>
   if (!pl.touch[s]) return;
   if (dist2 < rsum * rsum) [[unlikely]]
     tally.inert_fj += femtojoules(inert_energy(d.cp, d.pl, s, rsum, dist2, kRolling));
-  pl.touch[s] = 0;
-  pl.delta0[s] = 0;
-  pl.xi[s] = {};
-  if constexpr (kRolling) pl.psi[s] = {};
+  forget_contact<kRolling>(pl, s);
 }
 
 /// One pair slot of grain i: the contact law (true, with the results in cf) or the end of a
