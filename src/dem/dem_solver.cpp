@@ -61,8 +61,8 @@ constexpr std::size_t kPairCheckMaxGrains = 2000;
 }
 
 /// What a grain's move leaves (DemSolver::sweep): its allowance (the lists are rebuilt), its near
-/// margin (the near list is made again).
-constexpr int kLeftAllowance = 2, kLeftNearMargin = 1;
+/// margin (the near list is made again), the domain (DemSolver::all_inside).
+constexpr int kLeftAllowance = 2, kLeftNearMargin = 1, kLeftDomain = 4;
 
 /// Forgets the contact of pair slot s: its flags and its memory (the rolling one with kRolling).
 /// `pl` is the PairList or the sweep's view of its arrays.
@@ -174,6 +174,7 @@ void DemSolver::advance(Grains& grains, const Geometry& geometry, Real dt) {
       rolling_ ? sweep<true>(grains, geometry, dt) : sweep<false>(grains, geometry, dt);
   if (left & kLeftAllowance) need_rebuild_ = true;
   if (left & kLeftNearMargin) need_near_ = true;
+  maybe_outside_ = (left & kLeftDomain) != 0;
   // (assertions) the lists are the grains' (added or removed ones rebuild them)
   SANDFLOW_ASSERT(x_at_build_.size() == grains.size(),
                   "grains were added or removed without a rebuild");
@@ -348,6 +349,7 @@ void DemSolver::restore_state(DemState s, const Geometry& geometry) {
   acc_t_.assign(rolling_ ? n : 0, Vec3{});
   need_rebuild_ = s.need_rebuild;
   need_near_ = true;
+  maybe_outside_ = true;  // (no sweep has looked at the restored grains)
   rebuild_count_ = s.rebuild_count;
   ranges_stale_ = true;
   set_wall_params(geometry);
@@ -657,6 +659,7 @@ struct SweepData {
   const Real* allow2;  ///< per grain: its allowance, squared [m^2]
   const Vec3* x_at_near;
   const Real* near2;  ///< per grain: its near margin, squared [m^2]
+  Vec3 domain_lo, domain_hi;
   Vec3 gravity;
   Real dt;
   Real decay;  ///< what is left of a preload after one step
@@ -678,7 +681,8 @@ struct FixedPartners {
 SweepData sweep_data(const DemParams& p, PairList& pairs, Grains& grains, std::vector<Vec3>& acc_f,
                      std::vector<Vec3>& acc_q, std::vector<Vec3>& acc_t,
                      const std::vector<Vec3>& x_at_build, const std::vector<Real>& allow2,
-                     const std::vector<Vec3>& x_at_near, const std::vector<Real>& near2, Real dt) {
+                     const std::vector<Vec3>& x_at_near, const std::vector<Real>& near2,
+                     const Vec3& domain_lo, const Vec3& domain_hi, Real dt) {
   return {.cp = p.contact,
           .pl = pairs,
           .slots = {.start = pairs.start.data(),
@@ -709,6 +713,8 @@ SweepData sweep_data(const DemParams& p, PairList& pairs, Grains& grains, std::v
           .allow2 = allow2.data(),
           .x_at_near = x_at_near.data(),
           .near2 = near2.data(),
+          .domain_lo = domain_lo,
+          .domain_hi = domain_hi,
           .gravity = p.gravity,
           .dt = dt,
           .decay = p.preload_relax_time > 0 ? std::exp(-dt / p.preload_relax_time) : 1.0};
@@ -930,7 +936,8 @@ template <bool kRolling>
 // --- integration -----------------------------------------------------------------------------
 
 /// Grain i moves under force f and torque: symplectic Euler, velocities from the forces, then
-/// positions from the new velocities. Returns what it has left (kLeftAllowance, kLeftNearMargin).
+/// positions from the new velocities. Returns what it has left (kLeftAllowance, kLeftNearMargin,
+/// kLeftDomain: outside, or not finite, which a non-finite velocity makes the position too).
 [[gnu::always_inline]] inline int integrate(const SweepData& d, std::size_t i, const Vec3& f,
                                             const Vec3& torque) {
   Vec3* x = d.x;
@@ -939,8 +946,12 @@ template <bool kRolling>
   v[i] += (f * d.inv_m[i] + d.gravity) * dt;
   d.w[i] += torque * (d.inv_I[i] * dt);
   x[i] += v[i] * dt;
-  return (norm2(x[i] - d.x_at_build[i]) > d.allow2[i] ? kLeftAllowance : 0) |
-         (norm2(x[i] - d.x_at_near[i]) > d.near2[i] ? kLeftNearMargin : 0);
+  const Vec3 &p = x[i], &lo = d.domain_lo, &hi = d.domain_hi;
+  const bool inside =
+      p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
+  return (norm2(p - d.x_at_build[i]) > d.allow2[i] ? kLeftAllowance : 0) |
+         (norm2(p - d.x_at_near[i]) > d.near2[i] ? kLeftNearMargin : 0) |
+         (inside ? 0 : kLeftDomain);
 }
 
 // --- the thread partition --------------------------------------------------------------------
@@ -1006,7 +1017,7 @@ int DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   std::int64_t contacts = 0, wall_contacts = 0;
   Real max_ov = counters_.max_overlap_rel;
   std::int64_t inert_fj = 0, relaxed_fj = 0;  // (femtojoules: see there)
-  int moved_out = 0;  // what some grain left: kLeftAllowance, kLeftNearMargin
+  int moved_out = 0;  // what some grain left: kLeftAllowance, kLeftNearMargin, kLeftDomain
 
 #pragma omp parallel if (n >= kParallelMinGrains) \
     reduction(+ : contacts, wall_contacts, inert_fj, relaxed_fj) reduction(max : max_ov) reduction(| : moved_out)
@@ -1016,7 +1027,7 @@ int DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
     // each thread's own copy: no store through the arrays can change it, so the compiler need
     // not load the pointers again after each store
     const SweepData data = sweep_data(params_, pairs_, grains, acc_f_, acc_q_, acc_t_, x_at_build_,
-                                      allow2_, x_at_near_, near2_, dt);
+                                      allow2_, x_at_near_, near2_, domain_lo_, domain_hi_, dt);
     const FixedPartners fixed{geometry, walls_, wall_params_, bounds_, boundary_, boundary_params_};
     // this thread's tallies, added into the reductions once its work is done
     Tally tally{.max_ov = max_ov};

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -102,6 +103,18 @@ class DemSolver {
   /// grain moves as soon as its forces are summed, while its data are in cache); after
   /// update_lists.
   void advance(Grains& grains, const Geometry& geometry, Real dt);
+
+  /// Sets the box the ACTIVE grains must stay in [m]: each sweep notes whether one left it, so
+  /// that the caller's per-step guard need not read every grain again (all_inside).
+  void set_domain(const Vec3& lo, const Vec3& hi) {
+    domain_lo_ = lo;
+    domain_hi_ = hi;
+    maybe_outside_ = true;
+  }
+  /// True when the last sweep left every ACTIVE grain inside the domain with a finite position
+  /// (a non-finite velocity makes the position non-finite); false before the first sweep and after
+  /// a restore, when it has not looked.
+  bool all_inside() const { return !maybe_outside_; }
 
   /// Sets the boundary particles (before the first step).
   void set_boundary(BoundaryParticles boundary);
@@ -203,6 +216,9 @@ class DemSolver {
   std::vector<Vec3> x_at_near_;  ///< per grain: where it stood when the near list was made
   std::vector<Real> near2_;      ///< per grain: its near margin, squared [m^2]
   bool need_near_ = true;
+  static constexpr Real kFar = std::numeric_limits<Real>::infinity();
+  Vec3 domain_lo_{-kFar, -kFar, -kFar}, domain_hi_{kFar, kFar, kFar};  ///< (set_domain)
+  bool maybe_outside_ = true;                                          ///< (all_inside)
   /// The sweep's ranges, one per thread, of about equal work (set after each rebuild).
   std::vector<std::size_t> range_start_;
   std::vector<std::uint32_t> cross_rows_;  ///< ascending: rows with pairs past their range's end

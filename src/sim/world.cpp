@@ -297,6 +297,7 @@ World::World(const SceneConfig& scene)
     emitters_.back().set_bed(std::move(bed), where);
   }
   scene_domain(scene_, geometry_, domain_lo_, domain_hi_);
+  dem_.set_domain(domain_lo_, domain_hi_);
   if (surface_)
     static_ = StaticStore(
         static_store_frame(scene_, surface_->height_field(), domain_lo_.z, domain_hi_.z));
@@ -508,7 +509,10 @@ void World::check_grains() {
     return x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y && x.z >= lo.z &&
            x.z <= hi.z && is_finite(grains_.v[i]);
   };
-  // every step: a parallel look first, the grain-ordered walk below only when something is wrong
+  // every step: the sweep that moved the grains looked at each ACTIVE one's new position (nothing
+  // moves a grain between it and this guard), else a parallel look; the grain-ordered walk below
+  // only when something is wrong
+  if (dem_.all_inside()) return;
   const std::size_t n = grains_.size();
   int wrong = 0;
 #pragma omp parallel for schedule(static) reduction(max : wrong) if (n >= kParallelMinGrains)
