@@ -177,6 +177,32 @@ void add_scene_options(CLI::App* cmd, RunOptions& o, const std::string& out_help
       ->check(CLI::IsMember({"z", "y"}));
 }
 
+// The OpenMP runtimes read OMP_NUM_THREADS as the program loads, before main: LLVM's (a clang
+// build) stops the program on an empty one. One that is not a count leaves the environment before
+// any library starts (an entry of .preinit_array runs first), kept for main's warning. (Plain
+// arrays, and the environment from the loader's `env`: no constructor has run yet, not even
+// the C library's, so getenv and std::string cannot be used.)
+char bad_omp_num_threads[64];
+bool bad_omp_num_threads_cut = false;
+
+void drop_bad_omp_num_threads(int, char**, char** env) {
+  constexpr char kName[] = "OMP_NUM_THREADS=";
+  for (char** e = env; e && *e; ++e) {
+    if (std::strncmp(*e, kName, sizeof kName - 1) != 0) continue;
+    const char* text = *e + sizeof kName - 1;
+    if (omp_thread_count(text)) return;
+    const std::size_t n = std::strlen(text), kept = std::min(n, sizeof bad_omp_num_threads - 1);
+    std::memcpy(bad_omp_num_threads, text, kept);
+    bad_omp_num_threads[kept] = '\0';
+    bad_omp_num_threads_cut = kept < n;
+    for (char** f = e; *f; ++f) *f = *(f + 1);  // (the rest of the environment moves up one)
+    return;
+  }
+}
+
+[[gnu::used, gnu::section(".preinit_array")]] void (*const drop_bad_omp_num_threads_early)(
+    int, char**, char**) = &drop_bad_omp_num_threads;
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -188,12 +214,14 @@ int main(int argc, char** argv) {
   std::signal(SIGPIPE, SIG_IGN);
   // libgomp takes OMP_NUM_THREADS as it stands for every parallel region until told otherwise,
   // and one it cannot start crashes it (100,000 on this machine: a segmentation fault while the
-  // World was built): every region gets the count sandflow takes, at most kMaxThreads
-  if (const char* omp = std::getenv("OMP_NUM_THREADS"); omp && *omp && !omp_num_threads())
+  // World was built): every region gets the count sandflow takes, at most kMaxThreads. (One that
+  // is not a count has left the environment already: drop_bad_omp_num_threads.)
+  if (bad_omp_num_threads[0] != '\0')  // (an empty one is dropped without a word, as before)
     print_to_stderr(
-        "warning: OMP_NUM_THREADS={} is not a count of threads from 1 to {}: ignored, "
+        "warning: OMP_NUM_THREADS={}{} is not a count of threads from 1 to {}: ignored, "
         "{} (one per core) unless --threads or simulation.threads says\n",
-        omp, kMaxThreads, omp_get_num_procs());
+        bad_omp_num_threads, bad_omp_num_threads_cut ? "..." : "", kMaxThreads,
+        omp_get_num_procs());
   omp_set_num_threads(default_thread_count());
   if (const std::vector<long> cpus = absent_affinity_cpus(); !cpus.empty())
     print_to_stderr(

@@ -15,17 +15,21 @@ namespace sandflow {
 /// The most threads a job takes, from any of `--threads`, `simulation.threads` and OMP_NUM_THREADS
 inline constexpr int kMaxThreads = 4096;
 
-/// The count OMP_NUM_THREADS holds (the first of a list, as OpenMP reads it) when it is one from 1
-/// to kMaxThreads; nothing when it is unset or holds anything else (a word, 0, 100000).
-inline std::optional<int> omp_num_threads() {
-  const char* text = std::getenv("OMP_NUM_THREADS");
-  if (!text) return std::nullopt;
+/// The count a value of OMP_NUM_THREADS holds (the first of a list, as OpenMP reads it) when it is
+/// one from 1 to kMaxThreads; nothing when it holds anything else (a word, 0, 100000).
+inline std::optional<int> omp_thread_count(const char* text) {
   char* end = nullptr;
   const long n = std::strtol(text, &end, 10);
   while (end != text && (*end == ' ' || *end == '\t')) ++end;
   if (end != text && n > 0 && n <= kMaxThreads && (*end == '\0' || *end == ','))
     return static_cast<int>(n);
   return std::nullopt;
+}
+
+/// The count OMP_NUM_THREADS holds (omp_thread_count); nothing when it is unset.
+inline std::optional<int> omp_num_threads() {
+  const char* text = std::getenv("OMP_NUM_THREADS");
+  return text ? omp_thread_count(text) : std::nullopt;
 }
 
 /// OMP_NUM_THREADS when it holds a count (omp_num_threads), else one per core this process may

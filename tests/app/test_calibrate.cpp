@@ -133,6 +133,11 @@ TEST(Calibrate, ACacheFolderThatCannotBeMadeStopsItBeforeItMeasures) {
 // A cache file that cannot be written after minutes of measuring (a disk that filled meanwhile;
 // here `ulimit -f 0`) loses the measurement, but says the angles, which a scene can take by hand.
 TEST(Calibrate, AnglesMeasuredButNotKeptAreSaid) {
+#if defined(__clang__)
+  // (the program and the tests are built by one compiler)
+  GTEST_SKIP() << "LLVM's OpenMP runtime sizes a file in /dev/shm as the program loads, before "
+                  "main: under ulimit -f 0 the program cannot start (docs/known-issues.md)";
+#endif
   Sandbox box;
   const fs::path scene = box.write("t.toml", sand_scene());
   const fs::path log = box.dir / "log";
