@@ -6,7 +6,8 @@
 # Options (environment): SANDFLOW_DEMO_GRAINS (default 20000; the full scene has 107687),
 #   SANDFLOW_BUILD (build folder, default build), SANDFLOW_SANITIZE=1 (ASan + UBSan build, with
 #   the assertions of src/core/assert.hpp), SANDFLOW_COMPILER=clang (clang++ and LLVM's OpenMP,
-#   in build-clang: the force sweep 14 % faster on this project's machine, docs/performance.md;
+#   in build-clang: the same results, the sweep 14 % faster without rolling resistance and 2 % with
+#   it, docs/performance.md, seventy-fourth entry;
 #   the program then needs /dev/shm and a file-size limit of 1 KB or more, docs/known-issues.md).
 set -euo pipefail
 cd "$(dirname "$0")"
