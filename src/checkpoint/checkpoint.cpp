@@ -631,9 +631,6 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
     lo[a] = std::max(lo[a] - pad, -far);
     hi[a] = std::min(hi[a] + pad, far);
   }
-  auto inside = [&](const Vec3& x) {
-    return x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y && x.z >= lo.z && x.z <= hi.z;
-  };
   // radii as the emitters draw them, masses and inertias as Grains::add makes them
   const MaterialConfig& mat = world.scene().material;
   const Real r_lo = 0.5 * mat.smallest_diameter() * (1 - 1e-12);
@@ -642,7 +639,7 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   for (std::size_t i = 0; i < n; ++i) {
     const Real r = g.r[i], m = mat.density * (4.0 / 3.0) * kPi * r * r * r;
     if (!(r >= r_lo && r <= r_hi) || !near(g.m[i], m) || !near(g.inv_m[i], 1 / m) ||
-        !near(g.inv_I[i], 1 / (0.4 * m * r * r)) || !inside(g.x[i]))
+        !near(g.inv_I[i], 1 / (0.4 * m * r * r)) || !in_box(g.x[i], lo, hi))
       fail(fmt::format("hot grain {} has a radius, mass or position out of range", g.id[i]));
   }
   std::vector<GrainId> ids(g.id);
@@ -723,7 +720,7 @@ void check_fits(const Checkpoint& c, const World& world, const std::string& name
   const Real a_min = dp.skin / 2, a_max = std::max(a_min, dp.skin_max);
   for (std::size_t i = 0; i < n; ++i)
     if (!(d.allow[i] == 0 || (d.allow[i] >= a_min && d.allow[i] <= a_max)) ||
-        !inside(d.x_at_build[i]))
+        !in_box(d.x_at_build[i], lo, hi))
       fail("a reference position or allowance is out of range");
 
   // the surface flow: one entry per column (the static grains were checked against the store)

@@ -946,12 +946,9 @@ template <bool kRolling>
   v[i] += (f * d.inv_m[i] + d.gravity) * dt;
   d.w[i] += torque * (d.inv_I[i] * dt);
   x[i] += v[i] * dt;
-  const Vec3 &p = x[i], &lo = d.domain_lo, &hi = d.domain_hi;
-  const bool inside =
-      p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
-  return (norm2(p - d.x_at_build[i]) > d.allow2[i] ? kLeftAllowance : 0) |
-         (norm2(p - d.x_at_near[i]) > d.near2[i] ? kLeftNearMargin : 0) |
-         (inside ? 0 : kLeftDomain);
+  return (norm2(x[i] - d.x_at_build[i]) > d.allow2[i] ? kLeftAllowance : 0) |
+         (norm2(x[i] - d.x_at_near[i]) > d.near2[i] ? kLeftNearMargin : 0) |
+         (in_box(x[i], d.domain_lo, d.domain_hi) ? 0 : kLeftDomain);
 }
 
 // --- the thread partition --------------------------------------------------------------------

@@ -504,10 +504,8 @@ void World::check_grains() {
   const Vec3 lo = domain_lo_, hi = domain_hi_;
   auto fine = [&](std::size_t i) {
     if (grains_.state[i] != GrainState::Active) return true;  // frozen grains do not move
-    const Vec3& x = grains_.x[i];
-    // (a NaN fails the comparisons too: the usual case costs one test per axis)
-    return x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y && x.z >= lo.z &&
-           x.z <= hi.z && is_finite(grains_.v[i]);
+    // (a NaN position fails the box's comparisons: the usual case costs one test per axis)
+    return in_box(grains_.x[i], lo, hi) && is_finite(grains_.v[i]);
   };
   // every step: the sweep that moved the grains looked at each ACTIVE one's new position (nothing
   // moves a grain between it and this guard), else a parallel look; the grain-ordered walk below

@@ -76,8 +76,12 @@ TEST(DemDomain, ARestoredSolverHasNotLooked) {
   Profile prof;
   dem.step(g, Geometry{}, kDt, prof);
   ASSERT_TRUE(dem.all_inside());
+  // (into a solver that has looked at other grains: a fresh one has not looked either way)
   DemSolver restored(without_gravity());
   restored.set_domain({-1, -1, -1}, {1, 1, 1});
+  Grains other = two_grains({-0.5, 0, 0}, 1.0);
+  restored.step(other, Geometry{}, kDt, prof);
+  ASSERT_TRUE(restored.all_inside());
   restored.restore_state(dem.save_state(), Geometry{});
   EXPECT_FALSE(restored.all_inside());
   restored.step(g, Geometry{}, kDt, prof);
