@@ -82,10 +82,11 @@ GSS2=$GSS
 # The count per grain-step, from the source (an add, a multiply, a division or
 # a square root is one flop; comparisons, min and max are none):
 #   a touching pair: 131 flops. Its geometry (pair_force: dx, |dx|^2, the sum of
-#     radii and its square, sqrt, 1/|dx|, n, delta, r_eff, the overlap check) 20;
-#     the law (contact_force: v_i - v_j, the surfaces' velocity 3 + 9 + 9 + 3,
-#     v_n 5, v_t 6, F_n 3, c_t 1, rotate_into_plane 23, capped_spring 22,
-#     F 6, q 9) 99; the sums (the grain's own 6, the partner's accumulator 6) 12.
+#     radii and its square, sqrt, 1/|dx|^2 and |dx|/|dx|^2, n, delta, the overlap
+#     check) 19; the law (contact_force: v_i - v_j, the surfaces' velocity
+#     3 + 9 + 9 + 3, v_n 5, v_t 6, F_n 3, c_t 1, rotate_into_plane 24,
+#     capped_spring 22, F 6, q 9) 100; the sums (the grain's own 6, the
+#     partner's accumulator 6) 12.
 #   a pair of the near list that does not touch: 10 (dx, |dx|^2, the radii, the
 #     square). The sweep visits the near list only (DemSolver::build_near; the
 #     list's own making, a few times in a hundred steps, is left out).

@@ -43,6 +43,13 @@ constexpr Vec3 min(const Vec3& a, const Vec3& b) {
 constexpr Vec3 max(const Vec3& a, const Vec3& b) {
   return {a.x > b.x ? a.x : b.x, a.y > b.y ? a.y : b.y, a.z > b.z ? a.z : b.z};
 }
+/// to = v a coordinate at a time (where the default copy, a block move, would pass a vector held
+/// in registers through the stack).
+inline void store(Vec3& to, const Vec3& v) {
+  to.x = v.x;
+  to.y = v.y;
+  to.z = v.z;
+}
 /// p lies in the closed box [lo, hi]; a NaN coordinate does not (it fails every comparison).
 constexpr bool in_box(const Vec3& p, const Vec3& lo, const Vec3& hi) {
   return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;

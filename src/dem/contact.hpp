@@ -100,17 +100,20 @@ struct ContactForce {
   Vec3 torque_j(const ContactGeometry& g) const { return q * (-g.arm_j) - t_roll; }
 };
 
-/// Rotates a history vector into the plane normal to n, keeping its length. The normal turns
-/// little in one step, so the length lost by projecting, u = (a.n)^2 / |p|^2, is tiny and
-/// sqrt(1 + u) = 1 + u/2 to 1e-12 relative; the exact square root is kept for large turns.
+/// Rotates a history vector into the plane normal to n, keeping its length: the projection p onto
+/// the plane scaled by |a| / |p| = 1 / sqrt(1 - w), w = (a.n)^2 / |a|^2. The normal turns little
+/// in one step, so w is tiny and 1 / sqrt(1 - w) = 1 + w/2 to 4e-13 relative; the exact root is
+/// kept for large turns. 1 / |a|^2 needs only the stored history, not n: the division runs
+/// beside the normal's square root instead of after it (the sweep waits on each contact's chain
+/// of dependent operations, docs/performance.md).
 inline Vec3 rotate_into_plane(const Vec3& a, const Vec3& n) {
+  const Real a2 = norm2(a);
+  const Real inv_a2 = a2 > 0 ? 1 / a2 : 0.0;
   const Real an = dot(a, n);
-  if (an == 0) return a;
   const Vec3 p = a - n * an;
-  const Real plen2 = norm2(p);
-  if (plen2 == 0) return {};
-  const Real u = an * an / plen2;
-  return p * (u < 1e-6 ? 1 + 0.5 * u : std::sqrt(1 + u));
+  const Real w = an * an * inv_a2;
+  if (w < 1e-6) return p * (1 + 0.5 * w);
+  return w < 1 ? p * (1 / std::sqrt(1 - w)) : Vec3{};
 }
 
 /// Spring-dashpot on a history vector s with a Coulomb-type cap: returns the force and updates s,

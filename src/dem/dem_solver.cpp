@@ -862,14 +862,16 @@ template <bool kRolling>
     end_contact<kRolling>(d, s, rsum, dist2, tally);
     return false;
   }
+  // 1 / dist as dist / dist^2: the division runs beside the square root, not after it
   const Real dist = std::sqrt(dist2);
+  const Real inv_dist2 = 1 / dist2;
   ContactGeometry g;
-  g.n = dx * (1.0 / dist);
+  g.n = dx * (dist * inv_dist2);
   g.delta = rsum - dist;
   g.arm_i = gi.r;
   g.arm_j = r_j;
   g.c_n = pair_damping(d, gi, j, s);
-  g.r_eff = gi.r * r_j / rsum;
+  g.r_eff = kRolling ? gi.r * r_j / rsum : 0.0;  // (a division the law without rolling skips)
   // relative overlap; the division only when it may be a new largest one
   const Real d_small = 2 * std::min(gi.r, r_j);
   if (g.delta > tally.max_ov * d_small) tally.max_ov = g.delta / d_small;
@@ -940,15 +942,19 @@ template <bool kRolling>
 /// kLeftDomain: outside, or not finite, which a non-finite velocity makes the position too).
 [[gnu::always_inline]] inline int integrate(const SweepData& d, std::size_t i, const Vec3& f,
                                             const Vec3& torque) {
-  Vec3* x = d.x;
-  Vec3* v = d.v;
+  // (the new velocity and position are stored a coordinate at a time and read back from
+  // registers: GCC copied them as whole vectors through the stack, or loaded v[i] as one pair of
+  // doubles from three separate stores, which the processor cannot forward: a stall at every
+  // grain; docs/performance.md)
   const Real dt = d.dt;
-  v[i] += (f * d.inv_m[i] + d.gravity) * dt;
+  const Vec3 v_new = d.v[i] + (f * d.inv_m[i] + d.gravity) * dt;
+  const Vec3 x_new = d.x[i] + v_new * dt;
+  store(d.v[i], v_new);
   d.w[i] += torque * (d.inv_I[i] * dt);
-  x[i] += v[i] * dt;
-  return (norm2(x[i] - d.x_at_build[i]) > d.allow2[i] ? kLeftAllowance : 0) |
-         (norm2(x[i] - d.x_at_near[i]) > d.near2[i] ? kLeftNearMargin : 0) |
-         (in_box(x[i], d.domain_lo, d.domain_hi) ? 0 : kLeftDomain);
+  store(d.x[i], x_new);
+  return (norm2(x_new - d.x_at_build[i]) > d.allow2[i] ? kLeftAllowance : 0) |
+         (norm2(x_new - d.x_at_near[i]) > d.near2[i] ? kLeftNearMargin : 0) |
+         (in_box(x_new, d.domain_lo, d.domain_hi) ? 0 : kLeftDomain);
 }
 
 // --- the thread partition --------------------------------------------------------------------
