@@ -262,6 +262,21 @@ TEST(ContactLaw, HistoryRotatesIntoTheTangentPlaneKeepingItsLength) {
   EXPECT_NEAR(norm(r), 5, 1e-12);
 }
 
+TEST(ContactLaw, HistoryRotatedBySmallTurnsKeepsItsLengthTo1e12) {
+  // the normal turns by 1e-6 to 1e-2 rad in a step: w = (a.n)^2 / |a|^2 from 1e-12 to 1e-4, both
+  // sides of the series' switch at 1e-6; the length kept to 1e-12 relative, the result in the plane
+  const Vec3 xi{2e-5, -1e-5, 0};
+  for (Real turn : {1e-6, 1e-4, 9e-4, 1.1e-3, 1e-2}) {
+    const Vec3 n{std::sin(turn), 0, std::cos(turn)};
+    const Vec3 r = rotate_into_plane(xi, n);
+    EXPECT_NEAR(norm(r) / norm(xi), 1, 1e-12) << turn;
+    EXPECT_NEAR(dot(r, n) / norm(xi), 0, 1e-15) << turn;
+  }
+  // along the normal: nothing is left in the plane
+  EXPECT_EQ(rotate_into_plane(Vec3{0, 0, 3e-5}, Vec3{0, 0, 1}), Vec3{});
+  EXPECT_EQ(rotate_into_plane(Vec3{}, Vec3{0, 0, 1}), Vec3{});
+}
+
 TEST(ContactLaw, DampingBetaMatchesRestitution) {
   // unclamped: e = exp(-beta pi / sqrt(1 - beta^2)) for the damped linear oscillator
   for (Real e : {0.1, 0.5, 0.95}) {
