@@ -6,8 +6,8 @@
 # Options (environment): SANDFLOW_DEMO_GRAINS (default 20000; the full scene has 107687),
 #   SANDFLOW_BUILD (build folder, default build), SANDFLOW_SANITIZE=1 (ASan + UBSan build, with
 #   the assertions of src/core/assert.hpp), SANDFLOW_COMPILER=clang (clang++ and LLVM's OpenMP,
-#   in build-clang: the same results, the sweep 14 % faster without rolling resistance and 2 % with
-#   it, docs/performance.md, seventy-fourth entry;
+#   in build-clang: the same results, the bed's sweep 6-10 % faster than GCC's, docs/performance.md,
+#   seventy-fifth entry, and about 2 % with rolling resistance, seventy-fourth;
 #   the program then needs /dev/shm and a file-size limit of 1 KB or more, docs/known-issues.md).
 set -euo pipefail
 cd "$(dirname "$0")"
