@@ -433,8 +433,10 @@ TEST_F(Render, ASecondReportOfTheSameRunIsRefusedWhileTheFirstRenders) {
   EXPECT_EQ(sandflow_test::wait_for(first), 0) << read_text(log);
   for (int frame = 1; frame <= 12; ++frame)
     EXPECT_TRUE(fs::is_regular_file(run / "render" / fmt::format("{:04d}.png", frame))) << frame;
+  // (the first's log says why a picture failed: once in CI, under the sanitizers, the first
+  // rendered frames 1-4 and then wrote its page without the others, for a cause not yet found)
   const std::string page = read_text(run / "report.html");
-  EXPECT_EQ(page.find("could not be rendered"), std::string::npos);
+  EXPECT_EQ(page.find("could not be rendered"), std::string::npos) << read_text(log);
 }
 
 // `run --force` on a run that a render is drawing removed render/ under it; now it waits its turn,
