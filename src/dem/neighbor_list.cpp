@@ -411,6 +411,34 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const Gra
   return brute_force_pairs(grains, std::vector<Real>(grains.size(), skin / 2));
 }
 
+std::vector<std::pair<std::uint32_t, std::uint32_t>> swept_pairs(const Grains& grains,
+                                                                 const std::vector<Real>& allow) {
+  const std::size_t n = grains.size();
+  std::vector<std::uint32_t> by_x(n);
+  Real reach_max =
+      0;  // the largest r + a: no partner of i lies further along x than r_i + a_i + it
+  for (std::uint32_t i = 0; i < n; ++i) {
+    by_x[i] = i;
+    reach_max = std::max(reach_max, grains.r[i] + allow[i]);
+  }
+  std::sort(by_x.begin(), by_x.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return grains.x[a].x < grains.x[b].x || (grains.x[a].x == grains.x[b].x && a < b);
+  });
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  for (std::size_t p = 0; p < n; ++p) {
+    const std::uint32_t i = by_x[p];
+    const Real x_end = grains.x[i].x + grains.r[i] + allow[i] + reach_max;
+    for (std::size_t q = p + 1; q < n && grains.x[by_x[q]].x <= x_end; ++q) {
+      const std::uint32_t j = by_x[q];
+      if (grains.state[i] != GrainState::Active && grains.state[j] != GrainState::Active) continue;
+      const Real cut = grains.r[i] + grains.r[j] + allow[i] + allow[j];
+      if (norm2(grains.x[i] - grains.x[j]) < cut * cut)
+        pairs.emplace_back(std::min(i, j), std::max(i, j));
+    }
+  }
+  return pairs;
+}
+
 std::string pair_list_error(const Grains& grains, const std::vector<Real>& allow,
                             const PairList& pairs) {
   const std::size_t n = grains.size();
@@ -428,7 +456,7 @@ std::string pair_list_error(const Grains& grains, const std::vector<Real>& allow
             "grain, or out of order",
             i, grains.id[i], pairs.j[s]);
   }
-  for (const auto& [i, j] : brute_force_pairs(grains, allow)) {
+  for (const auto& [i, j] : swept_pairs(grains, allow)) {
     const auto row_begin = pairs.j.begin() + pairs.start[i];
     const auto row_end = pairs.j.begin() + pairs.start[i + 1];
     if (std::binary_search(row_begin, row_end, j)) continue;

@@ -143,11 +143,17 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(
 std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const Grains& grains,
                                                                         Real skin);
 
+/// The pairs of brute_force_pairs (in another order), found without a grid: the grains sorted
+/// along x, each tested against those that follow it within its reach along x. O(n log n + the
+/// pairs within reach along x): the assertions after each rebuild can afford it.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> swept_pairs(const Grains& grains,
+                                                                 const std::vector<Real>& allow);
+
 /// The half list against the reference, for assertions after a rebuild: its rows well formed
 /// (n + 1 offsets, each row's partners ascending and above the row's grain) and every pair of
-/// brute_force_pairs(grains, allow) in it. A pair within rounding of its cut (1e-9 of it) may be
+/// swept_pairs(grains, allow) in it. A pair within rounding of its cut (1e-9 of it) may be
 /// listed or not: the list's owner adds the allowances in its own order. Returns the first fault,
-/// or "" when there is none. O(n^2).
+/// or "" when there is none.
 std::string pair_list_error(const Grains& grains, const std::vector<Real>& allow,
                             const PairList& pairs);
 

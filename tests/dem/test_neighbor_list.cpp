@@ -93,6 +93,26 @@ TEST(CellGrid, GrainsAlongFarWallsKeepTheCellsFine) {
   EXPECT_LE(grid.cell_size(), 0.014) << grid.cell_size();
 }
 
+// The assertions' reference after each rebuild (a sweep along x) against brute force: the same
+// pairs, with frozen grains, large allowances of a few, grains at one x and one far away
+TEST(NeighbourList, TheSweptPairsAreTheBruteForcePairs) {
+  for (std::uint64_t seed : {8, 9}) {
+    Grains g = random_grains(2000, seed, 0.1);
+    g.add(5000, {1e3, -2e3, 5e2}, {}, 0.005, 2600);
+    for (int k = 0; k < 40; ++k) g.add(6000 + k, {0.05, 0.001 * k, 0.05}, {}, 0.005, 2600);
+    for (std::size_t i = 0; i < g.size(); i += 3) g.state[i] = GrainState::Interface;
+    Rng rng(seed);
+    std::vector<Real> allow(g.size(), 0.001);
+    for (std::size_t i = 0; i < g.size(); i += 11) allow[i] = rng.uniform(0.001, 0.012);
+    auto expected = brute_force_pairs(g, allow);
+    auto swept = swept_pairs(g, allow);
+    std::sort(expected.begin(), expected.end());
+    std::sort(swept.begin(), swept.end());
+    ASSERT_GT(expected.size(), 1000u);
+    EXPECT_EQ(swept, expected) << "seed " << seed;
+  }
+}
+
 // A few grains with large allowances (a fast stream) look further than the grid's cells: their
 // pairs, found from their side whatever the index order, must be exactly the brute-force ones.
 TEST(NeighbourList, LargerAllowancesOfAFewGrainsGiveTheBruteForcePairs) {
