@@ -10,7 +10,7 @@
 namespace sandflow {
 namespace {
 
-struct Grains {
+struct Spheres {
   std::vector<Vec3> pos;
   std::vector<Real> radius;
 };
@@ -18,10 +18,10 @@ struct Grains {
 // Spheres of radius r on a cubic lattice of spacing 2r, resting on z = 0, filling the cone
 // z <= h - rho * tan(angle) around the apex (ax, ay). The lattice is anchored at the origin, not
 // at the apex, so the apex falls between lattice columns as in a real pile.
-Grains lattice_cone(double angle_deg, double ax, double ay, double r, double h) {
+Spheres lattice_cone(double angle_deg, double ax, double ay, double r, double h) {
   const double d = 2 * r, t = std::tan(deg_to_rad(angle_deg));
   const double base = h / t;
-  Grains g;
+  Spheres g;
   const int n = static_cast<int>(std::ceil(base / d)) + 1;
   const int ix0 = static_cast<int>(std::floor(ax / d)), iy0 = static_cast<int>(std::floor(ay / d));
   for (int i = ix0 - n; i <= ix0 + n; ++i) {
@@ -41,7 +41,7 @@ TEST(Heap, LatticeCone30Degrees) {
   // Apex away from the origin and between lattice columns: the apex search must find it.
   const double r = 0.005, d = 2 * r, h = 16 * d;
   const double ax = 0.3725, ay = -0.2135;
-  const Grains g = lattice_cone(30.0, ax, ay, r, h);
+  const Spheres g = lattice_cone(30.0, ax, ay, r, h);
   const HeapFit fit = measure_heap(g.pos, g.radius);
   ASSERT_TRUE(fit.ok) << fit.reason;
   // 2 degrees: the lattice turns the flank into a staircase of one-diameter steps.
@@ -63,7 +63,7 @@ TEST(Heap, LatticeCone30Degrees) {
 
 TEST(Heap, LatticeCone35Degrees) {
   const double r = 0.005, h = 16 * 2 * r;
-  const Grains g = lattice_cone(35.0, -1.1337, 0.5861, r, h);
+  const Spheres g = lattice_cone(35.0, -1.1337, 0.5861, r, h);
   const HeapFit fit = measure_heap(g.pos, g.radius);
   ASSERT_TRUE(fit.ok) << fit.reason;
   EXPECT_NEAR(fit.repose_angle_deg, 35.0, 2.0);
@@ -73,7 +73,7 @@ TEST(Heap, LatticeCone35Degrees) {
 
 TEST(Heap, StrayGrainOnTopDoesNotMoveApex) {
   const double r = 0.005, h = 16 * 2 * r;
-  Grains g = lattice_cone(30.0, 0.3725, -0.2135, r, h);
+  Spheres g = lattice_cone(30.0, 0.3725, -0.2135, r, h);
   // A loose grain high above the flank, far from the apex.
   g.pos.push_back({0.3725 + 0.2, -0.2135, h + 0.1});
   g.radius.push_back(r);
@@ -86,7 +86,7 @@ TEST(Heap, StrayGrainOnTopDoesNotMoveApex) {
 TEST(Heap, JitteredConeOnFloorHeight) {
   // Random offsets of a tenth of a diameter and an explicit floor below the lowest grain.
   const double r = 0.005, h = 16 * 2 * r;
-  Grains g = lattice_cone(32.0, 0.0, 0.0, r, h);
+  Spheres g = lattice_cone(32.0, 0.0, 0.0, r, h);
   Rng rng(7);
   auto u = [&rng] { return static_cast<double>(rng.next() >> 11) * 0x1.0p-53 - 0.5; };
   for (Vec3& p : g.pos) p += Vec3{u(), u(), u()} * (0.2 * r);
@@ -99,7 +99,7 @@ TEST(Heap, JitteredConeOnFloorHeight) {
 }
 
 TEST(Heap, FlatLayerHasNoAngle) {
-  Grains g;
+  Spheres g;
   const double r = 0.005;
   for (int i = 0; i < 60; ++i) {
     for (int j = 0; j < 60; ++j) {
@@ -119,7 +119,7 @@ TEST(Heap, ASpreadOutLayerIsNotAHeap) {
   // over 40 diameters. A line fits it well (3 degrees), but its flank band spans under two grain
   // layers: reported as no flank, not as an angle.
   const double r = 0.005, h = 3.5 * 2 * r;
-  const Grains g = lattice_cone(3.0, 0.0, 0.0, r, h);
+  const Spheres g = lattice_cone(3.0, 0.0, 0.0, r, h);
   const HeapFit fit = measure_heap(g.pos, g.radius, 0.0);
   EXPECT_FALSE(fit.ok);
   EXPECT_TRUE(std::isnan(fit.repose_angle_deg));
@@ -134,8 +134,8 @@ TEST(Heap, StandardErrorFallsAsTheFlankGrows) {
   // The same staircase of single grains along a longer flank: more rings, a surer slope. The
   // standard error is the slope's, sqrt(SSE / (n - 2) / Srr), carried through atan.
   const double r = 0.005;
-  const Grains small = lattice_cone(32.0, 0.0, 0.0, r, 8 * 2 * r);
-  const Grains large = lattice_cone(32.0, 0.0, 0.0, r, 32 * 2 * r);
+  const Spheres small = lattice_cone(32.0, 0.0, 0.0, r, 8 * 2 * r);
+  const Spheres large = lattice_cone(32.0, 0.0, 0.0, r, 32 * 2 * r);
   const HeapFit a = measure_heap(small.pos, small.radius, 0.0);
   const HeapFit b = measure_heap(large.pos, large.radius, 0.0);
   ASSERT_TRUE(a.ok && b.ok);
@@ -163,7 +163,7 @@ TEST(Heap, EmptyAndBadInput) {
 TEST(Heap, NarrowBandCanRefuse) {
   // A band that spans under two grain layers: refused with a reason, not a wrong angle.
   const double r = 0.005, h = 8 * 2 * r;
-  const Grains g = lattice_cone(30.0, 0.0, 0.0, r, h);
+  const Spheres g = lattice_cone(30.0, 0.0, 0.0, r, h);
   const HeapFit fit = measure_heap(g.pos, g.radius, 0.0, 0.45, 0.55);
   EXPECT_FALSE(fit.ok);
   EXPECT_NE(fit.reason.find("no flank"), std::string::npos) << fit.reason;
@@ -173,7 +173,7 @@ TEST(Heap, ASteepShortFlankHasTooFewPoints) {
   // 60 degrees over 8 diameters: the band's four diameters of rise lie within 2.3 diameters
   // of radius, fewer than four rings.
   const double r = 0.005, h = 8 * 2 * r;
-  const Grains g = lattice_cone(60.0, 0.0, 0.0, r, h);
+  const Spheres g = lattice_cone(60.0, 0.0, 0.0, r, h);
   const HeapFit fit = measure_heap(g.pos, g.radius, 0.0);
   EXPECT_FALSE(fit.ok);
   EXPECT_NE(fit.reason.find("profile points"), std::string::npos) << fit.reason;

@@ -49,8 +49,8 @@ struct Sandbox {
 
 /// Runs the command (behind `wrapper`, e.g. "timeout 30"); returns its exit status, with
 /// stdout+stderr in `output`.
-inline int sandflow(const std::string& args, std::string* output = nullptr,
-                    const std::string& wrapper = "") {
+inline int run_sandflow(const std::string& args, std::string* output = nullptr,
+                        const std::string& wrapper = "") {
   // one log per test: ctest runs tests in parallel processes
   const std::string log =
       (fs::temp_directory_path() / ("sandflow_cli_" + test_id() + ".log")).string();

@@ -52,7 +52,7 @@ TEST(Calibrate, MeasuresOnceThenReadsTheCache) {
   std::string out;
   // a small, fast rig: the default one takes a minute
   const std::string cmd = "calibrate " + scene.string() + " --trials 1 --base 7 --tilt-rate 6";
-  ASSERT_EQ(sandflow(cmd + " --threads 1", &out, calibrating(box)), 0) << out;
+  ASSERT_EQ(run_sandflow(cmd + " --threads 1", &out, calibrating(box)), 0) << out;
   EXPECT_NE(out.find("s on 1 thread\n"), std::string::npos) << out;  // (--threads taken)
   // one trial: the standard deviation is 0
   const std::string theta0 = word_after(out, "\ntheta0 ");
@@ -72,11 +72,11 @@ TEST(Calibrate, MeasuresOnceThenReadsTheCache) {
   EXPECT_EQ(j["threads"], 1);
 
   // the second time costs nothing and says where the result came from
-  ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
+  ASSERT_EQ(run_sandflow(cmd, &out, calibrating(box)), 0) << out;
   EXPECT_NE(out.find("cached"), std::string::npos) << out;
   EXPECT_NE(out.find("theta0           " + theta0), std::string::npos) << out;
   // another material is another key
-  ASSERT_EQ(sandflow(cmd + " --set material.friction=0.3", &out, calibrating(box)), 0) << out;
+  ASSERT_EQ(run_sandflow(cmd + " --set material.friction=0.3", &out, calibrating(box)), 0) << out;
   EXPECT_NE(out.find("stored"), std::string::npos) << out;
 }
 
@@ -85,7 +85,7 @@ TEST(Calibrate, ADamagedCacheFileIsMeasuredAgain) {
   const fs::path scene = box.write("t.toml", sand_scene());
   std::string out;
   const std::string cmd = "calibrate " + scene.string() + " --trials 1 --base 7 --tilt-rate 6";
-  ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
+  ASSERT_EQ(run_sandflow(cmd, &out, calibrating(box)), 0) << out;
   const std::string key = word_after(out, "material key");
   ASSERT_EQ(key.size(), 16u) << out;
   const fs::path file = box.dir / "cache" / "calibration" / (key + ".json");
@@ -96,7 +96,7 @@ TEST(Calibrate, ADamagedCacheFileIsMeasuredAgain) {
         nlohmann::json{{"key", key}, {"theta0_deg", 30.0}, {"theta_max_deg", 40.0}}.dump(),
         nlohmann::json{{"key", key}, {"theta0_deg", 95.0}, {"theta_max_deg", 99.0}}.dump()}) {
     std::ofstream(file) << damaged;
-    ASSERT_EQ(sandflow(cmd, &out, calibrating(box)), 0) << out;
+    ASSERT_EQ(run_sandflow(cmd, &out, calibrating(box)), 0) << out;
     EXPECT_NE(out.find("stored"), std::string::npos) << damaged << "\n" << out;
     EXPECT_EQ(out.find("cached"), std::string::npos) << damaged << "\n" << out;
   }
@@ -105,7 +105,7 @@ TEST(Calibrate, ADamagedCacheFileIsMeasuredAgain) {
 // The key a surface run of `scene` looks up, as `run --check` prints it.
 std::string key_of(const Sandbox& box, const fs::path& scene) {
   std::string out;
-  EXPECT_EQ(sandflow("run " + scene.string() + " --check", &out, calibrating(box)), 0) << out;
+  EXPECT_EQ(run_sandflow("run " + scene.string() + " --check", &out, calibrating(box)), 0) << out;
   const std::string key = word_after(out, "cached as");
   EXPECT_EQ(key.size(), 16u) << out;
   return key;
@@ -118,9 +118,9 @@ TEST(Calibrate, ACacheFolderThatCannotBeMadeStopsItBeforeItMeasures) {
   const fs::path scene = box.write("t.toml", sand_scene());
   const fs::path file = box.write("a-file", "");
   std::string out;
-  EXPECT_EQ(sandflow("calibrate " + scene.string() + " --trials 1 --base 7 --tilt-rate 6", &out,
-                     "env -u SANDFLOW_NO_CALIBRATION SANDFLOW_CACHE_DIR=" + file.string() +
-                         " timeout 300"),
+  EXPECT_EQ(run_sandflow("calibrate " + scene.string() + " --trials 1 --base 7 --tilt-rate 6", &out,
+                         "env -u SANDFLOW_NO_CALIBRATION SANDFLOW_CACHE_DIR=" + file.string() +
+                             " timeout 300"),
             4)
       << out;
   EXPECT_NE(out.find(file.string() + "/calibration: cannot make the calibration cache folder"),
@@ -205,7 +205,7 @@ TEST(Calibrate, CtrlCWhileMeasuringStopsItSaysSoAndKeepsNothing) {
       << out;
   EXPECT_FALSE(cached());
   EXPECT_FALSE(fs::exists(run / "run.json"));
-  EXPECT_EQ(sandflow(run_args, &out, "env SANDFLOW_NO_CALIBRATION=1"), 0) << out;
+  EXPECT_EQ(run_sandflow(run_args, &out, "env SANDFLOW_NO_CALIBRATION=1"), 0) << out;
 
   // a comparison: its own way on
   const fs::path cmp = box.dir / "cmp";
@@ -233,8 +233,8 @@ TEST(Calibrate, ASurfaceRunTakesTheAnglesItsSceneLeavesUnsetFromTheCalibration) 
       << nlohmann::json{{"key", key}, {"theta0_deg", 30.5}, {"theta_max_deg", 41.25}}.dump();
   std::string out;
   const fs::path run = box.dir / "run";
-  ASSERT_EQ(sandflow("run " + scene.string() + " --frames 3 --out " + run.string(), &out,
-                     calibrating(box)),
+  ASSERT_EQ(run_sandflow("run " + scene.string() + " --frames 3 --out " + run.string(), &out,
+                         calibrating(box)),
             0)
       << out;
   const auto summary = nlohmann::json::parse(read_text(run / "summary.json"));
@@ -248,8 +248,8 @@ TEST(Calibrate, ASurfaceRunTakesTheAnglesItsSceneLeavesUnsetFromTheCalibration) 
 
   // an angle the scene sets wins over the calibration; the other one still comes from it
   const fs::path set = box.write("set.toml", sand_scene("repose_angle = 28\n"));
-  ASSERT_EQ(sandflow("run " + set.string() + " --frames 2 --out " + (box.dir / "set").string(),
-                     &out, calibrating(box)),
+  ASSERT_EQ(run_sandflow("run " + set.string() + " --frames 2 --out " + (box.dir / "set").string(),
+                         &out, calibrating(box)),
             0)
       << out;
   const auto s2 = nlohmann::json::parse(read_text(box.dir / "set" / "summary.json"));
@@ -263,8 +263,8 @@ TEST(Calibrate, WithoutCalibrationTheBuiltInAnglesAreUsedAndSaidSo) {
   Sandbox box;
   const fs::path scene = box.write("t.toml", sand_scene());
   std::string out;
-  ASSERT_EQ(sandflow("run " + scene.string() + " --frames 2 --out " + (box.dir / "r").string(),
-                     &out, "env SANDFLOW_NO_CALIBRATION=1"),
+  ASSERT_EQ(run_sandflow("run " + scene.string() + " --frames 2 --out " + (box.dir / "r").string(),
+                         &out, "env SANDFLOW_NO_CALIBRATION=1"),
             0)
       << out;
   const auto summary = nlohmann::json::parse(read_text(box.dir / "r" / "summary.json"));
@@ -273,8 +273,8 @@ TEST(Calibrate, WithoutCalibrationTheBuiltInAnglesAreUsedAndSaidSo) {
             std::string::npos);
   // both set: nothing to calibrate
   const fs::path both = box.write("both.toml", sand_scene("repose_angle = 31\nmax_angle = 37\n"));
-  ASSERT_EQ(sandflow("run " + both.string() + " --frames 2 --out " + (box.dir / "b").string(), &out,
-                     calibrating(box)),
+  ASSERT_EQ(run_sandflow("run " + both.string() + " --frames 2 --out " + (box.dir / "b").string(),
+                         &out, calibrating(box)),
             0)
       << out;
   const auto s2 = nlohmann::json::parse(read_text(box.dir / "b" / "summary.json"));

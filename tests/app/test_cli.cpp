@@ -21,8 +21,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using sandflow_test::run_sandflow;
 using sandflow_test::Sandbox;
-using sandflow_test::sandflow;
 
 const std::string kTinyScene = sandflow_test::tiny_block_scene(200);
 
@@ -31,8 +31,9 @@ TEST(Cli, RunWritesStatsSummaryAndFrames) {
   const auto scene = box.write("tiny.toml", kTinyScene);
   const auto out = box.dir / "out";
   std::string log;
-  ASSERT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 3 --out " + out.string(), &log),
-            0)
+  ASSERT_EQ(
+      run_sandflow("run " + scene.string() + " --mode dem --frames 3 --out " + out.string(), &log),
+      0)
       << log;
   // stats.csv: a header and one row per frame
   std::ifstream csv(out / "stats.csv");
@@ -53,7 +54,7 @@ TEST(Cli, RunWritesStatsSummaryAndFrames) {
   // the last frame reads back with every grain
   EXPECT_EQ(sandflow::read_ply((out / "frames" / "0003.ply").string()).size(), 200u);
   // measure reads it again
-  EXPECT_EQ(sandflow("measure " + out.string(), &log), 0) << log;
+  EXPECT_EQ(run_sandflow("measure " + out.string(), &log), 0) << log;
 }
 
 // Without --threads or the scene's simulation.threads, a run takes OMP_NUM_THREADS when it holds a
@@ -64,9 +65,9 @@ TEST(Cli, ThreadsComeFromTheOptionTheSceneOmpNumThreadsThenTheCores) {
   const auto threads_of = [&](const std::string& env, const std::string& args) {
     const auto out = box.dir / "out";
     std::string log;
-    EXPECT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 1 --force --out " +
-                           out.string() + args,
-                       &log, env),
+    EXPECT_EQ(run_sandflow("run " + scene.string() + " --mode dem --frames 1 --force --out " +
+                               out.string() + args,
+                           &log, env),
               0)
         << log;
     return nlohmann::json::parse(std::ifstream(out / "summary.json"))["threads"].get<int>();
@@ -83,7 +84,8 @@ TEST(Cli, ThreadsComeFromTheOptionTheSceneOmpNumThreadsThenTheCores) {
   // (a segmentation fault on a machine that can start 96,364 processes), where it takes the count
   // in OMP_NUM_THREADS as it stands
   EXPECT_EQ(threads_of("env OMP_NUM_THREADS=100000", ""), omp_get_num_procs());
-  EXPECT_EQ(sandflow("run " + scene.string() + " --check", &log, "env OMP_NUM_THREADS=100000"), 0)
+  EXPECT_EQ(run_sandflow("run " + scene.string() + " --check", &log, "env OMP_NUM_THREADS=100000"),
+            0)
       << log;
   EXPECT_NE(log.find("warning: OMP_NUM_THREADS=100000 is not a count of threads from 1 to 4096: "
                      "ignored"),
@@ -92,25 +94,26 @@ TEST(Cli, ThreadsComeFromTheOptionTheSceneOmpNumThreadsThenTheCores) {
   // OMP_THREAD_LIMIT caps what OpenMP gives a region: the run says the count it runs on
   EXPECT_EQ(threads_of("env OMP_THREAD_LIMIT=2", " --threads 3"), 2);
   EXPECT_EQ(threads_of("env OMP_THREAD_LIMIT=1 OMP_NUM_THREADS=3", ""), 1);
-  EXPECT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 1 --threads 3 --out " +
-                         (box.dir / "limited").string(),
-                     &log, "env OMP_THREAD_LIMIT=2"),
+  EXPECT_EQ(run_sandflow("run " + scene.string() + " --mode dem --frames 1 --threads 3 --out " +
+                             (box.dir / "limited").string(),
+                         &log, "env OMP_THREAD_LIMIT=2"),
             0);
   EXPECT_NE(log.find("warning: OMP_THREAD_LIMIT=2 holds this job to 2 threads (3 asked)"),
             std::string::npos)
       << log;
   // a CPU list for a larger machine: libgomp stops the program when it binds a thread there
   // ("Thread creation failed: Invalid argument", status 1), so the variable is named first
-  sandflow("run " + scene.string() + " --mode dem --frames 1 --threads 2 --force --out " +
-               (box.dir / "bound").string(),
-           &log, "env GOMP_CPU_AFFINITY='0 100000'");
+  run_sandflow("run " + scene.string() + " --mode dem --frames 1 --threads 2 --force --out " +
+                   (box.dir / "bound").string(),
+               &log, "env GOMP_CPU_AFFINITY='0 100000'");
   EXPECT_NE(log.find("warning: GOMP_CPU_AFFINITY=0 100000 names a CPU this process cannot run "
                      "on (100000)"),
             std::string::npos)
       << log;
   for (const std::string args : {" --threads 4097", " --set simulation.threads=4097"}) {
     EXPECT_EQ(
-        sandflow("run " + scene.string() + " --out " + (box.dir / "big").string() + args, &log), 2)
+        run_sandflow("run " + scene.string() + " --out " + (box.dir / "big").string() + args, &log),
+        2)
         << args;
     EXPECT_NE(log.find("4096"), std::string::npos) << log;
   }
@@ -123,13 +126,13 @@ TEST(Cli, BadSceneExitsTwoNamingThePlaceAndWritesNothing) {
   const auto scene = box.write("bad.toml", text);
   const auto out = box.dir / "out";
   std::string log;
-  EXPECT_EQ(sandflow("run " + scene.string() + " --out " + out.string(), &log), 2);
+  EXPECT_EQ(run_sandflow("run " + scene.string() + " --out " + out.string(), &log), 2);
   EXPECT_NE(log.find("bad.toml:6:1: material.k_n"), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(out));
   // a bad --set is refused the same way
-  EXPECT_EQ(sandflow("run " + box.write("ok.toml", kTinyScene).string() +
-                         " --set material.friction=-1 --out " + out.string(),
-                     &log),
+  EXPECT_EQ(run_sandflow("run " + box.write("ok.toml", kTinyScene).string() +
+                             " --set material.friction=-1 --out " + out.string(),
+                         &log),
             2);
   EXPECT_NE(log.find("material.friction"), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(out));
@@ -139,9 +142,9 @@ TEST(Cli, SurfaceModeReportsTransitionsAndTheHeightField) {
   Sandbox box;
   const auto out = box.dir / "out";
   std::string log;
-  ASSERT_EQ(sandflow("run " + box.write("t.toml", kTinyScene).string() + " --mode surface --out " +
-                         out.string(),
-                     &log),
+  ASSERT_EQ(run_sandflow("run " + box.write("t.toml", kTinyScene).string() +
+                             " --mode surface --out " + out.string(),
+                         &log),
             0)
       << log;
   std::ifstream stats(out / "stats.csv");
@@ -165,10 +168,10 @@ TEST(Cli, MeasureReadsAnUnfinishedSurfaceRunFromItsCheckpointWithEveryGrain) {
   const auto out = box.dir / "out";
   std::string log;
   // the block settles and its columns close within the run, so grains go to sleep
-  ASSERT_EQ(sandflow("run " + box.write("t.toml", kTinyScene).string() +
-                         " --mode surface --frames 30 --set surface.close_after=0.1 --out " +
-                         out.string(),
-                     &log),
+  ASSERT_EQ(run_sandflow("run " + box.write("t.toml", kTinyScene).string() +
+                             " --mode surface --frames 30 --set surface.close_after=0.1 --out " +
+                             out.string(),
+                         &log),
             0)
       << log;
   const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
@@ -178,16 +181,16 @@ TEST(Cli, MeasureReadsAnUnfinishedSurfaceRunFromItsCheckpointWithEveryGrain) {
   const std::string summary_text = sandflow_test::read_text(out / "summary.json");
   fs::remove(out / "final_grains.ply");
   fs::remove(out / "summary.json");
-  ASSERT_EQ(sandflow("measure " + out.string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow("measure " + out.string(), &log), 0) << log;
   EXPECT_NE(log.find("(frame 30, every grain)"), std::string::npos) << log;
   EXPECT_NE(log.find("grains           200\n"), std::string::npos) << log;
   EXPECT_NE(log.find("the run is not finished"), std::string::npos) << log;
   fs::remove(out / "checkpoint.bin");
-  EXPECT_EQ(sandflow("measure " + out.string(), &log), 2) << log;
+  EXPECT_EQ(run_sandflow("measure " + out.string(), &log), 2) << log;
   EXPECT_NE(log.find("no checkpoint yet"), std::string::npos) << log;
   // a finished run whose final state and checkpoint were deleted is not called unfinished
   std::ofstream(out / "summary.json") << summary_text;
-  EXPECT_EQ(sandflow("measure " + out.string(), &log), 2) << log;
+  EXPECT_EQ(run_sandflow("measure " + out.string(), &log), 2) << log;
   EXPECT_NE(log.find("the run finished, but its final_grains.ply and checkpoint.bin are gone"),
             std::string::npos)
       << log;
@@ -197,9 +200,9 @@ TEST(Cli, CompareWritesBothRunsAndTheTable) {
   Sandbox box;
   const auto out = box.dir / "cmp";
   std::string log;
-  ASSERT_EQ(sandflow("compare " + box.write("t.toml", kTinyScene).string() + " --frames 10 --out " +
-                         out.string(),
-                     &log),
+  ASSERT_EQ(run_sandflow("compare " + box.write("t.toml", kTinyScene).string() +
+                             " --frames 10 --out " + out.string(),
+                         &log),
             0)
       << log;
   EXPECT_TRUE(fs::exists(out / "dem" / "summary.json"));
@@ -215,8 +218,8 @@ TEST(Cli, CompareWritesBothRunsAndTheTable) {
   EXPECT_LE(j["simulated_fraction_mean"].get<double>(), 1.0);
   EXPECT_NE(log.find("speed-up"), std::string::npos) << log;
   // --mode makes no sense for a comparison
-  EXPECT_EQ(sandflow("compare " + (box.dir / "t.toml").string() + " --mode dem --out " +
-                     (box.dir / "x").string()),
+  EXPECT_EQ(run_sandflow("compare " + (box.dir / "t.toml").string() + " --mode dem --out " +
+                         (box.dir / "x").string()),
             2);
 }
 
@@ -226,11 +229,11 @@ TEST(Cli, CompareRunsEachSeedInBothModesAndTheEqualStiffnessRun) {
   Sandbox box;
   const auto out = box.dir / "cmp";
   std::string log;
-  ASSERT_EQ(sandflow("compare " + box.write("t.toml", kTinyScene).string() +
-                         " --frames 8 --seeds 2 --equal-stiffness --set simulation.seed=5 "
-                         "--set camera.fov=1 --out " +
-                         out.string(),
-                     &log),
+  ASSERT_EQ(run_sandflow("compare " + box.write("t.toml", kTinyScene).string() +
+                             " --frames 8 --seeds 2 --equal-stiffness --set simulation.seed=5 "
+                             "--set camera.fov=1 --out " +
+                             out.string(),
+                         &log),
             0)
       << log;
   // the scene's warning once, not once for each of its five runs
@@ -295,8 +298,8 @@ TEST(Cli, CompareRunsEachSeedInBothModesAndTheEqualStiffnessRun) {
   EXPECT_EQ(j["speedup_min"], std::min(j["speedup_per_seed"][0], j["speedup_per_seed"][1]));
   EXPECT_EQ(j["speedup_max"], std::max(j["speedup_per_seed"][0], j["speedup_per_seed"][1]));
   EXPECT_NE(log.find("x by seed"), std::string::npos) << log;
-  EXPECT_EQ(sandflow("compare " + (box.dir / "t.toml").string() + " --seeds 0 --out " +
-                     (box.dir / "y").string()),
+  EXPECT_EQ(run_sandflow("compare " + (box.dir / "t.toml").string() + " --seeds 0 --out " +
+                         (box.dir / "y").string()),
             2);
 }
 
@@ -304,13 +307,15 @@ TEST(Cli, NonEmptyOutputFolderNeedsForce) {
   Sandbox box;
   const auto scene = box.write("t.toml", kTinyScene);
   const auto out = box.dir / "out";
-  ASSERT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 1 --out " + out.string()), 0);
+  ASSERT_EQ(run_sandflow("run " + scene.string() + " --mode dem --frames 1 --out " + out.string()),
+            0);
   std::string log;
-  EXPECT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 1 --out " + out.string(), &log),
-            2);
+  EXPECT_EQ(
+      run_sandflow("run " + scene.string() + " --mode dem --frames 1 --out " + out.string(), &log),
+      2);
   EXPECT_NE(log.find("--force"), std::string::npos) << log;
-  EXPECT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 1 --force --out " +
-                     out.string()),
+  EXPECT_EQ(run_sandflow("run " + scene.string() + " --mode dem --frames 1 --force --out " +
+                         out.string()),
             0);
 }
 
@@ -319,12 +324,12 @@ TEST(Cli, CompareForceReplacesAnEarlierComparison) {
   const auto scene = box.write("t.toml", kTinyScene);
   const std::string args =
       "compare " + scene.string() + " --frames 2 --out " + (box.dir / "cmp").string();
-  ASSERT_EQ(sandflow(args), 0);
+  ASSERT_EQ(run_sandflow(args), 0);
   std::string log;
-  EXPECT_EQ(sandflow(args, &log), 2);
+  EXPECT_EQ(run_sandflow(args, &log), 2);
   EXPECT_NE(log.find("--force"), std::string::npos) << log;
   // the earlier dem/ and surface/ are replaced, not refused
-  EXPECT_EQ(sandflow(args + " --force", &log), 0) << log;
+  EXPECT_EQ(run_sandflow(args + " --force", &log), 0) << log;
   EXPECT_TRUE(fs::exists(box.dir / "cmp" / "compare.json"));
   EXPECT_TRUE(fs::exists(box.dir / "cmp" / "surface" / "stats.csv"));
 }
@@ -332,14 +337,14 @@ TEST(Cli, CompareForceReplacesAnEarlierComparison) {
 TEST(Cli, CheckValidatesWithoutRunning) {
   Sandbox box;
   std::string log;
-  EXPECT_EQ(sandflow("run " + box.write("t.toml", kTinyScene).string() + " --check --grains 300",
-                     &log),
+  EXPECT_EQ(run_sandflow(
+                "run " + box.write("t.toml", kTinyScene).string() + " --check --grains 300", &log),
             0);
   EXPECT_NE(log.find("300 grains"), std::string::npos) << log;
   // a time step above the stable bound is refused with the bound
-  EXPECT_EQ(sandflow("run " + box.write("t2.toml", kTinyScene).string() +
-                         " --check --set simulation.dt=0.01",
-                     &log),
+  EXPECT_EQ(run_sandflow("run " + box.write("t2.toml", kTinyScene).string() +
+                             " --check --set simulation.dt=0.01",
+                         &log),
             2);
   EXPECT_NE(log.find("stable bound"), std::string::npos) << log;
 }
@@ -357,10 +362,10 @@ TEST(Cli, AnOverlapPastTheImpactLimitIsNamedWithTheSpeedThatHoldsIt) {
   const std::string run = "run " + scene.string() + " --mode dem --frames 12 --force --out " +
                           out.string() + " --export none";
   std::string log;
-  ASSERT_EQ(sandflow(run, &log), 0) << log;
+  ASSERT_EQ(run_sandflow(run, &log), 0) << log;
   EXPECT_EQ(log.find("passed stiffness.impact_overlap"), std::string::npos) << log;
 
-  ASSERT_EQ(sandflow(run + " --set stiffness.impact_speed=1", &log), 0) << log;
+  ASSERT_EQ(run_sandflow(run + " --set stiffness.impact_speed=1", &log), 0) << log;
   const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
   const double reached = summary["max_overlap_rel"].get<double>();
   EXPECT_GT(reached, 0.1);
@@ -374,7 +379,7 @@ TEST(Cli, AnOverlapPastTheImpactLimitIsNamedWithTheSpeedThatHoldsIt) {
   ASSERT_NE(at, std::string::npos) << log;
   const std::string speed =
       log.substr(at + key.size(), log.find(' ', at + key.size()) - at - key.size());
-  ASSERT_EQ(sandflow(run + " --set stiffness.impact_speed=" + speed, &log), 0) << log;
+  ASSERT_EQ(run_sandflow(run + " --set stiffness.impact_speed=" + speed, &log), 0) << log;
   EXPECT_LE(
       nlohmann::json::parse(std::ifstream(out / "summary.json"))["max_overlap_rel"].get<double>(),
       0.1);
@@ -394,14 +399,15 @@ TEST(Cli, APourThatFallsAsDiscsSaysSoAndTheSummaryRecordsItsLead) {
   };
   std::string log;
   const std::string slanted = scene("slanted.toml", "[0.5, 0, -1]", 1.05);
-  ASSERT_EQ(sandflow("run " + slanted + " --check", &log), 0) << log;
+  ASSERT_EQ(run_sandflow("run " + slanted + " --check", &log), 0) << log;
   EXPECT_NE(log.find("warning: " + slanted), std::string::npos) << log;
   EXPECT_NE(log.find("falls as discs"), std::string::npos) << log;
   EXPECT_NE(log.find("lets it fall as a stream"), std::string::npos) << log;
   EXPECT_NE(log.find("facing = \"velocity\" turns its area across its throw"), std::string::npos)
       << log;
   const auto out = box.dir / "out";
-  ASSERT_EQ(sandflow("run " + slanted + " --mode dem --frames 2 --out " + out.string(), &log), 0)
+  ASSERT_EQ(run_sandflow("run " + slanted + " --mode dem --frames 2 --out " + out.string(), &log),
+            0)
       << log;
   EXPECT_NE(log.find("falls as discs"), std::string::npos) << log;
   const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
@@ -409,7 +415,8 @@ TEST(Cli, APourThatFallsAsDiscsSaysSoAndTheSummaryRecordsItsLead) {
   // straight down: a whole stream, and nothing said
   const std::string straight = scene("straight.toml", "[0, 0, -1]", 1.05);
   const auto out2 = box.dir / "out2";
-  ASSERT_EQ(sandflow("run " + straight + " --mode dem --frames 2 --out " + out2.string(), &log), 0)
+  ASSERT_EQ(run_sandflow("run " + straight + " --mode dem --frames 2 --out " + out2.string(), &log),
+            0)
       << log;
   EXPECT_EQ(log.find("off the vertical"), std::string::npos) << log;
   EXPECT_EQ(
@@ -419,7 +426,8 @@ TEST(Cli, APourThatFallsAsDiscsSaysSoAndTheSummaryRecordsItsLead) {
   const std::string nozzle = scene("nozzle.toml", "[0.5, 0, -1]", 1.05);
   std::ofstream(nozzle, std::ios::app) << "facing = \"velocity\"\n";
   const auto out3 = box.dir / "out3";
-  ASSERT_EQ(sandflow("run " + nozzle + " --mode dem --frames 2 --out " + out3.string(), &log), 0)
+  ASSERT_EQ(run_sandflow("run " + nozzle + " --mode dem --frames 2 --out " + out3.string(), &log),
+            0)
       << log;
   EXPECT_EQ(log.find("off the vertical"), std::string::npos) << log;
   const auto emitter3 = nlohmann::json::parse(std::ifstream(out3 / "summary.json"))["emitters"][0];

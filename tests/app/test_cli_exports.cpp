@@ -22,11 +22,11 @@ namespace fs = std::filesystem;
 namespace {
 
 using sandflow_test::read_text;
+using sandflow_test::run_sandflow;
 using sandflow_test::Sandbox;
-using sandflow_test::sandflow;
 
 // 200 grains settling on a floor: a fraction of a second a run.
-const std::string kTinyScene = sandflow_test::tiny_block_scene(200);
+const std::string kExportScene = sandflow_test::tiny_block_scene(200);
 
 std::string frame(int n, const char* ext) {
   char buf[16];
@@ -36,13 +36,14 @@ std::string frame(int n, const char* ext) {
 
 TEST(CliExports, EveryFormatForEveryFrame) {
   Sandbox box;
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kExportScene);
   const auto out = box.dir / "out";
   std::string log;
-  ASSERT_EQ(sandflow("run " + scene.string() +
-                         " --frames 3 --export ply,vtk,geo,geo_gz,pov,csv --out " + out.string(),
-                     &log),
-            0)
+  ASSERT_EQ(
+      run_sandflow("run " + scene.string() +
+                       " --frames 3 --export ply,vtk,geo,geo_gz,pov,csv --out " + out.string(),
+                   &log),
+      0)
       << log;
   for (int n = 1; n <= 3; ++n)
     for (const char* ext : {".ply", ".vtk", ".vtp", ".pov", ".csv"})
@@ -88,10 +89,10 @@ TEST(CliExports, EveryFormatForEveryFrame) {
 
 TEST(CliExports, SurfaceModeWritesTheHeightFieldByDefaultAndDemSkipsIt) {
   Sandbox box;
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kExportScene);
   std::string log;
   const auto surf = box.dir / "surf";
-  ASSERT_EQ(sandflow("run " + scene.string() + " --frames 10 --out " + surf.string(), &log), 0)
+  ASSERT_EQ(run_sandflow("run " + scene.string() + " --frames 10 --out " + surf.string(), &log), 0)
       << log;
   for (const char* f : {"H_0001.png", "h_0001.png", "H_0010.png", "h_0010.png", "heightfield.json"})
     EXPECT_TRUE(fs::exists(surf / "heightfield" / f)) << f;
@@ -126,9 +127,9 @@ TEST(CliExports, SurfaceModeWritesTheHeightFieldByDefaultAndDemSkipsIt) {
 
   // plain DEM: the default has no height field; asking for it warns and writes none
   const auto dem = box.dir / "dem";
-  ASSERT_EQ(sandflow("run " + scene.string() + " --mode dem --frames 1 --export ply,height --out " +
-                         dem.string(),
-                     &log),
+  ASSERT_EQ(run_sandflow("run " + scene.string() +
+                             " --mode dem --frames 1 --export ply,height --out " + dem.string(),
+                         &log),
             0)
       << log;
   EXPECT_NE(log.find("warning:"), std::string::npos) << log;
@@ -139,16 +140,18 @@ TEST(CliExports, SurfaceModeWritesTheHeightFieldByDefaultAndDemSkipsIt) {
 
 TEST(CliExports, UpAxisYRotatesFramesAndMeasureStillSeesTheSceneFrame) {
   Sandbox box;
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kExportScene);
   std::string log_z, log_y;
   const auto z = box.dir / "z", y = box.dir / "y";
   ASSERT_EQ(
-      sandflow("run " + scene.string() + " --mode dem --frames 2 --out " + z.string(), &log_z), 0)
+      run_sandflow("run " + scene.string() + " --mode dem --frames 2 --out " + z.string(), &log_z),
+      0)
       << log_z;
-  ASSERT_EQ(sandflow("run " + scene.string() +
-                         " --mode dem --frames 2 --up-axis y --export ply,csv --out " + y.string(),
-                     &log_y),
-            0)
+  ASSERT_EQ(
+      run_sandflow("run " + scene.string() +
+                       " --mode dem --frames 2 --up-axis y --export ply,csv --out " + y.string(),
+                   &log_y),
+      0)
       << log_y;
   // the same run, written the other way up: read_ply gives the same grains back
   const auto fz = sandflow::read_ply((z / "frames" / "0002.ply").string());
@@ -165,35 +168,36 @@ TEST(CliExports, UpAxisYRotatesFramesAndMeasureStillSeesTheSceneFrame) {
   EXPECT_NEAR(cz, -fz.position[0].y, 1e-6);
   // measure reads the y-up frames as the scene's
   std::string mz, my;
-  ASSERT_EQ(sandflow("measure " + z.string(), &mz), 0) << mz;
-  ASSERT_EQ(sandflow("measure " + y.string(), &my), 0) << my;
+  ASSERT_EQ(run_sandflow("measure " + z.string(), &mz), 0) << mz;
+  ASSERT_EQ(run_sandflow("measure " + y.string(), &my), 0) << my;
   EXPECT_EQ(mz.substr(mz.find('\n')), my.substr(my.find('\n')));  // all but the file's name
 }
 
 TEST(CliExports, UnknownExportIsRefusedListingTheKnownOnesAndWritesNothing) {
   Sandbox box;
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kExportScene);
   const auto out = box.dir / "out";
   std::string log;
-  EXPECT_EQ(sandflow("run " + scene.string() + " --export ply,vtkk --out " + out.string(), &log),
-            2);
+  EXPECT_EQ(
+      run_sandflow("run " + scene.string() + " --export ply,vtkk --out " + out.string(), &log), 2);
   EXPECT_NE(log.find("--export ply,vtkk: unknown export \"vtkk\""), std::string::npos) << log;
   EXPECT_NE(log.find("ply, vtk, geo, geo_gz, pov, csv, height, height_obj"), std::string::npos)
       << log;
   EXPECT_FALSE(fs::exists(out));
-  EXPECT_EQ(sandflow("compare " + scene.string() + " --up-axis x --out " + out.string(), &log), 2);
+  EXPECT_EQ(run_sandflow("compare " + scene.string() + " --up-axis x --out " + out.string(), &log),
+            2);
   EXPECT_NE(log.find("--up-axis"), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(out));
 }
 
 TEST(CliExports, CompareAppliesTheChoiceToBothRuns) {
   Sandbox box;
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kExportScene);
   const auto out = box.dir / "cmp";
   std::string log;
-  ASSERT_EQ(sandflow("compare " + scene.string() + " --frames 1 --export csv,height --out " +
-                         out.string(),
-                     &log),
+  ASSERT_EQ(run_sandflow("compare " + scene.string() + " --frames 1 --export csv,height --out " +
+                             out.string(),
+                         &log),
             0)
       << log;
   for (const char* mode : {"surface", "dem"}) {

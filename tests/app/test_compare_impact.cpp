@@ -18,8 +18,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using sandflow_test::run_sandflow;
 using sandflow_test::Sandbox;
-using sandflow_test::sandflow;
 
 const fs::path kScene = fs::path(SANDFLOW_SOURCE_DIR) / "tests/data/scenes/impact_small.toml";
 constexpr double kD = 0.01;       // the scene's grain diameter [m]
@@ -39,7 +39,8 @@ TEST(CompareImpact, TheCraterOfEveryRunAndTheModesAgainstThePlainDemSpread) {
   const auto out = box.dir / "cmp";
   std::string log;
   ASSERT_EQ(
-      sandflow("compare " + kScene.string() + " --seeds 2 --threads 1 --out " + out.string(), &log),
+      run_sandflow("compare " + kScene.string() + " --seeds 2 --threads 1 --out " + out.string(),
+                   &log),
       0)
       << log;
   const auto j = nlohmann::json::parse(std::ifstream(out / "compare.json"));
@@ -134,7 +135,8 @@ TEST(CompareImpact, TheCraterOfEveryRunAndTheModesAgainstThePlainDemSpread) {
   // static grains (a surface run's frames hold only the visible ones)
   for (const auto& run : j["runs"]) {
     std::string m;
-    ASSERT_EQ(sandflow("measure " + (out / run["folder"].get<std::string>()).string(), &m), 0) << m;
+    ASSERT_EQ(run_sandflow("measure " + (out / run["folder"].get<std::string>()).string(), &m), 0)
+        << m;
     EXPECT_EQ(m.find("repose"), std::string::npos) << m;
     const auto& f = run["crater"];
     if (f["ok"].get<bool>()) {
@@ -155,9 +157,9 @@ TEST(CompareImpact, AFlatBedHasNoCraterAndSaysWhy) {
   Sandbox box;
   const auto out = box.dir / "cmp";
   std::string log;
-  ASSERT_EQ(sandflow("compare " + kScene.string() + " --seeds 1 --frames 1 --threads 1 --out " +
-                         out.string(),
-                     &log),
+  ASSERT_EQ(run_sandflow("compare " + kScene.string() + " --seeds 1 --frames 1 --threads 1 --out " +
+                             out.string(),
+                         &log),
             0)
       << log;
   const auto j = nlohmann::json::parse(std::ifstream(out / "compare.json"));
@@ -184,7 +186,7 @@ TEST(RunImpact, ABedSceneReportsNoAngleOfRepose) {
   sandflow_test::Sandbox box;
   const auto out = box.dir / "run";
   std::string log;
-  ASSERT_EQ(sandflow_test::sandflow(
+  ASSERT_EQ(sandflow_test::run_sandflow(
                 "run " + kScene.string() + " --frames 1 --threads 1 --out " + out.string(), &log),
             0)
       << log;

@@ -24,8 +24,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using sandflow_test::run_sandflow;
 using sandflow_test::Sandbox;
-using sandflow_test::sandflow;
 
 // A scene with the tiny block and one mesh entry (its keys after `file`).
 std::string mesh_scene(const std::string& file, const std::string& keys = "") {
@@ -35,7 +35,7 @@ std::string mesh_scene(const std::string& file, const std::string& keys = "") {
 
 // `sandflow ARGS`, bounded by `timeout 30` (124 when it ran out).
 int bounded(const std::string& args, std::string* log) {
-  return sandflow_test::sandflow(args, log, "timeout 30");
+  return sandflow_test::run_sandflow(args, log, "timeout 30");
 }
 
 // the log has "FILE:LINE:COL: WHAT" for some line and column (std::regex would do, but GCC 12

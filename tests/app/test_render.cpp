@@ -32,12 +32,12 @@ namespace fs = std::filesystem;
 namespace {
 
 using sandflow_test::read_text;
+using sandflow_test::run_sandflow;
 using sandflow_test::Sandbox;
-using sandflow_test::sandflow;
 using sandflow_test::tetrahedron_stl;
 
 // 300 grains in a block resting on a floor: three frames take a fraction of a second.
-const std::string kTinyScene = sandflow_test::tiny_block_scene(300, 24, 0.08, 0.08);
+const std::string kRenderScene = sandflow_test::tiny_block_scene(300, 24, 0.08, 0.08);
 
 struct Rgb {
   int width = 0, height = 0;
@@ -95,13 +95,13 @@ class Render : public ::testing::Test {
     if (sandflow::find_povray().empty()) GTEST_SKIP() << "povray is not installed";
   }
   // A tiny plain-DEM run of `frames` frames in box.dir/run.
-  fs::path tiny_run(int frames, const std::string& scene_text = kTinyScene) {
+  fs::path tiny_run(int frames, const std::string& scene_text = kRenderScene) {
     const auto scene = box.write("tiny.toml", scene_text);
     const auto out = box.dir / "run";
     std::string log;
-    EXPECT_EQ(sandflow("run " + scene.string() + " --mode dem --frames " + std::to_string(frames) +
-                           " --out " + out.string(),
-                       &log),
+    EXPECT_EQ(run_sandflow("run " + scene.string() + " --mode dem --frames " +
+                               std::to_string(frames) + " --out " + out.string(),
+                           &log),
               0)
         << log;
     return out;
@@ -112,9 +112,9 @@ class Render : public ::testing::Test {
 TEST_F(Render, FramesAreNotBlankAndShareOneCamera) {
   const fs::path run = tiny_run(4);
   std::string log;
-  ASSERT_EQ(sandflow("render " + run.string() +
-                         " --frames 1:3 --width 64 --height 48 --quality draft --keep-pov",
-                     &log),
+  ASSERT_EQ(run_sandflow("render " + run.string() +
+                             " --frames 1:3 --width 64 --height 48 --quality draft --keep-pov",
+                         &log),
             0)
       << log;
   for (const char* name : {"0001", "0002", "0003"}) {
@@ -144,7 +144,8 @@ TEST_F(Render, FramesAreNotBlankAndShareOneCamera) {
 TEST_F(Render, LastFrameByDefaultAndNoLeftovers) {
   const fs::path run = tiny_run(2);
   std::string log;
-  ASSERT_EQ(sandflow("render " + run.string() + " --width 32 --height 24 --quality draft", &log), 0)
+  ASSERT_EQ(
+      run_sandflow("render " + run.string() + " --width 32 --height 24 --quality draft", &log), 0)
       << log;
   // exactly the last frame's picture and the record of what it was made from: no .pov, no log,
   // no partial image
@@ -162,13 +163,13 @@ TEST_F(Render, APictureMadeFromTheSameInputIsKept) {
   const fs::path run = tiny_run(3);
   const std::string base = "render " + run.string() + " --frames all --quality draft ";
   std::string log;
-  ASSERT_EQ(sandflow(base + "--width 32 --height 24", &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base + "--width 32 --height 24", &log), 0) << log;
   EXPECT_EQ(log.find("kept"), std::string::npos) << log;
   const auto made_at = [&](int frame) {
     return fs::last_write_time(run / "render" / fmt::format("{:04d}.png", frame));
   };
   const auto first = made_at(1);
-  ASSERT_EQ(sandflow(base + "--width 32 --height 24", &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base + "--width 32 --height 24", &log), 0) << log;
   EXPECT_NE(log.find("render: 3 of 3 pictures kept, made earlier from the same scene, size and "
                      "quality (render/pictures.json; --again makes them anew)"),
             std::string::npos)
@@ -182,17 +183,17 @@ TEST_F(Render, APictureMadeFromTheSameInputIsKept) {
   const std::string whole = read_text(run / "render" / "0003.png");
   std::ofstream(run / "render" / "0003.png", std::ios::binary | std::ios::trunc)
       << whole.substr(0, whole.size() - 1);
-  ASSERT_EQ(sandflow(base + "--width 32 --height 24", &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base + "--width 32 --height 24", &log), 0) << log;
   EXPECT_NE(log.find("render: 1 of 3 pictures kept"), std::string::npos) << log;
   EXPECT_EQ(sandflow::png_problem((run / "render" / "0003.png").string()), "");
   // another size, or --again: all made anew
-  ASSERT_EQ(sandflow(base + "--width 32 --height 26", &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base + "--width 32 --height 26", &log), 0) << log;
   EXPECT_EQ(log.find("kept"), std::string::npos) << log;
-  ASSERT_EQ(sandflow(base + "--width 32 --height 26 --again", &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base + "--width 32 --height 26 --again", &log), 0) << log;
   EXPECT_EQ(log.find("kept"), std::string::npos) << log;
   // a record that is not one is warned of, and every picture made again
   std::ofstream(run / "render" / "pictures.json") << "[1, 2";
-  ASSERT_EQ(sandflow(base + "--width 32 --height 26", &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base + "--width 32 --height 26", &log), 0) << log;
   EXPECT_NE(log.find("pictures.json"), std::string::npos) << log;
   EXPECT_NE(log.find(": every picture is made again"), std::string::npos) << log;
   EXPECT_EQ(log.find("kept"), std::string::npos) << log;
@@ -202,20 +203,20 @@ TEST_F(Render, APictureMadeFromTheSameInputIsKept) {
 // even when the scene file has moved away (it said "pass it with --scene FILE") and whatever the
 // file now says (a --set floor was drawn where the file put it).
 TEST_F(Render, TheRunsOwnSceneIsDrawnFromItsRecord) {
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kRenderScene);
   const auto out = box.dir / "run";
   std::string log;
-  ASSERT_EQ(sandflow("run " + scene.string() +
-                         " --mode dem --frames 1 --set 'geometry.0.point=[0, 0, "
-                         "-0.0123]' --out " +
-                         out.string(),
-                     &log),
+  ASSERT_EQ(run_sandflow("run " + scene.string() +
+                             " --mode dem --frames 1 --set 'geometry.0.point=[0, 0, "
+                             "-0.0123]' --out " +
+                             out.string(),
+                         &log),
             0)
       << log;
   fs::remove(scene);
   ASSERT_EQ(
-      sandflow("render " + out.string() + " --width 32 --height 24 --quality draft --keep-pov",
-               &log),
+      run_sandflow("render " + out.string() + " --width 32 --height 24 --quality draft --keep-pov",
+                   &log),
       0)
       << log;
   const std::string pov = sandflow_test::read_text(out / "render" / "0001.pov");
@@ -227,7 +228,7 @@ TEST_F(Render, ATable1FolderNamesItsScenes) {
   fs::create_directories(box.dir / "t1" / "bowl" / "surface" / "frames");
   box.write("t1/table1.csv", "scene,total\n");
   std::string log;
-  EXPECT_EQ(sandflow("render " + (box.dir / "t1").string(), &log), 2) << log;
+  EXPECT_EQ(run_sandflow("render " + (box.dir / "t1").string(), &log), 2) << log;
   EXPECT_NE(log.find("a table1 folder: render each scene's comparison on its own (" +
                      (box.dir / "t1" / "bowl").string() + ")"),
             std::string::npos)
@@ -237,19 +238,19 @@ TEST_F(Render, ATable1FolderNamesItsScenes) {
 // POV-Ray splits its options at spaces and cannot open non-ASCII paths: a run folder whose path
 // has both renders all the same; a look_at a hair from the location is still a direction.
 TEST_F(Render, AFolderWithSpacesAndNonAsciiNamesRenders) {
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kRenderScene);
   const fs::path run = box.dir / "run dir" / "sable fin \u00fc";
   std::string log;
   ASSERT_EQ(
-      sandflow("run " + scene.string() + " --mode dem --frames 1 --out '" + run.string() + "'",
-               &log),
+      run_sandflow("run " + scene.string() + " --mode dem --frames 1 --out '" + run.string() + "'",
+                   &log),
       0)
       << log;
-  ASSERT_EQ(sandflow("render '" + run.string() +
-                         "' --width 32 --height 24 --quality draft --keep-pov --set "
-                         "'camera.position=[0.3,-0.3,1]' --set "
-                         "'camera.look_at=[0.3,-0.3,0.9999999999]' --set 'camera.up=[0,1,0]'",
-                     &log),
+  ASSERT_EQ(run_sandflow("render '" + run.string() +
+                             "' --width 32 --height 24 --quality draft --keep-pov --set "
+                             "'camera.position=[0.3,-0.3,1]' --set "
+                             "'camera.look_at=[0.3,-0.3,0.9999999999]' --set 'camera.up=[0,1,0]'",
+                         &log),
             0)
       << log;
   EXPECT_GT(read_rgb_png(run / "render" / "0001.png").width, 0);
@@ -270,13 +271,13 @@ TEST_F(Render, BadFramesAreRefusedNamingTheOption) {
                         {"1.5", "is not a frame number"}};
   for (const Case& c : cases) {
     std::string log;
-    EXPECT_EQ(sandflow(base + "--frames " + c.frames, &log), 2) << c.frames << "\n" << log;
+    EXPECT_EQ(run_sandflow(base + "--frames " + c.frames, &log), 2) << c.frames << "\n" << log;
     EXPECT_NE(log.find("--frames " + c.frames + ":"), std::string::npos) << log;
     EXPECT_NE(log.find(c.says), std::string::npos) << log;
   }
   std::string log;
-  EXPECT_EQ(sandflow(base + "--frames 2 --frame 2", &log), 2) << log;
-  EXPECT_EQ(sandflow(base + "--quality best", &log), 2) << log;
+  EXPECT_EQ(run_sandflow(base + "--frames 2 --frame 2", &log), 2) << log;
+  EXPECT_EQ(run_sandflow(base + "--quality best", &log), 2) << log;
   EXPECT_NE(log.find("--quality"), std::string::npos) << log;
   // nothing was rendered for a refused command
   EXPECT_FALSE(fs::exists(run / "render"));
@@ -287,10 +288,10 @@ TEST_F(Render, AFailedFrameIsNamedAndTheOthersAreKept) {
   // a folder where frame 2's picture should go: its render cannot be put in place
   fs::create_directories(run / "render" / "0002.png" / "blocker");
   std::string log;
-  EXPECT_EQ(sandflow("render " + run.string() +
-                         " --frames all --width 32 --height 24 "
-                         "--quality draft",
-                     &log),
+  EXPECT_EQ(run_sandflow("render " + run.string() +
+                             " --frames all --width 32 --height 24 "
+                             "--quality draft",
+                         &log),
             4)
       << log;
   EXPECT_NE(log.find("1 of 3 frames failed to render (frame 2)"), std::string::npos) << log;
@@ -330,8 +331,8 @@ TEST_F(Render, AStopSignalEndsThePovrayAtWorkAndKeepsThePicturesMade) {
   // the same command goes on from the pictures made
   const auto made = static_cast<int>(at_exit.size()) - 1;
   std::string again;
-  ASSERT_EQ(sandflow("render " + run.string() + " --frames all --width 640 --height 360", &again),
-            0)
+  ASSERT_EQ(
+      run_sandflow("render " + run.string() + " --frames all --width 640 --height 360", &again), 0)
       << again;
   EXPECT_NE(again.find(fmt::format("render: {} of 12 pictures kept", made)), std::string::npos)
       << again;
@@ -408,7 +409,7 @@ TEST_F(Render, ASecondRenderOfTheSameRunIsRefusedNotMixedIn) {
   const pid_t first = sandflow_test::spawn(args, log);
   ASSERT_FALSE(first_children_of(first).empty()) << read_text(log);
   std::string second;
-  EXPECT_EQ(sandflow(args, &second), 2) << second;
+  EXPECT_EQ(run_sandflow(args, &second), 2) << second;
   EXPECT_NE(second.find(held_by_render(run, first)), std::string::npos) << second;
   EXPECT_EQ(sandflow_test::wait_for(first), 0) << read_text(log);
   for (int frame = 1; frame <= 3; ++frame)
@@ -426,7 +427,7 @@ TEST_F(Render, ASecondReportOfTheSameRunIsRefusedWhileTheFirstRenders) {
   const pid_t first = sandflow_test::spawn(args, log);
   ASSERT_FALSE(first_children_of(first).empty()) << read_text(log);
   std::string second;
-  EXPECT_EQ(sandflow(args, &second), 2) << second;
+  EXPECT_EQ(run_sandflow(args, &second), 2) << second;
   EXPECT_NE(second.find(held_by_render(run, first)), std::string::npos) << second;
   EXPECT_NE(second.find("wait for it to end or stop it, then report again"), std::string::npos)
       << second;
@@ -448,9 +449,9 @@ TEST_F(Render, ARunForcedOverARunThatRendersIsRefused) {
       box.dir / "render.log");
   ASSERT_FALSE(first_children_of(render).empty()) << read_text(box.dir / "render.log");
   std::string log;
-  EXPECT_EQ(sandflow("run " + (box.dir / "tiny.toml").string() +
-                         " --mode dem --frames 3 --force --out " + run.string(),
-                     &log),
+  EXPECT_EQ(run_sandflow("run " + (box.dir / "tiny.toml").string() +
+                             " --mode dem --frames 3 --force --out " + run.string(),
+                         &log),
             2)
       << log;
   EXPECT_NE(log.find(held_by_render(run, render)), std::string::npos) << log;
@@ -483,13 +484,13 @@ TEST_F(Render, AStopSignalWhileTheReportRendersStopsTheReport) {
 TEST_F(Render, AReportRendersAgainAPictureCutShort) {
   const fs::path run = tiny_run(2);
   std::string log;
-  ASSERT_EQ(sandflow("report " + run.string() + " --contact-sheet 2", &log), 0) << log;
+  ASSERT_EQ(run_sandflow("report " + run.string() + " --contact-sheet 2", &log), 0) << log;
   const fs::path picture = run / "render" / "0002.png";
   const std::string whole = read_text(picture);
   ASSERT_GT(whole.size(), 100u);
   std::ofstream(picture, std::ios::binary | std::ios::trunc) << whole.substr(0, whole.size() / 2);
   ASSERT_NE(sandflow::png_problem(picture.string()), "");
-  ASSERT_EQ(sandflow("report " + run.string() + " --contact-sheet 2", &log), 0) << log;
+  ASSERT_EQ(run_sandflow("report " + run.string() + " --contact-sheet 2", &log), 0) << log;
   EXPECT_NE(log.find("report: rendering " + run.string() + " frame 2 at 480x270"),
             std::string::npos)
       << log;
@@ -508,7 +509,8 @@ TEST_F(Render, AFullDiskIsSaidNotLeftToPovraysCutLog) {
   // 700 kB left: room for the picture (about 45 kB) and its log, not for the state file (1.6 MB)
   ASSERT_TRUE(disk.fill_to(700'000));
   std::string log;
-  EXPECT_EQ(sandflow("render " + (small / "run").string() + " --width 320 --height 240", &log), 4)
+  EXPECT_EQ(run_sandflow("render " + (small / "run").string() + " --width 320 --height 240", &log),
+            4)
       << log;
   EXPECT_NE(log.find("0001.png: cannot render: the disk holding " +
                      (small / "run" / "render").string() + " has "),
@@ -523,7 +525,8 @@ TEST_F(Render, AFullDiskIsSaidNotLeftToPovraysCutLog) {
     EXPECT_EQ(e.path().string().find("partial"), std::string::npos) << e.path();
   // with room made, the same command renders the picture
   fs::remove(disk.filler());
-  EXPECT_EQ(sandflow("render " + (small / "run").string() + " --width 320 --height 240", &log), 0)
+  EXPECT_EQ(run_sandflow("render " + (small / "run").string() + " --width 320 --height 240", &log),
+            0)
       << log;
   EXPECT_TRUE(fs::exists(small / "run" / "render" / "0001.png"));
 }
@@ -537,9 +540,9 @@ TEST_F(Render, UnderAMemoryLimitFewerRunAtOnceAndNoneIsKilled) {
   if (!group.ready()) GTEST_SKIP() << group.why_not();
   const fs::path run = tiny_run(4);
   std::string log;
-  ASSERT_EQ(sandflow("render " + run.string() +
-                         " --frames all --jobs 4 --width 1600 --height 1200 --quality draft",
-                     &log, group.wrapper()),
+  ASSERT_EQ(run_sandflow("render " + run.string() +
+                             " --frames all --jobs 4 --width 1600 --height 1200 --quality draft",
+                         &log, group.wrapper()),
             0)
       << log;
   const std::size_t said = log.find("render: a picture takes up to ");
@@ -558,14 +561,14 @@ TEST_F(Render, UnderAMemoryLimitFewerRunAtOnceAndNoneIsKilled) {
 }
 
 TEST_F(Render, SceneCameraIsUsed) {
-  std::string text = kTinyScene;
+  std::string text = kRenderScene;
   text += "[camera]\nposition = [0.4, -0.5, 0.3]\nlook_at = [0, 0, 0.05]\nfov = 30\n";
   const fs::path run = tiny_run(1, text);
   std::string log;
-  ASSERT_EQ(sandflow("render " + run.string() +
-                         " --width 32 --height 24 --quality draft "
-                         "--keep-pov",
-                     &log),
+  ASSERT_EQ(run_sandflow("render " + run.string() +
+                             " --width 32 --height 24 --quality draft "
+                             "--keep-pov",
+                         &log),
             0)
       << log;
   const std::string pov = read_text(run / "render" / "0001.pov");
@@ -579,29 +582,32 @@ TEST_F(Render, SceneCameraIsUsed) {
 // camera or drawn otherwise is not.
 TEST_F(Render, ASceneOtherThanTheRunsIsWarnedOf) {
   const fs::path run = tiny_run(1);
-  std::string other = kTinyScene;
+  std::string other = kRenderScene;
   other.replace(other.find("name = \"tiny\""), 13, "name = \"bin\"");
   other += "[[geometry]]\ntype = \"box\"\ncenter = [0.5, 0.0, 0.1]\nsize = [0.1, 0.1, 0.2]\n";
   const std::string base = "render " + run.string() + " --width 32 --height 24 --quality draft ";
   std::string log;
-  ASSERT_EQ(sandflow(base + "--scene " + box.write("bin.toml", other).string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base + "--scene " + box.write("bin.toml", other).string(), &log), 0)
+      << log;
   EXPECT_NE(log.find("is the scene 'bin' with 2 [[geometry]] tables; " + run.string() +
                      " ran 'tiny' with 1 [[geometry]] table (its run.json)"),
             std::string::npos)
       << log;
   const std::string camera =
-      kTinyScene + "[camera]\nposition = [0.4, -0.5, 0.3]\nlook_at = [0, 0, 0.05]\n";
-  ASSERT_EQ(sandflow(base + "--scene " + box.write("moved.toml", camera).string(), &log), 0) << log;
+      kRenderScene + "[camera]\nposition = [0.4, -0.5, 0.3]\nlook_at = [0, 0, 0.05]\n";
+  ASSERT_EQ(run_sandflow(base + "--scene " + box.write("moved.toml", camera).string(), &log), 0)
+      << log;
   EXPECT_EQ(log.find("warning"), std::string::npos) << log;
   // the same scene with its floor drawn as glass is the same solid; raised by a centimetre, not
-  std::string glass = kTinyScene;
+  std::string glass = kRenderScene;
   glass.replace(glass.find("type = \"plane\""), 14, "type = \"plane\"\nrender = \"glass\"");
-  ASSERT_EQ(sandflow(base + "--scene " + box.write("glass.toml", glass).string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base + "--scene " + box.write("glass.toml", glass).string(), &log), 0)
+      << log;
   EXPECT_EQ(log.find("warning"), std::string::npos) << log;
-  std::string raised = kTinyScene;
+  std::string raised = kRenderScene;
   raised.replace(raised.find("type = \"plane\""), 14, "type = \"plane\"\npoint = [0, 0, 0.01]");
   const fs::path raised_file = box.write("raised.toml", raised);
-  ASSERT_EQ(sandflow(base + "--scene " + raised_file.string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base + "--scene " + raised_file.string(), &log), 0) << log;
   EXPECT_NE(log.find("warning: --scene " + raised_file.string() +
                      ": [[geometry]] table 0 ('geometry 0') is not the solid " + run.string() +
                      " ran (its run.json)"),
@@ -616,22 +622,22 @@ TEST_F(Render, AMeshFileEditedSinceTheRunIsWarnedOf) {
   const std::string mesh =
       "[[geometry]]\ntype = \"mesh\"\nname = \"tet\"\nfile = \"tet.stl\"\n"
       "position = [0.3, 0.0, 0.0]\n";
-  const fs::path run = tiny_run(1, kTinyScene + mesh);
+  const fs::path run = tiny_run(1, kRenderScene + mesh);
   const std::string base = "render " + run.string() + " --width 32 --height 24 --quality draft";
   std::string log;
-  ASSERT_EQ(sandflow(base, &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base, &log), 0) << log;
   EXPECT_EQ(log.find("warning"), std::string::npos) << log;
   // the same mesh elsewhere, named otherwise, drawn by --scene: the same solid
   fs::create_directories(box.dir / "elsewhere");
   box.write("elsewhere/copy.stl", tetrahedron_stl(0.1));
-  std::string moved = kTinyScene + mesh;
+  std::string moved = kRenderScene + mesh;
   moved.replace(moved.find("tet.stl"), 7, "copy.stl");
   const fs::path moved_scene = box.write("elsewhere/tiny.toml", moved);
-  ASSERT_EQ(sandflow(base + " --scene " + moved_scene.string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base + " --scene " + moved_scene.string(), &log), 0) << log;
   EXPECT_EQ(log.find("warning"), std::string::npos) << log;
   // the run's own mesh file edited: its apex 2 cm higher
   box.write("tet.stl", tetrahedron_stl(0.12));
-  ASSERT_EQ(sandflow(base, &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base, &log), 0) << log;
   const std::string edited =
       "warning: [[geometry]] table 1 ('tet'): its mesh tet.stl is not the "
       "one " +
@@ -639,43 +645,45 @@ TEST_F(Render, AMeshFileEditedSinceTheRunIsWarnedOf) {
   EXPECT_NE(log.find(edited), std::string::npos) << log;
   // a run without its summary.json (stopped, killed or still going): its run.json's record
   fs::remove(run / "summary.json");
-  ASSERT_EQ(sandflow(base, &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base, &log), 0) << log;
   EXPECT_NE(log.find(edited), std::string::npos) << log;
   box.write("tet.stl", tetrahedron_stl(0.1));
-  ASSERT_EQ(sandflow(base, &log), 0) << log;
+  ASSERT_EQ(run_sandflow(base, &log), 0) << log;
   EXPECT_EQ(log.find("warning: [[geometry]]"), std::string::npos) << log;
 }
 
 TEST_F(Render, SetChangesTheLookOnly) {
   const fs::path run = tiny_run(1);
   std::string log;
-  ASSERT_EQ(sandflow("render " + run.string() +
-                         " --width 32 --height 24 --quality draft "
-                         "--keep-pov --set camera.fov=25 --set geometry.0.render=hidden",
-                     &log),
+  ASSERT_EQ(run_sandflow("render " + run.string() +
+                             " --width 32 --height 24 --quality draft "
+                             "--keep-pov --set camera.fov=25 --set geometry.0.render=hidden",
+                         &log),
             0)
       << log;
   const std::string pov = read_text(run / "render" / "0001.pov");
   EXPECT_NE(pov.find("angle 25"), std::string::npos);
   EXPECT_EQ(pov.find("// geometry 0"), std::string::npos);  // the floor plane, hidden
   // what the grains met is not render's to change
-  EXPECT_EQ(sandflow("render " + run.string() + " --set material.friction=1", &log), 2) << log;
+  EXPECT_EQ(run_sandflow("render " + run.string() + " --set material.friction=1", &log), 2) << log;
   EXPECT_NE(log.find("--set material.friction=1: render takes only camera.KEY and "
                      "geometry.N.render"),
             std::string::npos)
       << log;
-  EXPECT_EQ(sandflow("render " + run.string() + " --set geometry.0.point=[0,0,1]", &log), 2) << log;
+  EXPECT_EQ(run_sandflow("render " + run.string() + " --set geometry.0.point=[0,0,1]", &log), 2)
+      << log;
   // and a bad look value is a scene error, named
-  EXPECT_EQ(sandflow("render " + run.string() + " --set camera.fov=0", &log), 2) << log;
+  EXPECT_EQ(run_sandflow("render " + run.string() + " --set camera.fov=0", &log), 2) << log;
   EXPECT_NE(log.find("--set camera.fov: camera.fov = 0 is outside (0, 180)"), std::string::npos)
       << log;
 }
 
 TEST_F(Render, ComparisonFolderGetsOneCameraForBothRuns) {
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kRenderScene);
   const auto out = box.dir / "cmp";
   std::string log;
-  ASSERT_EQ(sandflow("compare " + scene.string() + " --frames 2 --out " + out.string(), &log), 0)
+  ASSERT_EQ(run_sandflow("compare " + scene.string() + " --frames 2 --out " + out.string(), &log),
+            0)
       << log;
   // The two runs of so short a comparison are alike: lift the DEM run's grains, so that each
   // run alone would be framed differently.
@@ -684,8 +692,8 @@ TEST_F(Render, ComparisonFolderGetsOneCameraForBothRuns) {
   for (auto& p : f.position) p.z += 0.2;
   sandflow::write_ply(dem_last, f);
   ASSERT_EQ(
-      sandflow("render " + out.string() + " --width 32 --height 24 --quality draft --keep-pov",
-               &log),
+      run_sandflow("render " + out.string() + " --width 32 --height 24 --quality draft --keep-pov",
+                   &log),
       0)
       << log;
   const fs::path s = out / "surface" / "render", d = out / "dem" / "render";
@@ -702,9 +710,9 @@ TEST_F(Render, AMovieAloneTakesEveryFrame) {
     GTEST_SKIP() << "ffmpeg is not installed (sudo apt-get install ffmpeg)";
   const fs::path run = tiny_run(3);
   std::string log;
-  ASSERT_EQ(
-      sandflow("render " + run.string() + " --width 32 --height 24 --quality draft --movie", &log),
-      0)
+  ASSERT_EQ(run_sandflow(
+                "render " + run.string() + " --width 32 --height 24 --quality draft --movie", &log),
+            0)
       << log;
   for (int frame = 1; frame <= 3; ++frame)
     EXPECT_TRUE(fs::is_regular_file(run / "render" / fmt::format("{:04d}.png", frame))) << frame;
@@ -717,10 +725,10 @@ TEST_F(Render, MovieOfTheFrames) {
   const fs::path run = tiny_run(4);
   std::string log;
   // odd sizes: yuv420p needs even ones, the movie is padded
-  ASSERT_EQ(sandflow("render " + run.string() +
-                         " --frames 2:4 --width 33 --height 25 "
-                         "--quality draft --movie",
-                     &log),
+  ASSERT_EQ(run_sandflow("render " + run.string() +
+                             " --frames 2:4 --width 33 --height 25 "
+                             "--quality draft --movie",
+                         &log),
             0)
       << log;
   const fs::path mp4 = run / "render" / "movie.mp4";
@@ -749,14 +757,15 @@ TEST_F(Render, MovieOfTheFrames) {
 TEST_F(Render, ComparisonMovieHasBothRunsSideBySide) {
   if (sandflow::find_program("ffmpeg").empty() || sandflow::find_program("ffprobe").empty())
     GTEST_SKIP() << "ffmpeg is not installed (sudo apt-get install ffmpeg)";
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kRenderScene);
   const auto out = box.dir / "cmp";
   std::string log;
-  ASSERT_EQ(sandflow("compare " + scene.string() + " --frames 1 --out " + out.string(), &log), 0)
+  ASSERT_EQ(run_sandflow("compare " + scene.string() + " --frames 1 --out " + out.string(), &log),
+            0)
       << log;
-  ASSERT_EQ(sandflow("render " + out.string() +
-                         " --frames all --width 32 --height 24 --quality draft --movie",
-                     &log),
+  ASSERT_EQ(run_sandflow("render " + out.string() +
+                             " --frames all --width 32 --height 24 --quality draft --movie",
+                         &log),
             0)
       << log;
   EXPECT_TRUE(fs::is_regular_file(out / "surface" / "render" / "movie.mp4")) << log;
@@ -788,7 +797,7 @@ TEST_F(Render, WithoutFfmpegTheFramesAreRenderedAndTheMessageSaysHowToInstallIt)
   const char* path_env = std::getenv("PATH");
   const std::string saved = path_env ? path_env : "";
   ::setenv("PATH", bin.c_str(), 1);
-  const int rc = sandflow(cmd, &log);
+  const int rc = run_sandflow(cmd, &log);
   ::setenv("PATH", saved.c_str(), 1);
   EXPECT_EQ(rc, 2) << log;
   EXPECT_NE(log.find("sudo apt-get install ffmpeg"), std::string::npos) << log;

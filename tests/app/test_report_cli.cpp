@@ -15,21 +15,21 @@ namespace {
 using sandflow_test::html_problem;
 using sandflow_test::polylines;
 using sandflow_test::read_text;
+using sandflow_test::run_sandflow;
 using sandflow_test::Sandbox;
-using sandflow_test::sandflow;
 using sandflow_test::section_of;
 
 // 300 grains dropped a few centimetres onto a floor: a second of work per run
-const std::string kTinyScene = sandflow_test::tiny_block_scene(300);
+const std::string kReportScene = sandflow_test::tiny_block_scene(300);
 
 }  // namespace
 
 TEST(ReportCli, TinyRunReportHasEverySection) {
   Sandbox box;
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kReportScene);
   const auto out = box.dir / "run";
   std::string log;
-  ASSERT_EQ(sandflow("run " + scene.string() + " --frames 4 --out " + out.string(), &log), 0)
+  ASSERT_EQ(run_sandflow("run " + scene.string() + " --frames 4 --out " + out.string(), &log), 0)
       << log;
   // the run wrote its report already, and said where
   EXPECT_TRUE(fs::exists(out / "report.html"));
@@ -37,7 +37,7 @@ TEST(ReportCli, TinyRunReportHasEverySection) {
       << log;
   fs::remove(out / "report.html");
 
-  ASSERT_EQ(sandflow("report " + out.string() + " --no-render", &log), 0) << log;
+  ASSERT_EQ(run_sandflow("report " + out.string() + " --no-render", &log), 0) << log;
   EXPECT_NE(log.find((out / "report.html").string()), std::string::npos) << log;
   const std::string html = read_text(out / "report.html");
   EXPECT_EQ(html_problem(html), "");
@@ -58,16 +58,16 @@ TEST(ReportCli, TinyRunReportHasEverySection) {
 
 TEST(ReportCli, TinyCompareReportHasBothModes) {
   Sandbox box;
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kReportScene);
   const auto out = box.dir / "cmp";
   std::string log;
-  ASSERT_EQ(sandflow("compare " + scene.string() + " --frames 3 --grains 200 --out " +
-                         out.string(),
-                     &log),
-            0)
+  ASSERT_EQ(
+      run_sandflow("compare " + scene.string() + " --frames 3 --grains 200 --out " + out.string(),
+                   &log),
+      0)
       << log;
   EXPECT_NE(log.find((out / "report.html").string()), std::string::npos) << log;
-  ASSERT_EQ(sandflow("report " + out.string() + " --no-render", &log), 0) << log;
+  ASSERT_EQ(run_sandflow("report " + out.string() + " --no-render", &log), 0) << log;
   const std::string html = read_text(out / "report.html");
   EXPECT_EQ(html_problem(html), "");
   for (const char* id : {"summary", "speedup", "plots", "final-frames", "contact-sheet"})
@@ -90,7 +90,7 @@ TEST(ReportCli, TinyCompareReportHasBothModes) {
   EXPECT_NE(html.find("href=\"dem/report.html\""), std::string::npos);
   // a run of the comparison deleted since: named as the comparison's, with the way back
   fs::remove_all(out / "dem");
-  EXPECT_EQ(sandflow("report " + out.string() + " --no-render", &log), 2) << log;
+  EXPECT_EQ(run_sandflow("report " + out.string() + " --no-render", &log), 2) << log;
   EXPECT_NE(log.find(out.string() + ": the comparison's plain-DEM run is missing"),
             std::string::npos)
       << log;
@@ -104,13 +104,13 @@ TEST(ReportCli, MissingOrBrokenInputsExitTwoNamingTheFile) {
   const auto run = box.dir / "run";
   fs::create_directories(run);
   box.write("run/summary.json", "{\"scene\": \"x\"}");
-  EXPECT_EQ(sandflow("report " + run.string(), &log), 2) << log;
+  EXPECT_EQ(run_sandflow("report " + run.string(), &log), 2) << log;
   EXPECT_NE(log.find((run / "stats.csv").string()), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(run / "report.html"));
   // a comparison stopped before its compare.json: how to finish it
   fs::create_directories(box.dir / "cmp");
   box.write("cmp/compare_plan.json", "{\"seeds\": 2, \"equal_stiffness\": false}");
-  EXPECT_EQ(sandflow("report " + (box.dir / "cmp").string(), &log), 2) << log;
+  EXPECT_EQ(run_sandflow("report " + (box.dir / "cmp").string(), &log), 2) << log;
   EXPECT_NE(log.find("a comparison that did not finish (no compare.json yet): go on with it with "
                      "sandflow compare --resume"),
             std::string::npos)
@@ -123,7 +123,7 @@ TEST(ReportCli, MissingOrBrokenInputsExitTwoNamingTheFile) {
             "1,0.03,10,1e-4,5,5,0,0,0,0,0,0,1,0,0,0,0,0,0.01\n"
             "2,0.06,10,1e-4,5\n"
             "3,0.10,10,1e-4,5,5,0,0,0,0,0,0,1,0,0,0,0,0,0.01\n");
-  EXPECT_EQ(sandflow("report " + run.string(), &log), 2) << log;
+  EXPECT_EQ(run_sandflow("report " + run.string(), &log), 2) << log;
   EXPECT_NE(log.find((run / "stats.csv").string() + ":3:"), std::string::npos) << log;
   // a summary that is not JSON
   box.write("run/stats.csv",
@@ -131,31 +131,31 @@ TEST(ReportCli, MissingOrBrokenInputsExitTwoNamingTheFile) {
             "max_overlap_rel,kinetic_energy,rebuilds,trapped,dislodged,slept,woken,"
             "surface_updates,wall_seconds\n");
   box.write("run/summary.json", "{\"scene\": ");
-  EXPECT_EQ(sandflow("report " + run.string(), &log), 2) << log;
+  EXPECT_EQ(run_sandflow("report " + run.string(), &log), 2) << log;
   EXPECT_NE(log.find((run / "summary.json").string() + ": not valid JSON"), std::string::npos)
       << log;
   // not a run folder at all, and no folder
   fs::create_directories(box.dir / "empty");
-  EXPECT_EQ(sandflow("report " + (box.dir / "empty").string(), &log), 2) << log;
+  EXPECT_EQ(run_sandflow("report " + (box.dir / "empty").string(), &log), 2) << log;
   EXPECT_NE(log.find("not a run folder"), std::string::npos) << log;
-  EXPECT_EQ(sandflow("report " + (box.dir / "nowhere").string(), &log), 2) << log;
+  EXPECT_EQ(run_sandflow("report " + (box.dir / "nowhere").string(), &log), 2) << log;
   EXPECT_NE(log.find("no such folder"), std::string::npos) << log;
-  EXPECT_EQ(sandflow("report " + run.string() + " --contact-sheet -1", &log), 2) << log;
+  EXPECT_EQ(run_sandflow("report " + run.string() + " --contact-sheet -1", &log), 2) << log;
 }
 
 TEST(ReportCli, ContactSheetIsRenderedWithPovray) {
   if (std::system("command -v povray > /dev/null 2>&1") != 0)
     GTEST_SKIP() << "povray is not installed";
   Sandbox box;
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kReportScene);
   const auto out = box.dir / "run";
   std::string log;
-  ASSERT_EQ(sandflow("run " + scene.string() + " --frames 3 --grains 50 --out " + out.string(),
-                     &log),
-            0)
+  ASSERT_EQ(
+      run_sandflow("run " + scene.string() + " --frames 3 --grains 50 --out " + out.string(), &log),
+      0)
       << log;
   // one picture (a second of POV-Ray): the last frame
-  ASSERT_EQ(sandflow("report " + out.string() + " --contact-sheet 1", &log), 0) << log;
+  ASSERT_EQ(run_sandflow("report " + out.string() + " --contact-sheet 1", &log), 0) << log;
   EXPECT_TRUE(fs::exists(out / "render" / "0003.png"));
   const std::string html = read_text(out / "report.html");
   EXPECT_EQ(html_problem(html), "");
@@ -163,7 +163,7 @@ TEST(ReportCli, ContactSheetIsRenderedWithPovray) {
   EXPECT_EQ(sandflow_test::occurrences(sheet, "<img src=\"data:image/png;base64,"), 1u);
   EXPECT_NE(sheet.find("frame 3"), std::string::npos);
   // --no-render now shows the picture already there
-  ASSERT_EQ(sandflow("report " + out.string() + " --no-render", &log), 0) << log;
+  ASSERT_EQ(run_sandflow("report " + out.string() + " --no-render", &log), 0) << log;
   EXPECT_EQ(sandflow_test::occurrences(read_text(out / "report.html"), "<img "), 1u);
 }
 
@@ -172,13 +172,13 @@ TEST(ReportCli, Table1FolderGetsAnIndexOfTheScenesReports) {
   const auto out = box.dir / "t1";
   std::string log;
   // the floor at a hundredth of the paper's count (1,077 grains), two frames per mode
-  ASSERT_EQ(sandflow("table1 --scale 0.01 --frames 2 --scenes floor --out " + out.string() +
-                         " --scene-dir " + SANDFLOW_SOURCE_DIR + "/scenes",
-                     &log),
+  ASSERT_EQ(run_sandflow("table1 --scale 0.01 --frames 2 --scenes floor --out " + out.string() +
+                             " --scene-dir " + SANDFLOW_SOURCE_DIR + "/scenes",
+                         &log),
             0)
       << log;
   EXPECT_TRUE(fs::exists(out / "floor" / "report.html"));  // compare_scene writes it
-  ASSERT_EQ(sandflow("report " + out.string() + " --no-render", &log), 0) << log;
+  ASSERT_EQ(run_sandflow("report " + out.string() + " --no-render", &log), 0) << log;
   const std::string html = read_text(out / "report.html");
   EXPECT_EQ(html_problem(html), "");
   for (const char* id : {"summary", "scenes"})
@@ -189,29 +189,29 @@ TEST(ReportCli, Table1FolderGetsAnIndexOfTheScenesReports) {
   // a row of table1.csv cut short: the file and the line
   const std::string csv = read_text(out / "table1.csv");
   box.write("t1/table1.csv", csv + "bowl,3181,12\n");
-  EXPECT_EQ(sandflow("report " + out.string() + " --no-render", &log), 2) << log;
+  EXPECT_EQ(run_sandflow("report " + out.string() + " --no-render", &log), 2) << log;
   EXPECT_NE(log.find((out / "table1.csv").string() + ":3: 3 fields"), std::string::npos) << log;
   // a scene named as a path out of the folder: report wrote that folder's report.html
   const std::size_t row = csv.find('\n') + 1;  // floor,...
   box.write("t1/table1.csv", csv.substr(0, row) + "../run" + csv.substr(csv.find(',', row)));
-  EXPECT_EQ(sandflow("report " + out.string() + " --no-render", &log), 2) << log;
+  EXPECT_EQ(run_sandflow("report " + out.string() + " --no-render", &log), 2) << log;
   EXPECT_NE(log.find(":2: scene '../run' is not the name of a folder in"), std::string::npos)
       << log;
 }
 
 TEST(ReportCli, WithoutPovrayTheSheetSaysHowToGetIt) {
   Sandbox box;
-  const auto scene = box.write("tiny.toml", kTinyScene);
+  const auto scene = box.write("tiny.toml", kReportScene);
   const auto out = box.dir / "run";
   std::string log;
-  ASSERT_EQ(sandflow("run " + scene.string() + " --frames 2 --grains 50 --out " + out.string(),
-                     &log),
-            0)
+  ASSERT_EQ(
+      run_sandflow("run " + scene.string() + " --frames 2 --grains 50 --out " + out.string(), &log),
+      0)
       << log;
   // a PATH without povray (the binary itself is called by its full path)
   const std::string path = std::getenv("PATH") ? std::getenv("PATH") : "";
   setenv("PATH", (box.dir / "no-such-bin").c_str(), 1);
-  const int rc = sandflow("report " + out.string(), &log);
+  const int rc = run_sandflow("report " + out.string(), &log);
   setenv("PATH", path.c_str(), 1);
   ASSERT_EQ(rc, 0) << log;
   const std::string sheet = section_of(read_text(out / "report.html"), "contact-sheet");

@@ -30,8 +30,8 @@ namespace fs = std::filesystem;
 namespace {
 
 using sandflow_test::read_text;
+using sandflow_test::run_sandflow;
 using sandflow_test::Sandbox;
-using sandflow_test::sandflow;
 using sandflow_test::spawn;
 using sandflow_test::tetrahedron_stl;
 using sandflow_test::wait_for;
@@ -141,7 +141,7 @@ constexpr const char* kComparisonRuns[] = {"surface", "dem", "seed-2/surface", "
 
 /// Runs that comparison straight into `out`; its exit status.
 int compare_straight(const Sandbox& box, const fs::path& out, std::string& log) {
-  return sandflow(
+  return run_sandflow(
       fmt::format("compare {} --frames {} {} --out {}", (box.dir / "pour.toml").string(), kFrames,
                   kComparisonOptions, out.string()),
       &log);
@@ -158,9 +158,9 @@ fs::path straight_run(const Sandbox& box, double* seconds = nullptr) {
   const fs::path out = box.dir / "straight";
   const auto t0 = std::chrono::steady_clock::now();
   std::string log;
-  EXPECT_EQ(sandflow(fmt::format("run {} --frames {} --out {}", (box.dir / "pour.toml").string(),
-                                 kFrames, out.string()),
-                     &log),
+  EXPECT_EQ(run_sandflow(fmt::format("run {} --frames {} --out {}",
+                                     (box.dir / "pour.toml").string(), kFrames, out.string()),
+                         &log),
             0)
       << log;
   if (seconds)
@@ -192,14 +192,14 @@ TEST(Resume, SigintFinishesTheFrameCheckpointsAndSaysHowToResume) {
   EXPECT_FALSE(fs::exists(out / "summary.json"));
   // the command it printed
   std::string resumed;
-  ASSERT_EQ(sandflow("run --resume " + out.string(), &resumed), 0) << resumed;
+  ASSERT_EQ(run_sandflow("run --resume " + out.string(), &resumed), 0) << resumed;
   EXPECT_NE(resumed.find(fmt::format("resuming {} from its checkpoint at frame {}", out.string(),
                                      frame)),
             std::string::npos)
       << resumed;
   expect_same_run(want, out);
   // and a finished run says so
-  EXPECT_EQ(sandflow("run --resume " + out.string(), &resumed), 0);
+  EXPECT_EQ(run_sandflow("run --resume " + out.string(), &resumed), 0);
   EXPECT_NE(resumed.find("this run is finished"), std::string::npos) << resumed;
 }
 
@@ -215,7 +215,7 @@ TEST(Resume, AFinishedRunKilledWhileWritingItsReportGetsItsReportOnResume) {
   box.write("straight/frames/0003.ply.tmp", "ply\n");
   box.write("straight/heightfield/h_0003.png.tmp", "half");
   std::string log;
-  ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow("run --resume " + out.string(), &log), 0) << log;
   EXPECT_NE(log.find("this run is finished"), std::string::npos) << log;
   EXPECT_NE(log.find("written now"), std::string::npos) << log;
   EXPECT_EQ(read_text(out / "report.html"), report);
@@ -223,7 +223,7 @@ TEST(Resume, AFinishedRunKilledWhileWritingItsReportGetsItsReportOnResume) {
   EXPECT_FALSE(fs::exists(out / "frames" / "0003.ply.tmp"));
   EXPECT_FALSE(fs::exists(out / "heightfield" / "h_0003.png.tmp"));
   // and once it is there, nothing is written again
-  ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow("run --resume " + out.string(), &log), 0) << log;
   EXPECT_EQ(log.find("written now"), std::string::npos) << log;
 }
 
@@ -250,17 +250,17 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   // options belong to the comparison as it was started; --frames runs it on, never back, and
   // --seeds adds seeds, never drops them
   for (const char* option : {" --grains 100", " --set simulation.seed=7", " --export none"}) {
-    EXPECT_EQ(sandflow("compare --resume " + out.string() + option, &log), 2) << option;
+    EXPECT_EQ(run_sandflow("compare --resume " + out.string() + option, &log), 2) << option;
     EXPECT_NE(log.find("takes no scene"), std::string::npos) << option << log;
   }
-  EXPECT_EQ(sandflow("compare --resume " + out.string() + " --seeds 1", &log), 2);
+  EXPECT_EQ(run_sandflow("compare --resume " + out.string() + " --seeds 1", &log), 2);
   EXPECT_NE(log.find("--seeds 1 is fewer than the 2 seeds"), std::string::npos) << log;
-  EXPECT_EQ(sandflow("compare --resume " + out.string() + " --frames 3", &log), 2);
+  EXPECT_EQ(run_sandflow("compare --resume " + out.string() + " --frames 3", &log), 2);
   EXPECT_NE(log.find("--frames 3 is before frame 40"), std::string::npos) << log;
-  EXPECT_EQ(sandflow("compare --resume " + (box.dir / "nothing").string(), &log), 2);
+  EXPECT_EQ(run_sandflow("compare --resume " + (box.dir / "nothing").string(), &log), 2);
   EXPECT_NE(log.find("no comparison to resume here"), std::string::npos) << log;
 
-  ASSERT_EQ(sandflow("compare --resume " + out.string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow("compare --resume " + out.string(), &log), 0) << log;
   EXPECT_NE(log.find((out / "seed-2" / "surface").string() + " is finished"), std::string::npos)
       << log;
   EXPECT_NE(log.find("resuming " + (out / "seed-2" / "dem").string() + " from its checkpoint"),
@@ -270,19 +270,19 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   EXPECT_EQ(comparison_figures(out)["runs"].size(), 5u);
   // one of its runs run on to another frame is no longer the comparison's run
   ASSERT_EQ(
-      sandflow(fmt::format("run --resume {} --frames {}", (out / "dem").string(), kFrames + 2),
-               &log),
+      run_sandflow(fmt::format("run --resume {} --frames {}", (out / "dem").string(), kFrames + 2),
+                   &log),
       0)
       << log;
   fs::remove(out / "compare.json");
-  EXPECT_EQ(sandflow("compare --resume " + out.string(), &log), 2);
+  EXPECT_EQ(run_sandflow("compare --resume " + out.string(), &log), 2);
   EXPECT_NE(log.find("run on to another frame"), std::string::npos) << log;
 
   // `--frames N` runs every run of the comparison on to frame N: those at 40 run on, the one
   // already at N is read back, one that is missing starts anew to end at N
   const int on = kFrames + 2;
   fs::remove_all(out / "dem-equal-stiffness");
-  ASSERT_EQ(sandflow(fmt::format("compare --resume {} --frames {}", out.string(), on), &log), 0)
+  ASSERT_EQ(run_sandflow(fmt::format("compare --resume {} --frames {}", out.string(), on), &log), 0)
       << log;
   EXPECT_NE(log.find((out / "surface").string() + ": running on to frame 42"), std::string::npos)
       << log;
@@ -295,11 +295,11 @@ TEST(Resume, AComparisonStoppedInItsDemRunGoesOnToTheSameComparison) {
   EXPECT_EQ(nlohmann::json::parse(read_text(out / "compare_plan.json"))["run_to_frame"], on);
   // resumed again, the comparison reads its runs back as they are
   fs::remove(out / "compare.json");
-  ASSERT_EQ(sandflow("compare --resume " + out.string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow("compare --resume " + out.string(), &log), 0) << log;
   EXPECT_EQ(log.find("running on to frame"), std::string::npos) << log;
   EXPECT_TRUE(fs::exists(out / "compare.json"));
-  EXPECT_EQ(sandflow(fmt::format("compare --resume {} --frames {}", out.string(), kFrames), &log),
-            2);
+  EXPECT_EQ(
+      run_sandflow(fmt::format("compare --resume {} --frames {}", out.string(), kFrames), &log), 2);
   EXPECT_NE(log.find("not back"), std::string::npos) << log;
 }
 
@@ -313,15 +313,15 @@ TEST(Resume, AFinishedComparisonGrowsBySeedsAndTheEqualStiffnessRun) {
   const fs::path want = box.dir / "straight", out = box.dir / "cmp";
   std::string log;
   ASSERT_EQ(compare_straight(box, want, log), 0) << log;
-  ASSERT_EQ(sandflow(fmt::format("compare {} --frames {} --seeds 1 --out {}", scene, kFrames,
-                                 out.string()),
-                     &log),
+  ASSERT_EQ(run_sandflow(fmt::format("compare {} --frames {} --seeds 1 --out {}", scene, kFrames,
+                                     out.string()),
+                         &log),
             0)
       << log;
   const std::string first_dem = read_text(out / "dem" / "stats.csv");
   EXPECT_EQ(nlohmann::json::parse(read_text(out / "compare.json"))["seeds"], 1);
 
-  ASSERT_EQ(sandflow("compare --resume " + out.string() + " --seeds 2", &log), 0) << log;
+  ASSERT_EQ(run_sandflow("compare --resume " + out.string() + " --seeds 2", &log), 0) << log;
   EXPECT_NE(log.find(out.string() + ": adding seeds 2 to 2 to the comparison"), std::string::npos)
       << log;
   EXPECT_NE(log.find((out / "dem").string() + " is finished"), std::string::npos) << log;
@@ -329,14 +329,16 @@ TEST(Resume, AFinishedComparisonGrowsBySeedsAndTheEqualStiffnessRun) {
   EXPECT_EQ(nlohmann::json::parse(read_text(out / "compare_plan.json"))["seeds"], 2);
   EXPECT_FALSE(fs::exists(out / "dem-equal-stiffness"));
 
-  ASSERT_EQ(sandflow("compare --resume " + out.string() + " --equal-stiffness", &log), 0) << log;
+  ASSERT_EQ(run_sandflow("compare --resume " + out.string() + " --equal-stiffness", &log), 0)
+      << log;
   EXPECT_NE(log.find("adding plain DEM at the surface run's stiffness"), std::string::npos) << log;
   EXPECT_EQ(log.find("adding seeds"), std::string::npos) << log;
   EXPECT_TRUE(nlohmann::json::parse(read_text(out / "compare_plan.json"))["equal_stiffness"]);
 
   expect_same_comparison(want, out);
   // asked again for what it has, it adds nothing and reads its runs back
-  ASSERT_EQ(sandflow("compare --resume " + out.string() + " --seeds 2 --equal-stiffness", &log), 0)
+  ASSERT_EQ(run_sandflow("compare --resume " + out.string() + " --seeds 2 --equal-stiffness", &log),
+            0)
       << log;
   EXPECT_EQ(log.find("adding"), std::string::npos) << log;
   EXPECT_EQ(comparison_figures(out), comparison_figures(want));
@@ -353,14 +355,14 @@ TEST(Resume, AComparisonTakesAnEarlierOnesPlainDemRunsWithDemFrom) {
   const fs::path want = box.dir / "straight", first = box.dir / "first", out = box.dir / "cmp";
   std::string log;
   ASSERT_EQ(compare_straight(box, want, log), 0) << log;
-  ASSERT_EQ(sandflow(fmt::format("compare {} --frames {} --seeds 1 --out {}", scene, kFrames,
-                                 first.string()),
-                     &log),
+  ASSERT_EQ(run_sandflow(fmt::format("compare {} --frames {} --seeds 1 --out {}", scene, kFrames,
+                                     first.string()),
+                         &log),
             0)
       << log;
-  ASSERT_EQ(sandflow(fmt::format("compare {} --frames {} {} --dem-from {} --out {}", scene, kFrames,
-                                 kComparisonOptions, first.string(), out.string()),
-                     &log),
+  ASSERT_EQ(run_sandflow(fmt::format("compare {} --frames {} {} --dem-from {} --out {}", scene,
+                                     kFrames, kComparisonOptions, first.string(), out.string()),
+                         &log),
             0)
       << log;
   EXPECT_NE(log.find((out / "dem").string() + ": plain DEM taken from " + (first / "dem").string()),
@@ -386,30 +388,31 @@ TEST(Resume, AComparisonTakesAnEarlierOnesPlainDemRunsWithDemFrom) {
   EXPECT_EQ(nlohmann::json::parse(read_text(out / "compare_plan.json"))["dem_from"],
             first.string());
   fs::remove(out / "compare.json");
-  ASSERT_EQ(sandflow("compare --resume " + out.string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow("compare --resume " + out.string(), &log), 0) << log;
   EXPECT_EQ(log.find("taken from " + (first / "dem").string()), std::string::npos) << log;
-  EXPECT_EQ(sandflow("compare --resume " + out.string() + " --dem-from " + first.string(), &log),
-            2);
+  EXPECT_EQ(
+      run_sandflow("compare --resume " + out.string() + " --dem-from " + first.string(), &log), 2);
   EXPECT_NE(log.find("takes no scene"), std::string::npos) << log;
 
   // refused: runs of another scene's options, before any run is made; its own folder; no runs
   const fs::path other = box.dir / "other";
-  EXPECT_EQ(sandflow(fmt::format("compare {} --frames {} --seeds 1 --set material.friction=0.5 "
-                                 "--dem-from {} --out {}",
-                                 scene, kFrames, first.string(), other.string()),
-                     &log),
+  EXPECT_EQ(run_sandflow(fmt::format("compare {} --frames {} --seeds 1 --set material.friction=0.5 "
+                                     "--dem-from {} --out {}",
+                                     scene, kFrames, first.string(), other.string()),
+                         &log),
             2);
   EXPECT_NE(log.find("cannot stand for it"), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(other / "surface" / "run.json"));
-  EXPECT_EQ(sandflow(fmt::format("compare {} --frames {} --seeds 1 --force --dem-from {} --out {}",
-                                 scene, kFrames, first.string(), first.string()),
-                     &log),
-            2);
+  EXPECT_EQ(
+      run_sandflow(fmt::format("compare {} --frames {} --seeds 1 --force --dem-from {} --out {}",
+                               scene, kFrames, first.string(), first.string()),
+                   &log),
+      2);
   EXPECT_NE(log.find("within the comparison's own output folder"), std::string::npos) << log;
   EXPECT_TRUE(fs::exists(first / "dem" / "run.json"));
-  EXPECT_EQ(sandflow(fmt::format("compare {} --frames {} --dem-from {} --out {}", scene, kFrames,
-                                 (box.dir / "nothing").string(), other.string()),
-                     &log),
+  EXPECT_EQ(run_sandflow(fmt::format("compare {} --frames {} --dem-from {} --out {}", scene,
+                                     kFrames, (box.dir / "nothing").string(), other.string()),
+                         &log),
             2);
   EXPECT_NE(log.find("not a comparison folder with a plain-DEM run"), std::string::npos) << log;
 }
@@ -421,8 +424,8 @@ TEST(Resume, TheExportsOfAResumedRunAreThoseOfTheRunUninterrupted) {
   box.write("pour.toml", kPourScene);
   const std::string scene = (box.dir / "pour.toml").string();
   const fs::path want = box.dir / "straight";
-  ASSERT_EQ(sandflow(fmt::format("run {} --frames {} --export ply,vtk,geo_gz --out {}", scene,
-                                 kFrames, want.string())),
+  ASSERT_EQ(run_sandflow(fmt::format("run {} --frames {} --export ply,vtk,geo_gz --out {}", scene,
+                                     kFrames, want.string())),
             0);
   const fs::path out = box.dir / "run";
   const pid_t pid = spawn(fmt::format("run {} --frames {} --export ply,vtk,geo_gz --out {}", scene,
@@ -431,7 +434,7 @@ TEST(Resume, TheExportsOfAResumedRunAreThoseOfTheRunUninterrupted) {
   interrupt_once_written(pid, out / "frames" / "0005.vtp");
   ASSERT_EQ(wait_for(pid), 130) << read_text(box.dir / "run.log");
   std::string log;
-  ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow("run --resume " + out.string(), &log), 0) << log;
   expect_same_run(want, out);
   EXPECT_EQ(read_text(out / "frames.pvd"), read_text(want / "frames.pvd"));
   for (int f = 1; f <= kFrames; ++f) {
@@ -493,7 +496,7 @@ TEST(Resume, KilledAtRandomMomentsItResumesToTheSameRun) {
   EXPECT_GE(kills, 3) << "the kills came too late to test anything";
   if (!finished) {
     std::string log;
-    ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+    ASSERT_EQ(run_sandflow("run --resume " + out.string(), &log), 0) << log;
   }
   expect_same_run(want, out);
 }
@@ -506,8 +509,8 @@ TEST(Resume, AFullDiskStopsWithAClearErrorAndKeepsTheLastGoodCheckpoint) {
   // holds more grains and is larger (by a sixth or more; the pair lists, which shrink as the heap
   // settles and the allowances with the grains' speeds, do not make up for that)
   const fs::path probe = box.dir / "probe";
-  ASSERT_EQ(sandflow(fmt::format("run {} --frames 2 --checkpoint-every 2 --out {}",
-                                 (box.dir / "pour.toml").string(), probe.string())),
+  ASSERT_EQ(run_sandflow(fmt::format("run {} --frames 2 --checkpoint-every 2 --out {}",
+                                     (box.dir / "pour.toml").string(), probe.string())),
             0);
   const auto limit = static_cast<rlim_t>(fs::file_size(probe / "checkpoint.bin"));
   // every file is limited to that size: a checkpoint past frame 2 cannot be written (EFBIG, as
@@ -532,7 +535,7 @@ TEST(Resume, AFullDiskStopsWithAClearErrorAndKeepsTheLastGoodCheckpoint) {
   EXPECT_EQ(sandflow::read_checkpoint((out / "checkpoint.bin").string()).world.frame, frame);
   EXPECT_FALSE(fs::exists(out / "checkpoint.bin.tmp"));
   std::string resumed;
-  ASSERT_EQ(sandflow("run --resume " + out.string(), &resumed), 0) << resumed;
+  ASSERT_EQ(run_sandflow("run --resume " + out.string(), &resumed), 0) << resumed;
   expect_same_run(want, out);
 }
 
@@ -554,9 +557,9 @@ velocity = [0.0, 0.0, -5.0]
 )");
   const fs::path out = box.dir / "run";
   std::string log;
-  ASSERT_EQ(sandflow(fmt::format("run {} --mode dem --checkpoint-every 1 --out {}",
-                                 (box.dir / "blow.toml").string(), out.string()),
-                     &log),
+  ASSERT_EQ(run_sandflow(fmt::format("run {} --mode dem --checkpoint-every 1 --out {}",
+                                     (box.dir / "blow.toml").string(), out.string()),
+                         &log),
             3)
       << log;
   ASSERT_GT(number_after(log, "simulation stopped: step "), 0) << log;
@@ -573,7 +576,7 @@ velocity = [0.0, 0.0, -5.0]
       << log;
   // the command given stops at the same step with the same words
   std::string again;
-  EXPECT_EQ(sandflow("run --resume " + out.string(), &again), 3);
+  EXPECT_EQ(run_sandflow("run --resume " + out.string(), &again), 3);
   EXPECT_NE(again.find(stop), std::string::npos) << again;
 }
 
@@ -585,14 +588,14 @@ TEST(Resume, FramesRunsAFinishedRunOnToTheSameLongerRun) {
   const fs::path want = straight_run(box);
   const fs::path out = box.dir / "run";
   std::string log;
-  ASSERT_EQ(sandflow(fmt::format("run {} --frames 10 --out {}", (box.dir / "pour.toml").string(),
-                                 out.string()),
-                     &log),
+  ASSERT_EQ(run_sandflow(fmt::format("run {} --frames 10 --out {}",
+                                     (box.dir / "pour.toml").string(), out.string()),
+                         &log),
             0)
       << log;
   ASSERT_TRUE(fs::exists(out / "summary.json"));
   // not to a frame before its checkpoint (the last frame, 10): refused, the run left finished
-  EXPECT_EQ(sandflow("run --resume " + out.string() + " --frames 9", &log), 2);
+  EXPECT_EQ(run_sandflow("run --resume " + out.string() + " --frames 9", &log), 2);
   EXPECT_NE(log.find("--frames 9 is before the run's checkpoint at frame 10"), std::string::npos)
       << log;
   EXPECT_TRUE(fs::exists(out / "summary.json"));
@@ -601,7 +604,7 @@ TEST(Resume, FramesRunsAFinishedRunOnToTheSameLongerRun) {
   interrupt_once_written(pid, out / "frames" / "0015.ply");
   EXPECT_EQ(wait_for(pid), 130) << read_text(box.dir / "on.log");
   EXPECT_FALSE(fs::exists(out / "summary.json"));
-  ASSERT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  ASSERT_EQ(run_sandflow("run --resume " + out.string(), &log), 0) << log;
   expect_same_run(want, out);
   EXPECT_EQ(nlohmann::json::parse(read_text(out / "run.json"))["run_to_frame"], kFrames);
 }
@@ -613,23 +616,23 @@ TEST(Resume, RefusesWhatItCannotContinueAndSaysWhy) {
   const std::string scene = (box.dir / "pour.toml").string();
   std::string log;
   // no scene and no --resume
-  EXPECT_EQ(sandflow("run", &log), 2);
+  EXPECT_EQ(run_sandflow("run", &log), 2);
   EXPECT_NE(log.find("give a scene file"), std::string::npos) << log;
   // a folder that holds no run
   fs::create_directories(box.dir / "empty");
-  EXPECT_EQ(sandflow("run --resume " + (box.dir / "empty").string(), &log), 2);
+  EXPECT_EQ(run_sandflow("run --resume " + (box.dir / "empty").string(), &log), 2);
   EXPECT_NE(log.find("no run.json"), std::string::npos) << log;
   // a run to play with, stopped at frame 4 (its checkpoint)
-  ASSERT_EQ(sandflow(fmt::format("run {} --frames 4 --checkpoint-every 2 --out {}", scene,
-                                 out.string())),
+  ASSERT_EQ(run_sandflow(fmt::format("run {} --frames 4 --checkpoint-every 2 --out {}", scene,
+                                     out.string())),
             0);
   fs::remove(out / "summary.json");
   // options that would change the run
-  EXPECT_EQ(sandflow("run --resume " + out.string() + " --set material.friction=0.1", &log), 2);
+  EXPECT_EQ(run_sandflow("run --resume " + out.string() + " --set material.friction=0.1", &log), 2);
   EXPECT_NE(log.find("continues a run exactly as it was started"), std::string::npos) << log;
-  EXPECT_EQ(sandflow("run " + scene + " --resume " + out.string(), &log), 2);
+  EXPECT_EQ(run_sandflow("run " + scene + " --resume " + out.string(), &log), 2);
   // a non-empty folder without --force or --resume
-  EXPECT_EQ(sandflow(fmt::format("run {} --out {}", scene, out.string()), &log), 2);
+  EXPECT_EQ(run_sandflow(fmt::format("run {} --out {}", scene, out.string()), &log), 2);
   EXPECT_NE(log.find("--force"), std::string::npos) << log;
   EXPECT_NE(log.find("--resume"), std::string::npos) << log;
   // a corrupt checkpoint
@@ -638,34 +641,35 @@ TEST(Resume, RefusesWhatItCannotContinueAndSaysWhy) {
   std::string bad = good;
   bad[bad.size() / 2] = static_cast<char>(bad[bad.size() / 2] ^ 0x40);
   std::ofstream(ck, std::ios::binary | std::ios::trunc) << bad;
-  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2);
+  EXPECT_EQ(run_sandflow("run --resume " + out.string(), &log), 2);
   EXPECT_NE(log.find(ck.string() + ": the data is corrupt"), std::string::npos) << log;
   // a truncated one
   std::ofstream(ck, std::ios::binary | std::ios::trunc) << good.substr(0, good.size() - 100);
-  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2);
+  EXPECT_EQ(run_sandflow("run --resume " + out.string(), &log), 2);
   EXPECT_NE(log.find(ck.string() + ": truncated"), std::string::npos) << log;
   // one written by another version of sandflow
   sandflow::Checkpoint c = sandflow::parse_checkpoint(good, "good");
   c.sandflow_version = "9.9.9";
   std::ofstream(ck, std::ios::binary | std::ios::trunc) << sandflow::encode_checkpoint(c);
-  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2);
+  EXPECT_EQ(run_sandflow("run --resume " + out.string(), &log), 2);
   EXPECT_NE(log.find("written by sandflow 9.9.9"), std::string::npos) << log;
   // (a refused checkpoint leaves the folder as it was)
   EXPECT_TRUE(fs::exists(out / "frames" / "0004.ply"));
   // one of another run (another scene)
   const fs::path other = box.dir / "other";
-  ASSERT_EQ(sandflow(fmt::format("run {} --frames 2 --checkpoint-every 2 --set material.friction=0.3 --out {}",
-                                 scene, other.string())),
+  ASSERT_EQ(run_sandflow(fmt::format(
+                "run {} --frames 2 --checkpoint-every 2 --set material.friction=0.3 --out {}",
+                scene, other.string())),
             0);
   fs::copy_file(other / "checkpoint.bin", ck, fs::copy_options::overwrite_existing);
   // (a frame after the checkpoint, as a killed run leaves it: kept while the checkpoint is refused)
   fs::copy_file(out / "frames" / "0004.ply", out / "frames" / "0005.ply");
-  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2);
+  EXPECT_EQ(run_sandflow("run --resume " + out.string(), &log), 2);
   EXPECT_NE(log.find("written for another scene"), std::string::npos) << log;
   EXPECT_TRUE(fs::exists(out / "frames" / "0005.ply"));
   // the good one again: it resumes, and the frame after it is made again
   std::ofstream(ck, std::ios::binary | std::ios::trunc) << good;
-  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  EXPECT_EQ(run_sandflow("run --resume " + out.string(), &log), 0) << log;
   EXPECT_FALSE(fs::exists(out / "frames" / "0005.ply"));
 }
 
@@ -679,22 +683,22 @@ TEST(Resume, AStartStoppedBeforeItsRecordNeedsNoForce) {
   fs::create_directories(out / "frames");
   const std::string cmd = fmt::format("run {} --frames 1 --out {}", scene, out.string());
   std::string log;
-  EXPECT_EQ(sandflow(cmd, &log), 0) << log;
+  EXPECT_EQ(run_sandflow(cmd, &log), 0) << log;
   // killed as it wrote its record: the half-written record is nothing to keep, and goes
   fs::remove_all(out);
   fs::create_directories(out / "frames");
   box.write("run/run.json.tmp", "{\"sta");
-  EXPECT_EQ(sandflow(cmd, &log), 0) << log;
+  EXPECT_EQ(run_sandflow(cmd, &log), 0) << log;
   EXPECT_FALSE(fs::exists(out / "run.json.tmp"));
   // a run replaced with --force leaves none of the old run's half-written files (frames.pvd:
   // one this run, without a VTK export, does not write again over it)
   box.write("run/frames.pvd.tmp", "half");
-  EXPECT_EQ(sandflow(cmd + " --force", &log), 0) << log;
+  EXPECT_EQ(run_sandflow(cmd + " --force", &log), 0) << log;
   EXPECT_FALSE(fs::exists(out / "frames.pvd.tmp"));
   fs::remove_all(out);
   fs::create_directories(out / "frames");
   box.write("run/frames/0001.ply", "not a frame");
-  EXPECT_EQ(sandflow(cmd, &log), 2) << log;
+  EXPECT_EQ(run_sandflow(cmd, &log), 2) << log;
   EXPECT_NE(log.find("the output folder is not empty"), std::string::npos) << log;
 }
 
@@ -711,24 +715,24 @@ TEST(Resume, AMeshEditedSinceTheStartIsRefused) {
           .string();
   const fs::path out = box.dir / "run";
   std::string log;
-  ASSERT_EQ(sandflow(fmt::format("run {} --mode dem --frames 4 --checkpoint-every 2 --out {}",
-                                 scene, out.string()),
-                     &log),
+  ASSERT_EQ(run_sandflow(fmt::format("run {} --mode dem --frames 4 --checkpoint-every 2 --out {}",
+                                     scene, out.string()),
+                         &log),
             0)
       << log;
   fs::remove(out / "summary.json");
   const auto particles = [&] {
     std::string check;
-    EXPECT_EQ(sandflow("run " + scene + " --check", &check), 0) << check;
+    EXPECT_EQ(run_sandflow("run " + scene + " --check", &check), 0) << check;
     return check.substr(0, check.find(" boundary particles"));
   };
   const std::string before = particles();
   box.write("tet.stl", tetrahedron_stl(0.1, true));
   ASSERT_EQ(particles(), before);  // (the edit this test is about: the particles stay)
-  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 2) << log;
+  EXPECT_EQ(run_sandflow("run --resume " + out.string(), &log), 2) << log;
   EXPECT_NE(log.find("written for another scene"), std::string::npos) << log;
   box.write("tet.stl", tetrahedron_stl(0.1));
-  EXPECT_EQ(sandflow("run --resume " + out.string(), &log), 0) << log;
+  EXPECT_EQ(run_sandflow("run --resume " + out.string(), &log), 0) << log;
 }
 
 }  // namespace

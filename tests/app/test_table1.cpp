@@ -21,8 +21,8 @@ namespace fs = std::filesystem;
 namespace {
 
 using sandflow_test::read_text;
+using sandflow_test::run_sandflow;
 using sandflow_test::Sandbox;
-using sandflow_test::sandflow;
 
 const fs::path kScenes = fs::path(SANDFLOW_SOURCE_DIR) / "scenes";
 const std::string kHeader =
@@ -57,9 +57,9 @@ TEST(Table1, TinyFloorRowHasTheHeaderAndFiniteFigures) {
   Sandbox box;
   const fs::path out = box.dir / "t1";
   std::string log;
-  ASSERT_EQ(sandflow("table1 --scale 0.01 --frames 3 --scenes floor --scene-dir " +
-                         kScenes.string() + " --out " + out.string(),
-                     &log),
+  ASSERT_EQ(run_sandflow("table1 --scale 0.01 --frames 3 --scenes floor --scene-dir " +
+                             kScenes.string() + " --out " + out.string(),
+                         &log),
             0)
       << log;
   const auto csv = lines(read_text(out / "table1.csv"));
@@ -124,12 +124,14 @@ TEST(Table1, TinyFloorRowHasTheHeaderAndFiniteFigures) {
     EXPECT_NE(log.find(s), std::string::npos) << s << "\n" << log;
 
   // a second run into the same folder needs --force
-  EXPECT_EQ(sandflow("table1 --scale 0.002 --frames 1 --scenes floor --out " + out.string(), &log),
-            2);
+  EXPECT_EQ(
+      run_sandflow("table1 --scale 0.002 --frames 1 --scenes floor --out " + out.string(), &log),
+      2);
   EXPECT_NE(log.find("--force"), std::string::npos) << log;
-  EXPECT_EQ(sandflow("table1 --scale 0.002 --frames 1 --scenes floor --force --out " + out.string(),
-                     &log),
-            0)
+  EXPECT_EQ(
+      run_sandflow("table1 --scale 0.002 --frames 1 --scenes floor --force --out " + out.string(),
+                   &log),
+      0)
       << log;
   EXPECT_EQ(fields(lines(read_text(out / "table1.csv"))[1])[1],
             std::to_string(std::llround(0.002 * 107687)));
@@ -140,10 +142,10 @@ TEST(Table1, ResumeKeepsWhatRanAndRefusesOtherOptions) {
   const fs::path out = box.dir / "t1";
   const std::string cmd = "table1 --scale 0.002 --frames 2 --scenes floor --out " + out.string();
   std::string log;
-  ASSERT_EQ(sandflow(cmd, &log), 0) << log;
+  ASSERT_EQ(run_sandflow(cmd, &log), 0) << log;
   const auto first = nlohmann::json::parse(read_text(out / "floor" / "compare.json"));
   // the same table goes on: both runs are read back from their last checkpoints, not run again
-  ASSERT_EQ(sandflow(cmd + " --resume", &log), 0) << log;
+  ASSERT_EQ(run_sandflow(cmd + " --resume", &log), 0) << log;
   for (const char* mode : {"surface", "dem"})
     EXPECT_NE(log.find((out / "floor" / mode).string() +
                        " is finished: reading it back from its checkpoint at frame 2"),
@@ -154,15 +156,15 @@ TEST(Table1, ResumeKeepsWhatRanAndRefusesOtherOptions) {
   EXPECT_EQ(again["surface_rms_rel"], first["surface_rms_rel"]);
   // other options are not this table: refused before anything is written
   const std::string table = read_text(out / "table1.csv");
-  EXPECT_EQ(sandflow("table1 --scale 0.002 --frames 3 --scenes floor --resume --out " +
-                         out.string(),
-                     &log),
-            2);
+  EXPECT_EQ(
+      run_sandflow("table1 --scale 0.002 --frames 3 --scenes floor --resume --out " + out.string(),
+                   &log),
+      2);
   EXPECT_NE(log.find("holds a run started otherwise"), std::string::npos) << log;
   EXPECT_EQ(read_text(out / "table1.csv"), table);
   EXPECT_EQ(nlohmann::json::parse(read_text(out / "floor" / "surface" / "summary.json"))["frames"],
             2);
-  EXPECT_EQ(sandflow(cmd + " --resume --force", &log), 2);
+  EXPECT_EQ(run_sandflow(cmd + " --resume --force", &log), 2);
   EXPECT_NE(log.find("give one of them"), std::string::npos) << log;
 }
 
@@ -170,9 +172,9 @@ TEST(Table1, MissingSceneIsSkippedAndTheOthersRun) {
   Sandbox box;
   const fs::path scenes = floor_only(box), out = box.dir / "t1";
   std::string log;
-  ASSERT_EQ(sandflow("table1 --scale 0.005 --frames 2 --scenes floor,terrain --scene-dir " +
-                         scenes.string() + " --out " + out.string(),
-                     &log),
+  ASSERT_EQ(run_sandflow("table1 --scale 0.005 --frames 2 --scenes floor,terrain --scene-dir " +
+                             scenes.string() + " --out " + out.string(),
+                         &log),
             0)
       << log;
   EXPECT_NE(log.find("terrain skipped: no scene file"), std::string::npos) << log;
@@ -186,9 +188,9 @@ TEST(Table1, MissingSceneIsSkippedAndTheOthersRun) {
   EXPECT_FALSE(fs::exists(out / "terrain"));
 
   // when no scene file is found at all, nothing ran: an error
-  EXPECT_EQ(sandflow("table1 --scale 0.005 --frames 2 --scenes terrain,bowl --scene-dir " +
-                         scenes.string() + " --out " + (box.dir / "none").string(),
-                     &log),
+  EXPECT_EQ(run_sandflow("table1 --scale 0.005 --frames 2 --scenes terrain,bowl --scene-dir " +
+                             scenes.string() + " --out " + (box.dir / "none").string(),
+                         &log),
             2);
   EXPECT_NE(log.find("no scene ran"), std::string::npos) << log;
 }
@@ -204,9 +206,9 @@ TEST(Table1, FailedSceneIsReportedAndTheOthersStillRun) {
   std::ofstream(scenes / "terrain.toml") << text;
   std::string log;
   // terrain first: floor still runs after it fails; the status is that of bad input
-  EXPECT_EQ(sandflow("table1 --scale 0.005 --frames 2 --scenes terrain,floor --scene-dir " +
-                         scenes.string() + " --out " + out.string(),
-                     &log),
+  EXPECT_EQ(run_sandflow("table1 --scale 0.005 --frames 2 --scenes terrain,floor --scene-dir " +
+                             scenes.string() + " --out " + out.string(),
+                         &log),
             2)
       << log;
   EXPECT_NE(log.find("terrain failed:"), std::string::npos) << log;
@@ -224,8 +226,8 @@ TEST(Table1, BadScaleIsRefusedBeforeAnythingIsWritten) {
   for (const char* scale : {"0", "-0.5", "nan", "inf", "1000", "1e-9"}) {
     std::string log;
     EXPECT_EQ(
-        sandflow(std::string("table1 --scenes floor --scale ") + scale + " --out " + out.string(),
-                 &log),
+        run_sandflow(
+            std::string("table1 --scenes floor --scale ") + scale + " --out " + out.string(), &log),
         2)
         << scale << ": " << log;
     EXPECT_NE(log.find("--scale"), std::string::npos) << scale << ": " << log;
@@ -237,11 +239,11 @@ TEST(Table1, UnknownSceneIsRefusedNamingTheKnownOnes) {
   Sandbox box;
   const fs::path out = box.dir / "t1";
   std::string log;
-  EXPECT_EQ(sandflow("table1 --scenes floor,nosuch --out " + out.string(), &log), 2);
+  EXPECT_EQ(run_sandflow("table1 --scenes floor,nosuch --out " + out.string(), &log), 2);
   EXPECT_NE(log.find("'nosuch'"), std::string::npos) << log;
   EXPECT_NE(log.find("floor, terrain, bowl, dragon, armadillo"), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(out));
-  EXPECT_EQ(sandflow("table1 --scenes floor,floor --out " + out.string(), &log), 2);
+  EXPECT_EQ(run_sandflow("table1 --scenes floor,floor --out " + out.string(), &log), 2);
   EXPECT_NE(log.find("listed twice"), std::string::npos) << log;
 }
 

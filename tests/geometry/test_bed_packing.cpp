@@ -16,15 +16,15 @@
 namespace sandflow {
 namespace {
 
-constexpr Real kD = 0.01;  // diameter of the equal grains [m]
+constexpr Real kBedD = 0.01;  // diameter of the equal grains [m]
 
 BedRegion flat_bed(Real side_d, Real height_d) {
   BedRegion R;
   R.x0 = R.y0 = 0;
-  R.x1 = R.y1 = side_d * kD;
+  R.x1 = R.y1 = side_d * kBedD;
   R.floor = [](Real, Real) { return 0.0; };
-  R.top = [h = height_d * kD](Real, Real) { return h; };
-  R.r_lo = R.r_hi = kD / 2;
+  R.top = [h = height_d * kBedD](Real, Real) { return h; };
+  R.r_lo = R.r_hi = kBedD / 2;
   return R;
 }
 
@@ -45,9 +45,9 @@ TEST(BedPacking, BulkPackingFractionIsThatOfRandomDeposition) {
   // Bolsterli); a box 4 diameters inside the floor, the walls and the top, where they order it
   const BedPacking b = pack_bed(flat_bed(32, 20));
   ASSERT_GT(b.size(), 18000u);
-  const Real m = 4 * kD;
+  const Real m = 4 * kBedD;
   const Real phi =
-      packing_fraction_in(b.x, b.r, {m, m, m}, {32 * kD - m, 32 * kD - m, 20 * kD - m});
+      packing_fraction_in(b.x, b.r, {m, m, m}, {32 * kBedD - m, 32 * kBedD - m, 20 * kBedD - m});
   EXPECT_GT(phi, 0.56);
   EXPECT_LT(phi, 0.64);
   // and the helper agrees with the brute-force overlap on a part of it
@@ -58,8 +58,8 @@ TEST(BedPacking, ContactsAreExactTouches) {
   // equal grains and grains of three sizes; every pair checked
   for (Real spread : {0.0, 0.3}) {
     BedRegion R = flat_bed(14, 8);
-    R.r_lo = kD / 2 * (1 - spread);
-    R.r_hi = kD / 2 * (1 + spread);
+    R.r_lo = kBedD / 2 * (1 - spread);
+    R.r_hi = kBedD / 2 * (1 + spread);
     const BedPacking b = pack_bed(R);
     ASSERT_GT(b.size(), 1000u);
     EXPECT_LT(brute_overlap(b), 1e-3) << "spread " << spread;
@@ -76,21 +76,21 @@ TEST(BedPacking, GrainsStayInsideTheFootprintOnTheFloorAndUnderTheTop) {
   for (std::size_t i = 0; i < b.size(); ++i) {
     const Vec3& x = b.x[i];
     const Real r = b.r[i];
-    EXPECT_GE(x.x - r, R.x0 - 1e-6 * kD);
-    EXPECT_LE(x.x + r, R.x1 + 1e-6 * kD);
-    EXPECT_GE(x.y - r, R.y0 - 1e-6 * kD);
-    EXPECT_LE(x.y + r, R.y1 + 1e-6 * kD);
+    EXPECT_GE(x.x - r, R.x0 - 1e-6 * kBedD);
+    EXPECT_LE(x.x + r, R.x1 + 1e-6 * kBedD);
+    EXPECT_GE(x.y - r, R.y0 - 1e-6 * kBedD);
+    EXPECT_LE(x.y + r, R.y1 + 1e-6 * kBedD);
     EXPECT_GE(x.z - r, -1e-12);
-    EXPECT_LE(x.z + r, 6 * kD + 1e-12);
+    EXPECT_LE(x.z + r, 6 * kBedD + 1e-12);
   }
 }
 
 TEST(BedPacking, HeightmapFloorAndSlopedTopAreRespected) {
   // a wavy floor (amplitude one diameter, wavelength 12) and a top sloping 10 degrees
   BedRegion R = flat_bed(24, 0);
-  const Real k = 2 * kPi / (12 * kD);
-  auto floor = [k](Real x, Real y) { return kD * std::sin(k * x) * std::cos(0.7 * k * y); };
-  auto top = [](Real x, Real) { return 7 * kD + std::tan(deg_to_rad(10)) * x; };
+  const Real k = 2 * kPi / (12 * kBedD);
+  auto floor = [k](Real x, Real y) { return kBedD * std::sin(k * x) * std::cos(0.7 * k * y); };
+  auto top = [](Real x, Real) { return 7 * kBedD + std::tan(deg_to_rad(10)) * x; };
   R.floor = floor;
   R.top = top;
   const BedPacking b = pack_bed(R);
@@ -111,8 +111,8 @@ TEST(BedPacking, HeightmapFloorAndSlopedTopAreRespected) {
         const Real rho2 = (px - x.x) * (px - x.x) + (py - x.y) * (py - x.y);
         lowest_gap = std::min(lowest_gap, x.z - std::sqrt(r * r - rho2) - floor(px, py));
       }
-    EXPECT_GT(lowest_gap, -0.01 * kD) << "grain " << i;
-    on_floor += lowest_gap < 0.02 * kD;
+    EXPECT_GT(lowest_gap, -0.01 * kBedD) << "grain " << i;
+    on_floor += lowest_gap < 0.02 * kBedD;
   }
   EXPECT_GT(on_floor, 200u);  // (the floor carries its layer)
 }
@@ -121,8 +121,8 @@ TEST(BedPacking, AnObstacleIsRespectedAndBuriedWithGrainsAboveIt) {
   // a sphere of radius 4 d standing on the floor; the floor the bed rests on is its top where it
   // has one, and a grain intersecting it is refused
   BedRegion R = flat_bed(24, 12);
-  const Vec3 s{12 * kD, 12 * kD, 3 * kD};
-  const Real S = 4 * kD;
+  const Vec3 s{12 * kBedD, 12 * kBedD, 3 * kBedD};
+  const Real S = 4 * kBedD;
   R.floor = [s, S](Real x, Real y) {
     const Real rho2 = (x - s.x) * (x - s.x) + (y - s.y) * (y - s.y);
     return rho2 < S * S ? std::max(0.0, s.z + std::sqrt(S * S - rho2)) : 0.0;
@@ -133,7 +133,7 @@ TEST(BedPacking, AnObstacleIsRespectedAndBuriedWithGrainsAboveIt) {
   EXPECT_GT(b.blocked, 0);
   std::size_t above = 0;
   for (std::size_t i = 0; i < b.size(); ++i) {
-    EXPECT_GE(norm(b.x[i] - s), S + b.r[i] - 1e-3 * kD) << "grain " << i;
+    EXPECT_GE(norm(b.x[i] - s), S + b.r[i] - 1e-3 * kBedD) << "grain " << i;
     above += std::hypot(b.x[i].x - s.x, b.x[i].y - s.y) < S / 2 && b.x[i].z > s.z + S;
   }
   EXPECT_GT(above, 20u);  // the sand covers it, no hole left over it
@@ -143,7 +143,7 @@ TEST(BedPacking, AnObstacleIsRespectedAndBuriedWithGrainsAboveIt) {
 // footprint, touching within 1e-6 d) with gravity inside the cone of their normals: the rule the
 // generator stops on. Neighbours through a grid of cells a largest diameter wide.
 std::size_t count_unsupported(const BedPacking& b, const BedRegion& R) {
-  const Real tol = 1e-6 * kD, cs = 2 * R.r_hi;
+  const Real tol = 1e-6 * kBedD, cs = 2 * R.r_hi;
   auto key = [&](const Vec3& x, int dx, int dy, int dz) {
     const auto i = static_cast<std::int64_t>(std::floor((x.x - R.x0) / cs)) + dx;
     const auto j = static_cast<std::int64_t>(std::floor((x.y - R.y0) / cs)) + dy;
@@ -200,8 +200,8 @@ TEST(BedPacking, TheSlabFromAPeriodicTileIsADropBedAtRest) {
   // no overlap, every grain inside and at rest, the bulk packed as a bed dropped grain by grain is
   // (the same region 70 d wide, too narrow for the slab), and the same bed on 1 and 2 threads.
   BedRegion R = flat_bed(80, 11);
-  R.r_lo = 0.4 * kD;
-  R.r_hi = 0.6 * kD;
+  R.r_lo = 0.4 * kBedD;
+  R.r_hi = 0.6 * kBedD;
   const BedPacking b = pack_bed(R);
   ASSERT_GT(b.size(), 40000u);
   EXPECT_GT(b.tiled, static_cast<std::int64_t>(b.size() / 3));
@@ -209,19 +209,21 @@ TEST(BedPacking, TheSlabFromAPeriodicTileIsADropBedAtRest) {
   for (std::size_t i = 0; i < b.size(); ++i) {
     const Vec3& x = b.x[i];
     const Real r = b.r[i];
-    ASSERT_TRUE(x.x - r >= -1e-6 * kD && x.x + r <= R.x1 + 1e-6 * kD && x.y - r >= -1e-6 * kD &&
-                x.y + r <= R.y1 + 1e-6 * kD && x.z - r >= -1e-12 && x.z + r <= 11 * kD + 1e-12)
+    ASSERT_TRUE(x.x - r >= -1e-6 * kBedD && x.x + r <= R.x1 + 1e-6 * kBedD &&
+                x.y - r >= -1e-6 * kBedD && x.y + r <= R.y1 + 1e-6 * kBedD && x.z - r >= -1e-12 &&
+                x.z + r <= 11 * kBedD + 1e-12)
         << "grain " << i << " of " << b.size();
   }
   EXPECT_EQ(count_unsupported(b, R), 0u);
-  const Real m = 4 * kD;
-  const Real phi = packing_fraction_in(b.x, b.r, {m, m, m}, {80 * kD - m, 80 * kD - m, 7 * kD});
+  const Real m = 4 * kBedD;
+  const Real phi =
+      packing_fraction_in(b.x, b.r, {m, m, m}, {80 * kBedD - m, 80 * kBedD - m, 7 * kBedD});
   BedRegion narrow = R;
-  narrow.x1 = narrow.y1 = 70 * kD;
+  narrow.x1 = narrow.y1 = 70 * kBedD;
   const BedPacking c = pack_bed(narrow);
   EXPECT_EQ(c.tiled, 0);
   const Real phi_dropped =
-      packing_fraction_in(c.x, c.r, {m, m, m}, {70 * kD - m, 70 * kD - m, 7 * kD});
+      packing_fraction_in(c.x, c.r, {m, m, m}, {70 * kBedD - m, 70 * kBedD - m, 7 * kBedD});
   EXPECT_NEAR(phi, phi_dropped, 0.006) << "slab " << phi << ", dropped " << phi_dropped;
   R.threads = 2;
   const BedPacking d = pack_bed(R);
@@ -235,21 +237,21 @@ TEST(BedPacking, TheCopiesAlongAWallRestAsTheirTemplateAndPackAsADroppedBed) {
   // the wall must pack as in a bed dropped grain by grain (the same depth, too narrow for the
   // slab). Without the check that each copied grain's holders lie shifted too, grains float.
   BedRegion R = flat_bed(224, 10);
-  R.y1 = 80 * kD;
+  R.y1 = 80 * kBedD;
   const BedPacking b = pack_bed(R);
   ASSERT_GT(b.tiled, static_cast<std::int64_t>(b.size() / 2));
   EXPECT_GT(b.copied, 5000);
   EXPECT_LT(largest_overlap(b.x, b.r), 1e-5);
   EXPECT_EQ(count_unsupported(b, R), 0u);
   // the bands 1 d to 12 d from the two walls along x, from 3 d over the floor up to 7 d
-  const Real m = 3 * kD;
+  const Real m = 3 * kBedD;
   auto band = [&](const BedPacking& p, const BedRegion& r) {
-    return 0.5 *
-           (packing_fraction_in(p.x, p.r, {m, kD, m}, {r.x1 - m, 12 * kD, 7 * kD}) +
-            packing_fraction_in(p.x, p.r, {m, r.y1 - 12 * kD, m}, {r.x1 - m, r.y1 - kD, 7 * kD}));
+    return 0.5 * (packing_fraction_in(p.x, p.r, {m, kBedD, m}, {r.x1 - m, 12 * kBedD, 7 * kBedD}) +
+                  packing_fraction_in(p.x, p.r, {m, r.y1 - 12 * kBedD, m},
+                                      {r.x1 - m, r.y1 - kBedD, 7 * kBedD}));
   };
   BedRegion narrow = R;
-  narrow.x1 = narrow.y1 = 60 * kD;
+  narrow.x1 = narrow.y1 = 60 * kBedD;
   const BedPacking c = pack_bed(narrow);
   ASSERT_EQ(c.tiled, 0);
   const Real phi = band(b, R), phi_dropped = band(c, narrow);
@@ -258,7 +260,7 @@ TEST(BedPacking, TheCopiesAlongAWallRestAsTheirTemplateAndPackAsADroppedBed) {
 
 TEST(BedPacking, TheSameSeedGivesTheSameBed) {
   BedRegion R = flat_bed(10, 6);
-  R.r_lo = 0.4 * kD;
+  R.r_lo = 0.4 * kBedD;
   const BedPacking a = pack_bed(R), b = pack_bed(R);
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) {
@@ -273,7 +275,7 @@ TEST(BedPacking, TheSameSeedGivesTheSameBed) {
 TEST(BedPacking, OneAndTwoThreadsGiveTheSameBed) {
   // 40 d x 40 d: tiles of 16 columns, several of each colour a phase, so two threads share them
   BedRegion R = flat_bed(40, 6);
-  R.r_lo = 0.4 * kD;
+  R.r_lo = 0.4 * kBedD;
   const BedPacking a = pack_bed(R);
   R.threads = 2;
   const BedPacking b = pack_bed(R);
@@ -289,7 +291,7 @@ TEST(BedPacking, AnExceptionOfBlockedReachesTheCaller) {
     BedRegion R = flat_bed(40, 4);
     R.threads = threads;
     R.blocked = [](const Vec3& c, Real) -> bool {
-      if (c.z > 2 * kD) throw std::runtime_error("blocked failed");
+      if (c.z > 2 * kBedD) throw std::runtime_error("blocked failed");
       return false;
     };
     EXPECT_THROW(pack_bed(R), std::runtime_error) << threads << " threads";

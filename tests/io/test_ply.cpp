@@ -38,7 +38,7 @@ class PlyTest : public test::ScratchTest {
   fs::path dir_;
 };
 
-FrameData sample_frame() {
+FrameData ply_sample_frame() {
   FrameData f;
   for (int i = 0; i < 100; ++i) {
     f.position.push_back({0.01 * i, -0.5 + 0.003 * i, 1.25 - 0.007 * i});
@@ -51,7 +51,7 @@ FrameData sample_frame() {
 }
 
 TEST_F(PlyTest, RoundTrip) {
-  const FrameData f = sample_frame();
+  const FrameData f = ply_sample_frame();
   const std::string p = path("frame.ply");
   write_ply(p, f);
   EXPECT_FALSE(fs::exists(p + ".tmp"));
@@ -95,14 +95,14 @@ TEST_F(PlyTest, EmptyFrameAndDefaults) {
 TEST_F(PlyTest, OverwritesAtomically) {
   const std::string p = path("frame.ply");
   write_bytes(p, "old contents");
-  write_ply(p, sample_frame());
+  write_ply(p, ply_sample_frame());
   EXPECT_EQ(read_ply(p).size(), 100u);
 }
 
 TEST_F(PlyTest, UnwritableFolderIsOutputError) {
   const std::string p = path("no/such/folder/frame.ply");
   try {
-    write_ply(p, sample_frame());
+    write_ply(p, ply_sample_frame());
     FAIL() << "no error";
   } catch (const OutputError& e) {
     const std::string msg = e.what();
@@ -113,7 +113,7 @@ TEST_F(PlyTest, UnwritableFolderIsOutputError) {
 
 TEST_F(PlyTest, TruncatedFileIsInputError) {
   const std::string p = path("frame.ply");
-  write_ply(p, sample_frame());
+  write_ply(p, ply_sample_frame());
   std::string bytes = read_bytes(p);
   // Cut in the middle of a record, and then right after the header.
   write_bytes(p, bytes.substr(0, bytes.size() - 50));
@@ -218,7 +218,7 @@ TEST_F(PlyTest, CorruptFilesNeverCrash) {
   // Random byte flips and truncations of valid binary and ascii files: each read either succeeds
   // or throws InputError (run under the sanitizer build to catch out-of-bounds reads).
   const std::string p = path("fuzz.ply");
-  FrameData f = sample_frame();
+  FrameData f = ply_sample_frame();
   f.position.resize(5);
   f.radius.resize(5);
   f.velocity.resize(5);

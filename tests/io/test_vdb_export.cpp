@@ -37,7 +37,7 @@ using VdbTest = test::ScratchTest;
 constexpr Real kDiameter = 0.01;
 
 // Grains one diameter across, apart from each other, with distinct values in every field.
-FrameData sample_frame() {
+FrameData vdb_sample_frame() {
   FrameData f;
   f.position = {{0.0125, -0.02, 0.1}, {0.05, 0.031, 0.12}, {-0.04, 0.0, 0.105}};
   f.radius = {0.005, 0.0045, 0.0055};
@@ -130,7 +130,7 @@ double phi(const vdb::FloatGrid& grid, const Vec3& x) {
 
 TEST_F(VdbTest, GridsReadBackWithTheirNamesClassesAndVoxels) {
   const std::string path = this->path("0012.vdb");
-  write_vdb(path, sample_frame(), nullptr, sample_info());
+  write_vdb(path, vdb_sample_frame(), nullptr, sample_info());
   const ReadBack r = read_vdb(path);
   EXPECT_EQ(r.names, (std::vector<std::string>{"grains", "surface"}));
   ASSERT_TRUE(r.grains);
@@ -154,7 +154,7 @@ TEST_F(VdbTest, GridsReadBackWithTheirNamesClassesAndVoxels) {
 }
 
 TEST_F(VdbTest, PointsHoldEveryGrainWithItsAttributes) {
-  const FrameData f = sample_frame();
+  const FrameData f = vdb_sample_frame();
   const VdbFrameInfo info = sample_info();
   const std::string path = this->path("0012.vdb");
   write_vdb(path, f, nullptr, info);
@@ -183,7 +183,7 @@ TEST_F(VdbTest, PointsHoldEveryGrainWithItsAttributes) {
 }
 
 TEST_F(VdbTest, LevelSetIsNegativeInsideEachGrainAndPositiveAway) {
-  const FrameData f = sample_frame();
+  const FrameData f = vdb_sample_frame();
   const VdbFrameInfo info = sample_info();
   const double vs = info.surface_voxel;
   write_vdb(path("0012.vdb"), f, nullptr, info);
@@ -270,7 +270,7 @@ TEST_F(VdbTest, AWallStepKeepsTheLayerInItsColumns) {
 }
 
 TEST_F(VdbTest, YUpRotatesThePointsAndTheLevelSet) {
-  const FrameData f = sample_frame();
+  const FrameData f = vdb_sample_frame();
   const HeightField hf = ramp_field();
   const VdbFrameInfo info = sample_info(UpAxis::Y);
   const double vs = info.surface_voxel;
@@ -302,7 +302,7 @@ TEST_F(VdbTest, YUpRotatesThePointsAndTheLevelSet) {
 TEST_F(VdbTest, AnUnwritablePathIsAnOutputErrorNamingIt) {
   const std::string path = this->path("no_such_folder/0001.vdb");
   try {
-    write_vdb(path, sample_frame(), nullptr, sample_info());
+    write_vdb(path, vdb_sample_frame(), nullptr, sample_info());
     FAIL() << "no error";
   } catch (const OutputError& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();

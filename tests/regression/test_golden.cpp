@@ -11,8 +11,8 @@
 
 namespace {
 
+using sandflow_test::run_sandflow;
 using sandflow_test::Sandbox;
-using sandflow_test::sandflow;
 
 // What these guard: any unintended change of the physics or of the order of floating-point
 // operations — the contact law, the integrator, the order of the pair lists and of the sums, the
@@ -42,7 +42,7 @@ nlohmann::json run_golden(const std::string& mode) {
   const auto out = box.dir / "out";
   const std::string scene = std::string(SANDFLOW_SOURCE_DIR) + "/tests/regression/golden.toml";
   std::string log;
-  const int rc = sandflow(
+  const int rc = run_sandflow(
       "run " + scene + " --mode " + mode + " --threads 2 --export none --out " + out.string(),
       &log);
   EXPECT_EQ(rc, 0) << log;

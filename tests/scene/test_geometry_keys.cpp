@@ -20,7 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kEmitter = "[[emitter]]\ncount = 10\n";  // lines 1-2
+constexpr const char* kEmitterLines = "[[emitter]]\ncount = 10\n";  // lines 1-2
 
 using test::error_of;
 using test::expect_error;
@@ -28,7 +28,7 @@ using test::expect_error;
 using TempDir = test::ScratchFolder;
 
 TEST(GeometryKeys, BowlReadsEveryKey) {
-  const SceneConfig c = load_scene_from_string(std::string(kEmitter) +
+  const SceneConfig c = load_scene_from_string(std::string(kEmitterLines) +
                                                    "[[geometry]]\n"
                                                    "type = \"bowl\"\n"
                                                    "center = [1, 2, 3]\n"
@@ -45,14 +45,15 @@ TEST(GeometryKeys, BowlReadsEveryKey) {
   EXPECT_EQ(g.depth, 0.2);
   EXPECT_EQ(g.rotation_deg, Vec3(10, 0, 0));
   // defaults: a hemisphere (depth unset = radius) with 2 cm walls
-  const SceneConfig d =
-      load_scene_from_string(std::string(kEmitter) + "[[geometry]]\ntype = \"bowl\"\n", "t.toml");
+  const SceneConfig d = load_scene_from_string(
+      std::string(kEmitterLines) + "[[geometry]]\ntype = \"bowl\"\n", "t.toml");
   EXPECT_FALSE(d.geometry[0].depth.has_value());
   EXPECT_EQ(d.geometry[0].wall_thickness, 0.02);
 }
 
 TEST(GeometryKeys, BowlErrors) {
-  const std::string head = std::string(kEmitter) + "[[geometry]]\ntype = \"bowl\"\nradius = 0.2\n";
+  const std::string head =
+      std::string(kEmitterLines) + "[[geometry]]\ntype = \"bowl\"\nradius = 0.2\n";
   expect_error(head + "depth = 0.4\n",
                {"t.toml:6:1: geometry[0].depth = 0.4 is not below 2 * radius = 0.4"});
   expect_error(head + "depth = 0\n", {"t.toml:6:1: geometry[0].depth = 0 is not > 0"});
@@ -62,7 +63,7 @@ TEST(GeometryKeys, BowlErrors) {
 }
 
 TEST(GeometryKeys, HeightmapInlineHeights) {
-  const SceneConfig c = load_scene_from_string(std::string(kEmitter) +
+  const SceneConfig c = load_scene_from_string(std::string(kEmitterLines) +
                                                    "[[geometry]]\n"
                                                    "type = \"heightmap\"\n"
                                                    "extent = [0, 0, 2, 1]\n"
@@ -81,7 +82,7 @@ TEST(GeometryKeys, HeightmapInlineHeights) {
 
 TEST(GeometryKeys, HeightmapErrors) {
   const std::string head =
-      std::string(kEmitter) + "[[geometry]]\ntype = \"heightmap\"\nextent = [0, 0, 1, 1]\n";
+      std::string(kEmitterLines) + "[[geometry]]\ntype = \"heightmap\"\nextent = [0, 0, 1, 1]\n";
   expect_error(head + "heights = [[0, 1, 2], [3, 4]]\n",
                {"t.toml:6:23: geometry[0].heights[1] has 2 values but geometry[0].heights[0] has 3",
                 "same length"});
@@ -102,11 +103,13 @@ TEST(GeometryKeys, HeightmapErrors) {
                {"t.toml:7:1: geometry[0].file: a heightmap takes exactly one of", "heights and file"});
   expect_error(head + "heights = [[0, 1], [2, 3]]\nz_min = 1\n",
                {"t.toml:7:1: geometry[0].z_min is not a key of a heightmap with heights"});
-  expect_error(std::string(kEmitter) + "[[geometry]]\ntype = \"heightmap\"\nheights = [[0, 1], [2, 3]]\n",
+  expect_error(std::string(kEmitterLines) +
+                   "[[geometry]]\ntype = \"heightmap\"\nheights = [[0, 1], [2, 3]]\n",
                {"t.toml:3:1: geometry[0].extent is missing: expected [x0, y0, x1, y1]"});
-  expect_error(std::string(kEmitter) +
-                   "[[geometry]]\ntype = \"heightmap\"\nextent = [1, 0, 0, 1]\nheights = [[0, 1], [2, 3]]\n",
-               {"t.toml:5:1: geometry[0].extent = [1, 0, 0, 1]: expected [x0, y0, x1, y1] with x1 > x0"});
+  expect_error(
+      std::string(kEmitterLines) +
+          "[[geometry]]\ntype = \"heightmap\"\nextent = [1, 0, 0, 1]\nheights = [[0, 1], [2, 3]]\n",
+      {"t.toml:5:1: geometry[0].extent = [1, 0, 0, 1]: expected [x0, y0, x1, y1] with x1 > x0"});
   expect_error(head + "noise = { wavelength = 0.1, amp = 2 }\n",
                {"t.toml:6:29: geometry[0].noise.amp is not a key of a heightmap's noise"});
   expect_error(head + "noise = { wavelength = 0.1 }\nz_min = 1\nz_max = 0.5\n",
@@ -114,7 +117,7 @@ TEST(GeometryKeys, HeightmapErrors) {
 }
 
 TEST(GeometryKeys, HeightmapNoise) {
-  const SceneConfig c = load_scene_from_string(std::string(kEmitter) +
+  const SceneConfig c = load_scene_from_string(std::string(kEmitterLines) +
                                                    "[[geometry]]\n"
                                                    "type = \"heightmap\"\n"
                                                    "extent = [0, 0, 0.4, 0.3]\n"
@@ -136,7 +139,7 @@ TEST(GeometryKeys, HeightmapFromPngRelativeToTheScene) {
                                  0.25, 0.75, 1.0};
   for (int bits : {8, 16}) {
     write_gray_png(tmp.path("h.png"), 3, 2, grey, bits);
-    const std::string scene = tmp.write("s.toml", std::string(kEmitter) +
+    const std::string scene = tmp.write("s.toml", std::string(kEmitterLines) +
                                                       "[[geometry]]\n"
                                                       "type = \"heightmap\"\n"
                                                       "extent = [0, 0, 2, 1]\n"
@@ -158,11 +161,12 @@ TEST(GeometryKeys, HeightmapFromPngRelativeToTheScene) {
 TEST(GeometryKeys, HeightmapFileErrors) {
   const TempDir tmp;
   const auto scene = [&](const std::string& file) {
-    return tmp.write("s.toml", std::string(kEmitter) +
+    return tmp.write("s.toml", std::string(kEmitterLines) +
                                    "[[geometry]]\n"
                                    "type = \"heightmap\"\n"
                                    "extent = [0, 0, 1, 1]\n"
-                                   "file = \"" + file + "\"\n");
+                                   "file = \"" +
+                                   file + "\"\n");
   };
   const auto error_loading = [](const std::string& path) {
     try {
@@ -210,19 +214,19 @@ TEST(GeometryKeys, HeightmapFileErrors) {
 
 TEST(GeometryKeys, RemoveAtIsReadForSolidsAndRefusedForMeshes) {
   const SceneConfig c = load_scene_from_string(
-      std::string(kEmitter) +
+      std::string(kEmitterLines) +
           "[[geometry]]\ntype = \"cylinder\"\ncontainer = true\nremove_at = 1.5\n",
       "t.toml");
   ASSERT_TRUE(c.geometry.at(0).remove_at.has_value());
   EXPECT_EQ(*c.geometry[0].remove_at, 1.5);
-  const SceneConfig none =
-      load_scene_from_string(std::string(kEmitter) + "[[geometry]]\ntype = \"plane\"\n", "t.toml");
+  const SceneConfig none = load_scene_from_string(
+      std::string(kEmitterLines) + "[[geometry]]\ntype = \"plane\"\n", "t.toml");
   EXPECT_FALSE(none.geometry.at(0).remove_at.has_value());
-  expect_error(std::string(kEmitter) + "[[geometry]]\ntype = \"box\"\nremove_at = -1\n",
+  expect_error(std::string(kEmitterLines) + "[[geometry]]\ntype = \"box\"\nremove_at = -1\n",
                {"t.toml:5:1: geometry[0].remove_at = -1"});
-  expect_error(
-      std::string(kEmitter) + "[[geometry]]\ntype = \"mesh\"\nfile = \"m.obj\"\nremove_at = 1\n",
-      {"t.toml:", "geometry[0].remove_at", "a mesh cannot be removed"});
+  expect_error(std::string(kEmitterLines) +
+                   "[[geometry]]\ntype = \"mesh\"\nfile = \"m.obj\"\nremove_at = 1\n",
+               {"t.toml:", "geometry[0].remove_at", "a mesh cannot be removed"});
 }
 
 }  // namespace

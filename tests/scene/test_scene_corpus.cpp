@@ -84,7 +84,7 @@ TEST(SceneCorpusCli, CheckExitsWithTwoOnEveryFile) {
   for (const std::string& name : corpus_files()) {
     const fs::path path = kCorpus / name;
     std::string out;
-    const int rc = sandflow_test::sandflow("run \"" + path.string() + "\" --check", &out);
+    const int rc = sandflow_test::run_sandflow("run \"" + path.string() + "\" --check", &out);
     EXPECT_EQ(rc, 2) << name << ":\n" << out;
     EXPECT_NE(out.find("error: " + path.string() + ":"), std::string::npos) << name << ":\n" << out;
     ++checked;

@@ -12,8 +12,8 @@
 namespace sandflow {
 namespace {
 
-constexpr Real kD = 0.01;     // grain diameter [m]
-constexpr Real kR = kD / 2;
+constexpr Real kGrainD = 0.01;  // grain diameter [m]
+constexpr Real kGrainR = kGrainD / 2;
 
 // A static layer three grains deep under a plane through the origin sloping at `theta` along x
 // (a square lattice in the plane's frame, a hair looser than touching), and one ACTIVE grain a
@@ -30,7 +30,7 @@ struct Creep {
 
   static HeightFieldParams grid() {
     HeightFieldParams p;
-    p.cell = kD;
+    p.cell = kGrainD;
     p.nx = p.ny = 16;
     p.x0 = p.y0 = -0.08;
     return p;
@@ -40,7 +40,7 @@ struct Creep {
     MaterialConfig m;
     m.k_n = 1e4;
     p.contact = contact_params(m);
-    p.skin = 0.2 * kD;
+    p.skin = 0.2 * kGrainD;
     p.gravity = {};
     return p;
   }
@@ -48,15 +48,15 @@ struct Creep {
       : hf(grid(), std::vector<Real>(256, -1.0)), dem(dem_params()) {
     n = {-std::sin(theta), 0, std::cos(theta)};
     const Vec3 e1{std::cos(theta), 0, std::sin(theta)}, e2{0, 1, 0};
-    const Real a = 1.0001 * kD;
+    const Real a = 1.0001 * kGrainD;
     GrainId id = 0;
     for (int k = 0; k < 3; ++k)
       for (int v = -4; v <= 4; ++v)
         for (int u = -4; u <= 4; ++u) {
           const Vec3 x = e1 * (u * a) + e2 * (v * a) - n * ((k + 0.5) * a);
-          st.add(id++, x, kR, static_cast<std::uint32_t>(hf.column_of(x.x, x.y)));
+          st.add(id++, x, kGrainR, static_cast<std::uint32_t>(hf.column_of(x.x, x.y)));
         }
-    hot.add(id, n * (kR + 0.1 * kD), n * -0.2, kR, 2600);
+    hot.add(id, n * (kGrainR + 0.1 * kGrainD), n * -0.2, kGrainR, 2600);
   }
   // one step as World::step takes it: the invariant before each rebuild, then the DEM.
   // `deepest` gets the deepest overlap of an ACTIVE grain with a STATIC one where the forces are
@@ -115,7 +115,7 @@ TEST(LayerInvariant, WithoutItTheGrainGoesIntoTheStaticLayer) {
   Creep c(deg_to_rad(39.0));
   Real deepest = 0;
   for (int s = 0; s < 3000; ++s) c.step(false, &deepest);
-  EXPECT_GT(deepest, 0.3 * kD);
+  EXPECT_GT(deepest, 0.3 * kGrainD);
 }
 
 // Erosion after the creep: the static top falls below the whole layer and every static grain
@@ -155,26 +155,27 @@ TEST(LayerInvariant, TheBandIsMeasuredNormalToTheSlope) {
   // band on a 40-degree slope, where the band reaches 1.31 T down
   for (const Real theta_deg : {0.0, 40.0}) {
     HeightFieldParams p;
-    p.cell = kD;
+    p.cell = kGrainD;
     p.nx = p.ny = 10;
     HeightField hf(p, std::vector<Real>(100, -1.0));
     const Real slope = std::tan(deg_to_rad(theta_deg));
     std::vector<Real> h(100), H(100);
     for (std::size_t c = 0; c < 100; ++c) {
       h[c] = 0.2 + slope * hf.centre(c).x;
-      H[c] = h[c] + kD;
+      H[c] = h[c] + kGrainD;
     }
     hf.set_surface(H);
     hf.set_static_top(h);
     hf.exchange(1e-12);  // (the slopes; a vanishing interval moves nothing)
     InterfaceParams ip;
-    ip.thickness = kD;
-    ip.margin = 0.25 * kD;
+    ip.thickness = kGrainD;
+    ip.margin = 0.25 * kGrainD;
     InterfaceLayer layer(ip);
     Grains hot;
     StaticStore st(static_frame(hf, -1.0, 1.0, 0.004, 0.006));
     const Vec3 at{0.05, 0.05, 0};
-    hot.add(0, {at.x, at.y, hf.static_top_at(at.x, at.y) - 1.15 * kD - ip.margin}, {}, kR, 2600);
+    hot.add(0, {at.x, at.y, hf.static_top_at(at.x, at.y) - 1.15 * kGrainD - ip.margin}, {}, kGrainR,
+            2600);
     hot.state[0] = GrainState::Interface;
     std::vector<std::uint8_t> contacts(1, DemSolver::kTouches);
     const TransitionCounts n = layer.transfer(hf, hot, st, contacts).counts;

@@ -16,11 +16,11 @@
 namespace sandflow {
 namespace {
 
-constexpr Real kD = 0.01;  // grain diameter [m]
-constexpr Real kR = kD / 2;
+constexpr Real kSeatD = 0.01;  // grain diameter [m]
+constexpr Real kSeatR = kSeatD / 2;
 
 SceneConfig bed_scene() {
-  SceneConfig s = test::grains_on_floor("seat", Mode::Surface, kD);
+  SceneConfig s = test::grains_on_floor("seat", Mode::Surface, kSeatD);
   s.material.diameter_spread = 0;
   s.surface.extent = std::array<Real, 4>{-0.05, -0.05, 0.05, 0.05};
   return s;
@@ -34,22 +34,23 @@ TEST(Seat, TheRiseToTheSaddleIsThatOfASphereOnThreeEqualSpheres) {
   EXPECT_NEAR(kSeatRise, saddle - seat, 1e-15);
   // at rest in its seat, without rotation, the bound is a speed of 0.31 sqrt(g d)
   SeatParams p;
-  EXPECT_NEAR(std::sqrt(2 * p.hold_energy(kR)), 0.3147 * std::sqrt(9.81 * kD), 1e-4);
-  EXPECT_EQ(p.hold_energy(kR), p.move_energy(kR));
-  EXPECT_NEAR(p.hold_energy(2 * kR), 2 * p.hold_energy(kR), 1e-15);  // the rise scales with r
+  EXPECT_NEAR(std::sqrt(2 * p.hold_energy(kSeatR)), 0.3147 * std::sqrt(9.81 * kSeatD), 1e-4);
+  EXPECT_EQ(p.hold_energy(kSeatR), p.move_energy(kSeatR));
+  EXPECT_NEAR(p.hold_energy(2 * kSeatR), 2 * p.hold_energy(kSeatR),
+              1e-15);  // the rise scales with r
 }
 
 TEST(Seat, SceneSpeedsOverrideTheSeatAndMayNotCross) {
   SceneConfig s = bed_scene();
   const Geometry g = Geometry::from_config(s.geometry, s.material);
   const SurfaceParams p = surface_params(s, g, 1e-4);
-  EXPECT_NEAR(p.interface.seat.hold_energy(kR), 9.81 * kSeatRise * kR, 1e-15);
+  EXPECT_NEAR(p.interface.seat.hold_energy(kSeatR), 9.81 * kSeatRise * kSeatR, 1e-15);
 
   s.surface.trap_speed = 0.05;
   s.surface.flow_speed = 0.2;
   const SeatParams set = surface_params(s, g, 1e-4).interface.seat;
-  EXPECT_NEAR(set.hold_energy(kR), 0.5 * 0.05 * 0.05, 1e-15);
-  EXPECT_NEAR(set.move_energy(3 * kR), 0.5 * 0.2 * 0.2, 1e-15);  // the same for every size
+  EXPECT_NEAR(set.hold_energy(kSeatR), 0.5 * 0.05 * 0.05, 1e-15);
+  EXPECT_NEAR(set.move_energy(3 * kSeatR), 0.5 * 0.2 * 0.2, 1e-15);  // the same for every size
 
   s.surface.trap_speed = 0.2;
   s.surface.flow_speed = 0.1;
@@ -94,7 +95,7 @@ TopGrain top_grain(Real speed, Real spin = 0, bool pocket = true, bool h_above =
   SurfaceFlow flow(sp, geometry);
   DemParams dp;
   dp.contact = contact_params(s.material);
-  dp.skin = 0.2 * kD;
+  dp.skin = 0.2 * kSeatD;
   dp.sort_every = 0;  // the top grain stays last
   DemSolver dem(dp);
 
@@ -105,18 +106,19 @@ TopGrain top_grain(Real speed, Real spin = 0, bool pocket = true, bool h_above =
   for (int layer = 0; layer < 3; ++layer)
     for (int j = -3; j <= 3; ++j)
       for (int i = -3; i <= 3; ++i) {
-        const Vec3 x{i * kD, j * kD, (2 * layer + 1) * kR};
+        const Vec3 x{i * kSeatD, j * kSeatD, (2 * layer + 1) * kSeatR};
         if (layer < 2) {
-          st.add(id++, x, kR, static_cast<std::uint32_t>(hf.column_of(x.x, x.y)));
+          st.add(id++, x, kSeatR, static_cast<std::uint32_t>(hf.column_of(x.x, x.y)));
         } else {
-          hot.add(id++, x, {}, kR, s.material.density);
+          hot.add(id++, x, {}, kSeatR, s.material.density);
           hot.state.back() = GrainState::Interface;
         }
       }
   // pressed in by a hair, so that it touches: between four grains, or on top of one
-  const Vec3 top = pocket ? Vec3{0.5 * kD, 0.5 * kD, 5 * kR + std::sqrt(2.0) * kR - 1e-5}
-                          : Vec3{0, 0, 7 * kR - 1e-5};
-  hot.add(id++, top, {speed, 0, 0}, kR, s.material.density);
+  const Vec3 top =
+      pocket ? Vec3{0.5 * kSeatD, 0.5 * kSeatD, 5 * kSeatR + std::sqrt(2.0) * kSeatR - 1e-5}
+             : Vec3{0, 0, 7 * kSeatR - 1e-5};
+  hot.add(id++, top, {speed, 0, 0}, kSeatR, s.material.density);
   hot.w.back() = {0, spin, 0};
   Profile profile;
   dem.step(hot, geometry, dt, profile);  // builds the lists and sets the contacts' state
@@ -133,26 +135,26 @@ TopGrain top_grain(Real speed, Real spin = 0, bool pocket = true, bool h_above =
 
   if (h_above) {  // the transfer alone, against a static top above the grain's centre
     HeightField above(sp.grid, terrain_columns(sp, geometry));
-    above.set_surface(std::vector<Real>(above.columns(), top.z + 2 * kR));
-    above.set_static_top(std::vector<Real>(above.columns(), top.z + kR));
+    above.set_surface(std::vector<Real>(above.columns(), top.z + 2 * kSeatR));
+    above.set_static_top(std::vector<Real>(above.columns(), top.z + kSeatR));
     InterfaceLayer layer(sp.interface);
     layer.transfer(above, hot, st, contacts);
   } else {
     SurfaceState state = flow.save_state();
-    for (Real& h : state.columns.h) h = top.z - kR;
+    for (Real& h : state.columns.h) h = top.z - kSeatR;
     flow.restore_state(state);
     flow.update_height_field(hot, st, dem, geometry, sp.update_interval);
     flow.apply_impacts(hot, sp.update_interval);
     dem.apply(flow.transfer(hot, st, dem).changes);
     const std::int64_t c = hf.column_of(top.x, top.y);
-    out.h_minus_bottom = hf.static_top()[static_cast<std::size_t>(c)] - (top.z - kR);
+    out.h_minus_bottom = hf.static_top()[static_cast<std::size_t>(c)] - (top.z - kSeatR);
   }
   for (std::size_t i = 0; i < hot.size(); ++i)
     if (hot.id[i] == id - 1) out.state = hot.state[i];
   return out;
 }
 
-const Real kEscape = std::sqrt(2 * 9.81 * kSeatRise * kR);  // at rest in its seat, no rotation
+const Real kEscape = std::sqrt(2 * 9.81 * kSeatRise * kSeatR);  // at rest in its seat, no rotation
 
 TEST(Seat, AGrainAtRestInAPocketIsSeatedAndHeld) {
   const TopGrain g = top_grain(0);
@@ -162,7 +164,7 @@ TEST(Seat, AGrainAtRestInAPocketIsSeatedAndHeld) {
   EXPECT_FALSE(g.moves);
   // below h it is trapped; and it does not dig: the static top stays at its bottom
   EXPECT_EQ(top_grain(0, 0, true, true).state, GrainState::Interface);
-  EXPECT_GT(g.h_minus_bottom, -0.1 * kD);
+  EXPECT_GT(g.h_minus_bottom, -0.1 * kSeatD);
 }
 
 TEST(Seat, AGrainWithTheEnergyToLeaveItsSeatMovesThePileAndDigs) {
@@ -171,10 +173,10 @@ TEST(Seat, AGrainWithTheEnergyToLeaveItsSeatMovesThePileAndDigs) {
   EXPECT_TRUE(g.moves);
   EXPECT_EQ(top_grain(1.5 * kEscape, 0, true, true).state, GrainState::Active);
   // the flowing layer under it (flowing_min, 2 d): the static top goes a diameter below its bottom
-  EXPECT_LE(g.h_minus_bottom, -kD + 1e-12);
+  EXPECT_LE(g.h_minus_bottom, -kSeatD + 1e-12);
   // rotation counts: slower than the bound, but spinning with the energy of a rolling grain
   // (2/5 of the translational) that takes it over
-  const TopGrain rolling = top_grain(0.9 * kEscape, 0.9 * kEscape / kR);
+  const TopGrain rolling = top_grain(0.9 * kEscape, 0.9 * kEscape / kSeatR);
   EXPECT_FALSE(rolling.held);
   EXPECT_TRUE(rolling.moves);
   const TopGrain sliding = top_grain(0.9 * kEscape);
@@ -183,7 +185,7 @@ TEST(Seat, AGrainWithTheEnergyToLeaveItsSeatMovesThePileAndDigs) {
   EXPECT_FALSE(sliding.held) << "a grain sliding over the bed is not trapped";
   EXPECT_FALSE(sliding.moves) << "too slow to leave a seat: it does not dig";
   EXPECT_EQ(top_grain(0.9 * kEscape, 0, true, true).state, GrainState::Active);
-  EXPECT_GT(sliding.h_minus_bottom, -0.1 * kD);
+  EXPECT_GT(sliding.h_minus_bottom, -0.1 * kSeatD);
 }
 
 TEST(Seat, AGrainBalancedOnOneGrainIsNotSeated) {
