@@ -301,6 +301,7 @@ World::World(const SceneConfig& scene)
   if (surface_)
     static_ = StaticStore(
         static_store_frame(scene_, surface_->height_field(), domain_lo_.z, domain_hi_.z));
+  checked_ = {};  // (a new store counts its revisions from 0 again)
   // a solid removed at time t goes at the first step that starts at or after t
   for (const GeometryConfig& g : scene_.geometry)
     removal_step_.push_back(
@@ -484,9 +485,14 @@ void World::end_step() {
   // those that left (docs/design.md §2; advance_frame checks the count in every build), and the
   // INTERFACE grains at rest: frozen with v = w = 0, and the DEM moves ACTIVE grains only
   if constexpr (kAssertions) {
-    const std::string fault =
-        store_error(grains_, static_, next_id_, static_cast<std::int64_t>(next_id_) - left_);
-    SANDFLOW_ASSERT(fault.empty(), fmt::format("{}: {}", where(step_ + 1), fault));
+    const std::int64_t expected = static_cast<std::int64_t>(next_id_) - left_;
+    if (static_.revision() != checked_.static_revision || grains_.id != checked_.ids ||
+        grains_.state != checked_.states || next_id_ != checked_.next_id ||
+        expected != checked_.expected) {
+      const std::string fault = store_error(grains_, static_, next_id_, expected);
+      SANDFLOW_ASSERT(fault.empty(), fmt::format("{}: {}", where(step_ + 1), fault));
+      checked_ = {static_.revision(), grains_.id, grains_.state, next_id_, expected};
+    }
     for (std::size_t i = 0; i < grains_.size(); ++i)
       SANDFLOW_ASSERT(grains_.state[i] == GrainState::Active ||
                           (grains_.v[i] == Vec3{} && grains_.w[i] == Vec3{}),
@@ -745,6 +751,7 @@ void World::restore_state(WorldState s) {
   grains_ = std::move(s.grains);
   // (slot for slot, as the run had it: the same grains wake in the same order)
   static_.restore(std::move(s.statics));
+  checked_ = {};
   // the solids removed before the checkpoint (at its step, the next step() removes them, as the
   // run did), before the DEM's lists and the height field are restored over them
   remove_due_geometry(s.step, false);

@@ -225,6 +225,15 @@ class World {
   /// Per [[geometry]] entry, the step whose start removes it (-1: never, or done)
   std::vector<std::int64_t> removal_step_;
   std::int64_t left_ = 0, left_frame_ = 0;
+  /// (assertions) the stores as store_error last found them sound: it depends on nothing else, so
+  /// a step that changed neither (most steps) is not checked again
+  struct CheckedStores {
+    std::uint64_t static_revision = 0;
+    std::vector<GrainId> ids;
+    std::vector<GrainState> states;
+    GrainId next_id = 0;
+    std::int64_t expected = -1;
+  } checked_;
 };
 
 }  // namespace sandflow
