@@ -415,8 +415,8 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> swept_pairs(const Grains& g
                                                                  const std::vector<Real>& allow) {
   const std::size_t n = grains.size();
   std::vector<std::uint32_t> by_x(n);
-  Real reach_max =
-      0;  // the largest r + a: no partner of i lies further along x than r_i + a_i + it
+  // the largest r + a: no partner of i lies further along x than r_i + a_i + it
+  Real reach_max = 0;
   for (std::uint32_t i = 0; i < n; ++i) {
     by_x[i] = i;
     reach_max = std::max(reach_max, grains.r[i] + allow[i]);

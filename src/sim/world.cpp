@@ -301,7 +301,6 @@ World::World(const SceneConfig& scene)
   if (surface_)
     static_ = StaticStore(
         static_store_frame(scene_, surface_->height_field(), domain_lo_.z, domain_hi_.z));
-  checked_ = {};  // (a new store counts its revisions from 0 again)
   // a solid removed at time t goes at the first step that starts at or after t
   for (const GeometryConfig& g : scene_.geometry)
     removal_step_.push_back(
