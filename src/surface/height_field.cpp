@@ -47,7 +47,10 @@ HeightField::HeightField(const HeightFieldParams& p, std::vector<Real> terrain)
     : HeightField(p, TerrainColumns::single(terrain)) {}
 
 HeightField::HeightField(const HeightFieldParams& p, TerrainColumns terrain)
-    : p_(p), solids_(std::move(terrain)) {
+    : p_(p),
+      tan_theta0_(std::tan(p.theta0)),
+      tan_theta_max_(std::tan(p.theta_max)),
+      solids_(std::move(terrain)) {
   if (p_.nx < 1 || p_.ny < 1 || !(p_.cell > 0))
     throw InputError("height field: the grid needs at least one column of positive width");
   check_terrain(solids_, columns());
@@ -307,7 +310,6 @@ void HeightField::exchange(Real dt, const std::vector<std::uint8_t>& flowing) {
 void HeightField::exchange(Real dt, const ColumnSet& flowing) {
   const int nx = p_.nx, ny = p_.ny;
   const Real dx = p_.cell;
-  const Real tan0 = std::tan(p_.theta0);
   // the columns that can change (see the top of the file)
   evaluate_.clear();
   if (everything_) {
@@ -354,12 +356,13 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
       // a slope between the two stay there in DEM, so they join the static layer.
       const bool flows = flowing.contains(c);
       const Real theta_c = flows ? p_.theta0 : p_.theta_max;
+      const Real tan_c = flows ? tan_theta0_ : tan_theta_max_;
       dh = -R * std::expm1(p_.gamma * (theta - theta_c) * dt);
       // a deposit stops where the column's own downhill slope would pass theta_c: otherwise it
       // builds a step that the next update erodes again, and the grains on it flip between
       // trapped and dislodged at every update
       if (dh > 0) {
-        const Real cap = 0.5 * dx * std::max(std::tan(theta_c) - tan_theta, 0.0);
+        const Real cap = 0.5 * dx * std::max(tan_c - tan_theta, 0.0);
         dh = std::min(dh, cap);
         // the exchange's deposit takes a fraction of R at each update, never all of it: what it
         // would leave thinner than a thousandth of a column (a fraction of a grain's rounding in
@@ -370,7 +373,7 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
       // an avalanche: a static slope above theta_max erodes even with no rolling layer
       if (theta > p_.theta_max) dh -= p_.gamma * p_.avalanche_depth * (theta - p_.theta_max) * dt;
       // erosion stops where the slope would fall below theta0 (no overshoot between updates)
-      if (dh < 0) dh = std::max(dh, -0.5 * dx * std::max(tan_theta - tan0, 0.0));
+      if (dh < 0) dh = std::max(dh, -0.5 * dx * std::max(tan_theta - tan_theta0_, 0.0));
     }
     h_new_[w] = std::max(h_[c] + dh, L_[c]);  // erosion never digs below the terrain
     Gamma_[c] = -(h_new_[w] - h_[c]) / dt;
@@ -413,7 +416,7 @@ Real HeightField::max_slope_top(std::size_t c, const std::vector<Real>& z) const
   const Real a = std::min(i > 0 ? across(c - 1) : kNone, i + 1 < p_.nx ? across(c + 1) : kNone);
   const Real b =
       std::min(j > 0 ? across(c - p_.nx) : kNone, j + 1 < p_.ny ? across(c + p_.nx) : kNone);
-  const Real s = p_.cell * std::tan(p_.theta_max);
+  const Real s = p_.cell * tan_theta_max_;
   // the h at which (h - a)^2 + (h - b)^2 = s^2 (each term only where h is above it)
   if (std::abs(a - b) >= s || !std::isfinite(a) || !std::isfinite(b)) return std::min(a, b) + s;
   return 0.5 * (a + b + std::sqrt(2 * s * s - (a - b) * (a - b)));
@@ -423,13 +426,27 @@ void HeightField::hold_max_slope(const std::vector<std::uint32_t>& seeds) {
   const Real tol = 1e-9 * p_.cell;  // (rounding must not keep the sweep going)
   // 1. free faces: static sand standing steeper than theta_max above the sand beside it (H: the
   // grains there, moving or not, buttress it; under an impact's pit they still do)
+  // (each seed's five tests on the threads, one bit each; the queue is then filled in seed order)
   queue_.clear();
-  auto face = [&](std::size_t c) {
-    if (h_[c] > max_slope_top(c, H_) + tol) queue_.push_back(static_cast<std::uint32_t>(c));
-  };
-  for (std::uint32_t c : seeds) {
-    face(c);
-    for_each_neighbour(c, face);
+  auto face = [&](std::size_t c) { return h_[c] > max_slope_top(c, H_) + tol; };
+  faces_.resize(seeds.size());
+#pragma omp parallel for schedule(static) if (seeds.size() >= 1024)
+  for (std::size_t w = 0; w < seeds.size(); ++w) {
+    std::uint8_t bits = face(seeds[w]), bit = 2;
+    for_each_neighbour(seeds[w], [&](std::size_t n) {
+      if (face(n)) bits |= bit;
+      bit <<= 1;
+    });
+    faces_[w] = bits;
+  }
+  for (std::size_t w = 0; w < seeds.size(); ++w) {
+    if (!faces_[w]) continue;
+    if (faces_[w] & 1) queue_.push_back(seeds[w]);
+    std::uint8_t bit = 2;
+    for_each_neighbour(seeds[w], [&](std::size_t n) {
+      if (faces_[w] & bit) queue_.push_back(static_cast<std::uint32_t>(n));
+      bit <<= 1;
+    });
   }
   // 2. the wedge behind each face fails with it: a label-correcting sweep of the static top to
   // the theta_max slope from the face's foot (h only falls, never below L, so it ends)

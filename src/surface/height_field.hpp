@@ -253,6 +253,9 @@ class HeightField {
   void everything_changed();
 
   HeightFieldParams p_;
+  // the angles' tangents, which the exchange and the free faces take at every column (computed
+  // there, they were a hundredth of a surface run, all on one thread)
+  Real tan_theta0_ = 0, tan_theta_max_ = 0;
   TerrainColumns solids_;
   std::uint64_t initial_terrain_hash_ = 0;
   std::vector<Real> L_, H_, h_, R_, theta_, Gamma_, rest_, hold_left_;
@@ -269,6 +272,7 @@ class HeightField {
   std::size_t evaluated_ = 0;
   std::vector<Real> h_new_;
   std::vector<std::uint32_t> queue_;  ///< scratch of hold_max_slope()
+  std::vector<std::uint8_t> faces_;   ///< scratch of hold_max_slope(): a seed's faces, one bit each
 
   // scratch of measure(): ray hits filed by column, for the columns hit only
   struct ColumnHit {

@@ -6,6 +6,8 @@
 #include <limits>
 #include <vector>
 
+#include <omp.h>
+
 #include "surface/height_field.hpp"
 
 namespace sandflow {
@@ -227,29 +229,25 @@ TEST(Exchange, AvalancheStartsOnlyAboveThetaMax) {
   });
 }
 
-// A 30 x 30 field on a flat terrain at 0, sand 2 mm deep, with a 10 x 10 block of static sand
-// 20 cm high in the middle; the sand surface H is `beside` outside the block and the block's top
-// inside it.
-HeightField block(Real beside) {
+// A field of `size` x `size` columns on a flat terrain at 0, sand 2 mm deep, with a block of
+// static sand 20 cm high in the middle, a third of the field wide; the sand surface H is `beside`
+// outside the block and the block's top inside it.
+HeightField block(Real beside, int size = 30) {
   HeightFieldParams p = ramp_params();
-  p.nx = p.ny = 30;
+  p.nx = p.ny = size;
   HeightField hf(p, std::vector<Real>(static_cast<std::size_t>(p.nx) * p.ny, 0.0));
   std::vector<Real> h(hf.columns(), 0.002), H(hf.columns(), beside);
-  for (int j = 10; j < 20; ++j)
-    for (int i = 10; i < 20; ++i)
+  for (int j = size / 3; j < 2 * size / 3; ++j)
+    for (int i = size / 3; i < 2 * size / 3; ++i)
       h[static_cast<std::size_t>(j) * p.nx + i] = H[static_cast<std::size_t>(j) * p.nx + i] = 0.2;
   hf.set_surface(H);
   hf.set_static_top(h);
   return hf;
 }
 
-TEST(Exchange, AFreeFaceAboveThetaMaxFailsWithTheWedgeBehindIt) {
-  // the block stands free, as a tube's sand does when the tube is lifted away: one update leaves
-  // no column steeper than theta_max (upwind, as the exchange measures slopes), a cone of
-  // theta_max slopes where the block stood, and the sand around it untouched. The avalanche's
-  // rate alone lowers the wall by about a millimetre an update.
-  HeightField hf = block(0.002);
-  hf.exchange(0.003);
+// Checks that no column of hf's static top stands steeper than theta_max (upwind, as the
+// exchange measures slopes) and none below the terrain; returns the highest top.
+Real highest_within_theta_max(const HeightField& hf) {
   const std::vector<Real>& top = hf.static_top();
   const HeightFieldParams& p = hf.params();
   const Real s = kCell * std::tan(p.theta_max);
@@ -267,10 +265,49 @@ TEST(Exchange, AFreeFaceAboveThetaMaxFailsWithTheWedgeBehindIt) {
       EXPECT_GE(z, 0.0);
       highest = std::max(highest, z);
     }
+  return highest;
+}
+
+TEST(Exchange, AFreeFaceAboveThetaMaxFailsWithTheWedgeBehindIt) {
+  // the block stands free, as a tube's sand does when the tube is lifted away: one update leaves
+  // no column steeper than theta_max, a cone of theta_max slopes where the block stood, and the
+  // sand around it untouched. The avalanche's rate alone lowers the wall by about a millimetre
+  // an update.
+  HeightField hf = block(0.002);
+  hf.exchange(0.003);
+  const Real s = kCell * std::tan(hf.params().theta_max);
+  const Real highest = highest_within_theta_max(hf);
   // the centre stands five steps of theta_max above the sand around the block, not lower
   EXPECT_GT(highest, 0.002 + 4.5 * s);
   EXPECT_LT(highest, 0.002 + 5.5 * s * std::sqrt(2.0));
-  EXPECT_DOUBLE_EQ(at(2, 2), 0.002);
+  EXPECT_DOUBLE_EQ(hf.static_top()[2 * 30 + 2], 0.002);
+}
+
+TEST(Exchange, FreeFacesFailAlikeOnOneThreadAndOnTwo) {
+  // 3,600 columns, so the search for free faces runs on the threads (from 1,024 seeds), and two
+  // blocks apart, one in each thread's share of the columns: each fails to its cone, bit for bit
+  // the same whatever the thread count.
+  std::vector<std::vector<Real>> tops;
+  for (const int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    HeightFieldParams p = ramp_params();
+    p.nx = p.ny = 60;
+    HeightField hf(p, std::vector<Real>(static_cast<std::size_t>(p.nx) * p.ny, 0.0));
+    std::vector<Real> h(hf.columns(), 0.002), H = h;
+    for (const int j0 : {5, 40})
+      for (int j = j0; j < j0 + 15; ++j)
+        for (int i = 20; i < 35; ++i)
+          h[static_cast<std::size_t>(j) * p.nx + i] = H[static_cast<std::size_t>(j) * p.nx + i] =
+              0.2;
+    hf.set_surface(H);
+    hf.set_static_top(h);
+    hf.exchange(0.003);
+    const Real s = kCell * std::tan(p.theta_max);
+    EXPECT_LT(highest_within_theta_max(hf), 0.002 + 8 * s * std::sqrt(2.0));
+    tops.push_back(hf.static_top());
+  }
+  omp_set_num_threads(omp_get_num_procs());
+  EXPECT_EQ(tops[0], tops[1]);
 }
 
 TEST(Exchange, StaticSandButtressedByMovingSandDoesNotFail) {
