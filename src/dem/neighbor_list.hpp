@@ -60,7 +60,8 @@ struct WallList {
 };
 
 /// A uniform cell grid over a set of grains, cells in row-major (z, y, x) order. Its box is the
-/// grains' bounding box, or, when that would need too many cells (a few grains far away), the box
+/// grains' bounding box, or, when that would need too many cells (over 32 a grain: a few grains
+/// far away), the box
 /// holding the central 99 % of them: grains outside are clamped into the border cells, which keeps
 /// every pair within one cell of each other (clamping never separates neighbours) and only costs
 /// extra distance checks for the few outliers.
