@@ -61,10 +61,9 @@ struct WallList {
 
 /// A uniform cell grid over a set of grains, cells in row-major (z, y, x) order. Its box is the
 /// grains' bounding box, or, when that would need too many cells (over 32 a grain: a few grains
-/// far away), the box
-/// holding the central 99 % of them: grains outside are clamped into the border cells, which keeps
-/// every pair within one cell of each other (clamping never separates neighbours) and only costs
-/// extra distance checks for the few outliers.
+/// far away), the box holding the central 99 % of them: grains outside are clamped into the border
+/// cells, which keeps every pair within one cell of each other (clamping never separates
+/// neighbours) and only costs extra distance checks for the few outliers.
 class CellGrid {
  public:
   /// Files grains by cell of side >= `min_cell` (the largest pair cutoff).

@@ -254,7 +254,7 @@ class HeightField {
 
   HeightFieldParams p_;
   // the angles' tangents, which the exchange and the free faces take at every column (computed
-  // there, they were a hundredth of a surface run, all on one thread)
+  // there, they were 0.7 % of a surface run's samples, all on one thread)
   Real tan_theta0_ = 0, tan_theta_max_ = 0;
   TerrainColumns solids_;
   std::uint64_t initial_terrain_hash_ = 0;

@@ -229,16 +229,16 @@ TEST(Exchange, AvalancheStartsOnlyAboveThetaMax) {
   });
 }
 
-// A field of `size` x `size` columns on a flat terrain at 0, sand 2 mm deep, with a block of
-// static sand 20 cm high in the middle, a third of the field wide; the sand surface H is `beside`
-// outside the block and the block's top inside it.
-HeightField block(Real beside, int size = 30) {
+// A 30 x 30 field on a flat terrain at 0, sand 2 mm deep, with a 10 x 10 block of static sand
+// 20 cm high in the middle; the sand surface H is `beside` outside the block and the block's top
+// inside it.
+HeightField block(Real beside) {
   HeightFieldParams p = ramp_params();
-  p.nx = p.ny = size;
+  p.nx = p.ny = 30;
   HeightField hf(p, std::vector<Real>(static_cast<std::size_t>(p.nx) * p.ny, 0.0));
   std::vector<Real> h(hf.columns(), 0.002), H(hf.columns(), beside);
-  for (int j = size / 3; j < 2 * size / 3; ++j)
-    for (int i = size / 3; i < 2 * size / 3; ++i)
+  for (int j = 10; j < 20; ++j)
+    for (int i = 10; i < 20; ++i)
       h[static_cast<std::size_t>(j) * p.nx + i] = H[static_cast<std::size_t>(j) * p.nx + i] = 0.2;
   hf.set_surface(H);
   hf.set_static_top(h);
