@@ -135,9 +135,9 @@ TEST(Determinism, OneAndTwoThreadsGiveTheSameState) {
 }
 
 TEST(Determinism, ThreeAndFourThreadsGiveTheOneThreadState) {
-  // with more than two ranges, each thread computes the pairs reaching out of the range before
-  // its own and waits for those reaching into it from further back: a chain two threads do not
-  // walk. A pair left out changes the state at once; a missing wait only when the threads race.
+  // with more than two ranges, pairs reach out of every range but the last, and each thread adds
+  // those reaching into its range from all the ranges before it: boundaries two threads do not
+  // have. Dropping the second range's crossing pairs changes the state; two threads do not see it.
   if constexpr (test::kSanitizers) GTEST_SKIP() << "three runs, left to the Release suite";
   const auto h1 = hash_after_run(falling_block(4), 1);
   EXPECT_EQ(hash_after_run(falling_block(4), 3), h1);
