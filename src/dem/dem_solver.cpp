@@ -404,7 +404,7 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
   std::swap(pairs_, old_pairs_);
   std::swap(walls_, old_walls_);
   std::swap(bounds_, old_bounds_);
-  build_pair_list(grains, allow_, rolling_, grid_, old_pairs_, slot_of_id_, pairs_);
+  build_pair_list(grains, allow_, rolling_, grids_, old_pairs_, slot_of_id_, pairs_);
   // (assertions) the grid found every pair the brute-force reference finds, in small runs
   if constexpr (kAssertions) {
     if (n <= kPairCheckMaxGrains) {

@@ -201,7 +201,7 @@ class DemSolver {
   DemParams params_;
   bool rolling_;  ///< resists_turning()
   std::vector<ContactParams> wall_params_;
-  CellGrid grid_;
+  PairGrids grids_;
   PairList pairs_, old_pairs_;
   WallList walls_, old_walls_;
   BoundaryParticles boundary_;

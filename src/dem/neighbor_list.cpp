@@ -10,20 +10,34 @@
 namespace sandflow {
 
 void CellGrid::build(const std::vector<Vec3>& x, Real min_cell) {
-  const std::size_t n = x.size();
+  const auto every = [](std::size_t k) { return static_cast<std::uint32_t>(k); };
+  file(x, x.size(), every, min_cell);
+}
+
+void CellGrid::build(const std::vector<Vec3>& x, std::span<const std::uint32_t> which,
+                     Real min_cell) {
+  const auto only = [which](std::size_t k) { return which[k]; };
+  file(x, which.size(), only, min_cell);
+}
+
+template <class Which>
+void CellGrid::file(const std::vector<Vec3>& all, std::size_t n, Which which, Real min_cell) {
+  // (x(k): the k-th grain filed)
+  auto x = [&](std::size_t k) -> const Vec3& { return all[which(k)]; };
   // (a surface run's simulated grains are a shell over the heap and a stream above it: with 4
   // cells a grain allowed, 98 % of the 20,000-grain floor's rebuilds trimmed the box, on one
   // thread, a tenth of the neighbour stage: docs/performance.md, eightieth)
   const std::size_t max_cells = std::max<std::size_t>(4096, 32 * n);
   Vec3 lo{0, 0, 0}, hi{0, 0, 0};
   if (n > 0) {
-    Real lx = x[0].x, ly = x[0].y, lz = x[0].z, hx = lx, hy = ly, hz = lz;
+    Real lx = x(0).x, ly = x(0).y, lz = x(0).z, hx = lx, hy = ly, hz = lz;
     // (minima and maxima: the same for any thread count)
     const bool many = n >= kParallelMinGrains;
 #pragma omp parallel for reduction(min : lx, ly, lz) reduction(max : hx, hy, hz) if (many)
     for (std::size_t i = 0; i < n; ++i) {
-      lx = std::min(lx, x[i].x), ly = std::min(ly, x[i].y), lz = std::min(lz, x[i].z);
-      hx = std::max(hx, x[i].x), hy = std::max(hy, x[i].y), hz = std::max(hz, x[i].z);
+      const Vec3& p = x(i);
+      lx = std::min(lx, p.x), ly = std::min(ly, p.y), lz = std::min(lz, p.z);
+      hx = std::max(hx, p.x), hy = std::max(hy, p.y), hz = std::max(hz, p.z);
     }
     lo = {lx, ly, lz}, hi = {hx, hy, hz};
   }
@@ -40,7 +54,7 @@ void CellGrid::build(const std::vector<Vec3>& x, Real min_cell) {
     std::vector<Real> axis(n);
     for (const std::size_t per : {200, 50, 20, 10}) {
       for (int a = 0; a < 3; ++a) {
-        for (std::size_t i = 0; i < n; ++i) axis[i] = x[i][a];
+        for (std::size_t i = 0; i < n; ++i) axis[i] = x(i)[a];
         const std::size_t k_lo = n / per, k_hi = n - 1 - n / per;
         std::nth_element(axis.begin(), axis.begin() + k_lo, axis.end());
         lo[a] = axis[k_lo];
@@ -66,13 +80,17 @@ void CellGrid::build(const std::vector<Vec3>& x, Real min_cell) {
   std::vector<std::uint32_t> c(n);
 #pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i)
-    c[i] = static_cast<std::uint32_t>(index(coord(x[i].x, 0), coord(x[i].y, 1), coord(x[i].z, 2)));
+    c[i] = static_cast<std::uint32_t>(index(coord(x(i).x, 0), coord(x(i).y, 1), coord(x(i).z, 2)));
   cell_start_.assign(cells + 1, 0);
   for (std::size_t i = 0; i < n; ++i) ++cell_start_[c[i] + 1];
   for (std::size_t k = 0; k < cells; ++k) cell_start_[k + 1] += cell_start_[k];
   items_.resize(n);
   std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-  for (std::size_t i = 0; i < n; ++i) items_[fill[c[i]]++] = static_cast<std::uint32_t>(i);
+  place_.resize(all.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    place_[which(i)] = fill[c[i]];
+    items_[fill[c[i]]++] = which(i);
+  }
 }
 
 namespace {
@@ -86,15 +104,15 @@ std::uint32_t find_old_slot(const PairList& old, std::uint32_t a, std::uint32_t 
 
 }  // namespace
 
-void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& grid,
+void build_pair_list(const Grains& grains, Real skin, bool rolling, PairGrids& grids,
                      const PairList& old, const std::vector<std::uint32_t>& old_slot_of_id,
                      PairList& out) {
-  build_pair_list(grains, std::vector<Real>(grains.size(), skin / 2), rolling, grid, old,
+  build_pair_list(grains, std::vector<Real>(grains.size(), skin / 2), rolling, grids, old,
                   old_slot_of_id, out);
 }
 
 void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool rolling,
-                     CellGrid& grid, const PairList& old,
+                     PairGrids& grids, const PairList& old,
                      const std::vector<std::uint32_t>& old_slot_of_id, PairList& out) {
   const std::size_t n = grains.size();
   const auto& x = grains.x;
@@ -117,36 +135,43 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   for (std::size_t i = 0; i < n; ++i)
     if (searches(i)) a_min = std::min(a_min, allow[i]);
   if (a_min == kNone) a_min = 0;
-  // cells fit the pairs of the least mobile searching grains; one with a larger allowance looks
-  // further
-  grid.build(x, 2 * r_max + 2 * a_min);
-  const Real inv_cell = 1.0 / grid.cell_size();
+  // The grains that search in one grid, the frozen ones that search none in another. Cells fit
+  // the pairs of the least mobile searching grains; one with a larger allowance looks further.
+  std::vector<std::uint32_t> searching, frozen;
+  for (std::size_t i = 0; i < n; ++i)
+    (searches(i) ? searching : frozen).push_back(static_cast<std::uint32_t>(i));
+  grids.searching.build(x, searching, 2 * r_max + 2 * a_min);
+  grids.frozen.build(x, frozen, 2 * r_max + 2 * a_min);
+  const Real inv_cell = 1.0 / grids.searching.cell_size();
 
   // A pair is listed when the grains are within reach and at least one of them can move. It is
-  // found by the grain with the larger allowance (the lower index on a tie), whose search reaches
-  // r_i + r_max + 2 a_i: every partner with an allowance no larger than its own.
-  auto owns = [&](std::size_t i, std::uint32_t j) {
-    return allow[i] > allow[j] || (allow[i] == allow[j] && i < j);
-  };
-  auto listed = [&](std::size_t i, std::uint32_t j) {
-    if (j == i || !owns(i, j)) return false;
-    if (grains.state[i] != GrainState::Active && grains.state[j] != GrainState::Active)
-      return false;
-    const Real cut = r[i] + r[j] + allow[i] + allow[j];
-    return norm2(x[i] - x[j]) < cut * cut;
-  };
+  // found by the grain with the larger allowance, whose search reaches r_i + r_max + 2 a_i: every
+  // partner with an allowance no larger than its own. On a tie the lower index finds it, but for
+  // the commonest pairs, two grains of the least allowance (the slow grains, all of a plain DEM
+  // run's in a bed), which are found by the grid's half search (CellGrid::for_each_after): half
+  // the candidates, and none of them another's.
+  // (the search reads the arrays through local pointers, captured by value: through `grains`,
+  // every candidate reloaded them, since any store may change a vector's pointer)
+  const Vec3* const px = x.data();
+  const Real* const pr = r.data();
+  const Real* const pa = allow.data();
+  const GrainState* const ps = grains.state.data();
 
   // One pass: each thread lists a contiguous range of grains into its own buffer; the buffers
   // are then joined in thread order, so the list is in grain order for any thread count. A pair
   // found by its higher-index grain goes to a side list and joins the lower one's row after.
-  // The ranges are of about equal work: a grain searches (2k + 1)^3 cells, k = 1 for most and
-  // 2-3 for the fast grains of a stream, which sit together in the storage order.
+  // The ranges are of about equal work: a grain searches about 14 cells (the half search),
+  // (2k + 1)^3 with k = 1 or 2-3 for the fast grains of a stream, which sit together in the
+  // storage order, and 27 more among the frozen grains.
   std::vector<std::uint32_t> own_count(n + 1, 0);
   std::vector<std::uint8_t> reach(n);
   std::uint64_t work = 0;
+  const bool any_frozen = !frozen.empty();
   auto cells_searched = [&](std::size_t i) -> std::uint64_t {
     const std::uint64_t k = reach[i];
-    return k == 0 ? 0 : (2 * k + 1) * (2 * k + 1) * (2 * k + 1);
+    const std::uint64_t among_frozen = any_frozen && ps[i] == GrainState::Active ? 27 : 0;
+    return k == 0 ? 0
+                  : (pa[i] == a_min ? 14 : (2 * k + 1) * (2 * k + 1) * (2 * k + 1)) + among_frozen;
   };
 #pragma omp parallel for schedule(static) reduction(+ : work) if (many)
   for (std::size_t i = 0; i < n; ++i) {
@@ -182,19 +207,42 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
       const std::size_t first = buf.size();
       const int k = reach[i];
       if (k == 0) continue;  // (own_count[i + 1] stays 0)
-      auto consider = [&](std::uint32_t j) {
-        if (!listed(i, j)) return;
-        if (j > i)
+      const auto me = static_cast<std::uint32_t>(i);
+      const Real a_i = pa[i], r_i = pr[i];
+      const Vec3 x_i = px[i];
+      const bool active_i = ps[i] == GrainState::Active;
+      auto list = [&buf, &side, px, pr, pa, me, a_i, r_i, x_i](std::uint32_t j) {
+        const Real cut = r_i + pr[j] + a_i + pa[j];
+        if (!(norm2(x_i - px[j]) < cut * cut)) return;
+        if (j > me)
           buf.push_back(j);
         else
-          side.emplace_back(j, static_cast<std::uint32_t>(i));
+          side.emplace_back(j, me);
       };
-      // a reach of one cell: the 27 cells, nine contiguous rows; a longer one (a fast grain):
-      // only the cells its ball meets, a third of the cube
-      if (k == 1)
-        grid.for_each_within(x[i], 1, consider);
+      const bool slow = a_i == a_min;
+      auto searching_partner = [&list, pa, ps, me, a_i, a_min, active_i, slow](std::uint32_t j) {
+        const Real a_j = pa[j];
+        // (a slow grain's half search meets only grains that are as slow or faster)
+        if (slow ? a_j > a_min : !(a_i > a_j || (a_i == a_j && me < j))) return;  // (j == i too)
+        if (!active_i && ps[j] != GrainState::Active) return;
+        list(j);
+      };
+      // a reach of one cell: the 27 cells, nine contiguous rows, or half of them; a longer one (a
+      // fast grain): only the cells its ball meets, a third of the cube
+      const Real reach_i = r_i + r_max + 2 * a_i;
+      if (slow)
+        grids.searching.for_each_after(me, x_i, searching_partner);
+      else if (k == 1)
+        grids.searching.for_each_within(x_i, 1, searching_partner);
       else
-        grid.for_each_in_ball(x[i], r[i] + r_max + 2 * allow[i], consider);
+        grids.searching.for_each_in_ball(x_i, reach_i, searching_partner);
+      // every frozen grain that searches none is less mobile: an ACTIVE grain lists it
+      if (any_frozen && active_i) {
+        if (reach_i <= grids.frozen.cell_size())
+          grids.frozen.for_each_within(x_i, 1, list);
+        else
+          grids.frozen.for_each_in_ball(x_i, reach_i, list);
+      }
       // ascending j: a canonical order, independent of how the grid visits cells
       std::sort(buf.begin() + first, buf.end());
       own_count[i + 1] = static_cast<std::uint32_t>(buf.size() - first);

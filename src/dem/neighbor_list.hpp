@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -68,12 +69,20 @@ class CellGrid {
  public:
   /// Files grains by cell of side >= `min_cell` (the largest pair cutoff).
   void build(const std::vector<Vec3>& x, Real min_cell);
+  /// Files only the grains `which` (indices into x).
+  void build(const std::vector<Vec3>& x, std::span<const std::uint32_t> which, Real min_cell);
 
   /// Calls f(j) for every grain j in the 27 cells around p.
   template <class F>
   void for_each_near(const Vec3& p, F&& f) const {
     for_each_within(p, 1, f);
   }
+  /// Calls f(j) for every grain j filed after grain i (filed in this grid, at x_i) in the 27 cells
+  /// around it: those later in its own cell, and those of the 13 cells that follow its own in the
+  /// grid's order. Of two grains in cells next to each other, exactly one finds the other: a half
+  /// of for_each_near's search, for the pairs that either grain may list.
+  template <class F>
+  void for_each_after(std::uint32_t i, const Vec3& x_i, F&& f) const;
   /// Calls f(j) for every grain j in the cells at most k cells away from p's along each axis.
   template <class F>
   void for_each_within(const Vec3& p, int k, F&& f) const;
@@ -88,7 +97,8 @@ class CellGrid {
 
  private:
   int coord(Real v, int axis) const {
-    const Real c = std::floor((v - lo_[axis]) * inv_cell_);
+    // (truncation is the floor here, c >= 0; std::floor is a dozen instructions without SSE4.1)
+    const Real c = (v - lo_[axis]) * inv_cell_;
     return c < 0 ? 0 : (c >= dims_[axis] ? dims_[axis] - 1 : static_cast<int>(c));
   }
   /// How far p lies from the slab of cells c along an axis. The border cells reach to infinity:
@@ -102,21 +112,30 @@ class CellGrid {
     return (static_cast<std::size_t>(cz) * dims_[1] + cy) * dims_[0] + cx;
   }
 
+  template <class Which>
+  void file(const std::vector<Vec3>& all, std::size_t n, Which which, Real min_cell);
+
   Vec3 lo_;
   Real cell_ = 1, inv_cell_ = 1;
   int dims_[3] = {1, 1, 1};
   std::vector<std::uint32_t> cell_start_;  ///< cells+1 offsets into items_
   std::vector<std::uint32_t> items_;       ///< grain indices, grouped by cell
+  std::vector<std::uint32_t> place_;       ///< where each filed grain is in items_
+};
+
+/// build_pair_list's scratch: the grains that search for pairs, and the frozen ones that do not.
+struct PairGrids {
+  CellGrid searching, frozen;
 };
 
 /// Builds the half list of `grains` for the allowances `allow` (one per grain, >= 0), carrying
 /// history over from `old` (whose slots refer to grains by the slot they had then;
-/// old_slot_of_id maps an id to that slot, or kNoSlot). Uses `grid` as scratch.
+/// old_slot_of_id maps an id to that slot, or kNoSlot). Uses `grids` as scratch.
 void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool rolling,
-                     CellGrid& grid, const PairList& old,
+                     PairGrids& grids, const PairList& old,
                      const std::vector<std::uint32_t>& old_slot_of_id, PairList& out);
 /// The same with one skin for all grains (allowance skin / 2 each).
-void build_pair_list(const Grains& grains, Real skin, bool rolling, CellGrid& grid,
+void build_pair_list(const Grains& grains, Real skin, bool rolling, PairGrids& grids,
                      const PairList& old, const std::vector<std::uint32_t>& old_slot_of_id,
                      PairList& out);
 
@@ -178,6 +197,23 @@ void CellGrid::for_each_within(const Vec3& p, int k, F&& f) const {
       for (std::uint32_t q = cell_start_[index(x0, y, z)]; q < end; ++q) f(items_[q]);
     }
   }
+}
+
+template <class F>
+void CellGrid::for_each_after(std::uint32_t i, const Vec3& x_i, F&& f) const {
+  const int cx = coord(x_i.x, 0), cy = coord(x_i.y, 1), cz = coord(x_i.z, 2);
+  const int x0 = cx > 0 ? cx - 1 : 0, x1 = cx + 1 < dims_[0] ? cx + 1 : dims_[0] - 1;
+  auto row = [&](std::uint32_t from, int y, int z) {
+    const std::uint32_t end = cell_start_[index(x1, y, z) + 1];
+    for (std::uint32_t q = from; q < end; ++q) f(items_[q]);
+  };
+  // its own row from i on (its cell's later grains and the next cell), the row after it, and
+  // the three rows of the next layer
+  row(place_[i] + 1, cy, cz);
+  if (cy + 1 < dims_[1]) row(cell_start_[index(x0, cy + 1, cz)], cy + 1, cz);
+  if (cz + 1 < dims_[2])
+    for (int y = cy > 0 ? cy - 1 : 0; y <= cy + 1 && y < dims_[1]; ++y)
+      row(cell_start_[index(x0, y, cz + 1)], y, cz + 1);
 }
 
 template <class F>

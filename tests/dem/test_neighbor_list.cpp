@@ -46,7 +46,7 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> listed_pairs(const PairList
 
 // Lists the pairs of g for the allowances `allow` into pl (grid as scratch) and checks them
 // against brute force; there must be many, or the check proves little.
-void expect_brute_force_pairs(const Grains& g, const std::vector<Real>& allow, CellGrid& grid,
+void expect_brute_force_pairs(const Grains& g, const std::vector<Real>& allow, PairGrids& grid,
                               PairList& pl, std::uint64_t seed) {
   PairList none;
   build_pair_list(g, allow, true, grid, none, {}, pl);
@@ -63,7 +63,7 @@ TEST(NeighbourList, SamePairsAsBruteForce) {
     g.add(5000, {1e3, -2e3, 5e2}, {}, 0.005, 2600);
     for (int k = 0; k < 50; ++k) g.add(6000 + k, {0.5 + 0.001 * k, 0.5, 0.5}, {}, 0.005, 2600);
     const Real skin = 0.002;
-    CellGrid grid;
+    PairGrids grid;
     PairList pl, none;
     build_pair_list(g, skin, true, grid, none, {}, pl);
     auto expected = brute_force_pairs(g, skin);
@@ -85,12 +85,12 @@ TEST(CellGrid, GrainsAlongFarWallsKeepTheCellsFine) {
                                  Vec3{4, t, 0.05}};
     g.add(10000 + k, at[static_cast<std::size_t>(k % 4)], {}, 0.005, 2600);
   }
-  CellGrid grid;
+  PairGrids grid;
   PairList pl;
   // (each grain may move half a 2 mm skin)
   expect_brute_force_pairs(g, std::vector<Real>(g.size(), 0.001), grid, pl, 7);
   // the finest cells: the largest diameter and the skin (1.4 cm)
-  EXPECT_LE(grid.cell_size(), 0.014) << grid.cell_size();
+  EXPECT_LE(grid.searching.cell_size(), 0.014) << grid.searching.cell_size();
 }
 
 // The assertions' reference after each rebuild (a sweep along x) against brute force: the same
@@ -124,7 +124,7 @@ TEST(NeighbourList, LargerAllowancesOfAFewGrainsGiveTheBruteForcePairs) {
     std::vector<Real> allow(g.size(), 0.001);
     for (std::size_t i = 0; i < g.size(); i += 7) allow[i] = rng.uniform(0.001, 0.012);
     allow[17] = allow[18] = 0.004;  // equal large allowances: found once, by the lower index
-    CellGrid grid;
+    PairGrids grid;
     PairList pl;
     expect_brute_force_pairs(g, allow, grid, pl, seed);
     for (std::size_t i = 0; i + 1 < pl.start.size(); ++i)  // rows ascending, as the sweep needs
@@ -172,7 +172,7 @@ TEST(NeighbourList, TheRebuildCheckNamesAMissingPairAndABadRow) {
   for (std::size_t i = 0; i < g.size(); i += 4) g.state[i] = GrainState::Interface;
   std::vector<Real> allow(g.size(), 0.001);
   for (std::size_t i = 0; i < g.size(); i += 4) allow[i] = 0;  // as the solver: frozen, none
-  CellGrid grid;
+  PairGrids grid;
   PairList pl, none;
   build_pair_list(g, allow, false, grid, none, {}, pl);
   EXPECT_EQ(pair_list_error(g, allow, pl), "");
@@ -205,7 +205,7 @@ TEST(NeighbourList, TheRebuildCheckNamesAMissingPairAndABadRow) {
 TEST(NeighbourList, FrozenPairsAreNotListed) {
   Grains g = random_grains(500, 7, 0.08);
   for (std::size_t i = 0; i < g.size(); i += 2) g.state[i] = GrainState::Interface;
-  CellGrid grid;
+  PairGrids grid;
   PairList pl, none;
   build_pair_list(g, 0.002, false, grid, none, {}, pl);
   auto expected = brute_force_pairs(g, 0.002);
@@ -230,10 +230,61 @@ TEST(NeighbourList, FrozenGrainsWithoutAllowanceLoseNoPair) {
     }
     allow[30] = 0.002;  // frozen, more mobile than the least active grain: it searches
     allow[31] = 0.0005;  // frozen, less mobile: it does not
-    CellGrid grid;
+    PairGrids grid;
     PairList pl;
     expect_brute_force_pairs(g, allow, grid, pl, seed);
-    EXPECT_LT(grid.cell_size(), 2 * 0.006 + 2 * 0.001 + 1e-12);  // sized for the active grains
+    // sized for the active grains
+    EXPECT_LT(grid.searching.cell_size(), 2 * 0.006 + 2 * 0.001 + 1e-12);
+  }
+}
+
+// Three ways a pair is found: two of the least allowance by the grid's half search, one grain
+// more mobile than the other by that one, and two of one larger allowance by the lower index.
+// Many ties of each kind, ACTIVE and frozen grains among them, and the list is the brute-force
+// one; so it is where a few far grains stretch the grid (clamped into its border cells).
+TEST(NeighbourList, PairsOfEqualAllowancesAreFoundOnce) {
+  for (std::uint64_t seed : {11, 12}) {
+    Grains g = random_grains(3000, seed, 0.12);
+    for (int k = 0; k < 4; ++k) g.add(7000 + k, {50.0 * k, -20.0, 3.0 * k}, {}, 0.005, 2600);
+    std::vector<Real> allow(g.size(), 0.001);
+    for (std::size_t i = 0; i < g.size(); ++i) {
+      if (i % 7 == 0) allow[i] = 0.004;  // a fast stream's grains, all alike
+      if (i % 13 == 0) {                 // frozen: without allowance, or as the least active
+        g.state[i] = GrainState::Interface;
+        allow[i] = i % 2 ? 0.0 : 0.001;
+      }
+    }
+    PairGrids grid;
+    PairList pl;
+    expect_brute_force_pairs(g, allow, grid, pl, seed);
+  }
+}
+
+// The half search: of two grains in cells next to each other (or in one cell), exactly one
+// finds the other, and neither finds itself.
+TEST(CellGrid, TheHalfSearchFindsEachNeighbourOnce) {
+  const Grains g = random_grains(2000, 5, 0.1);
+  for (const Real cell : {0.012, 0.03}) {
+    CellGrid grid;
+    grid.build(g.x, cell);
+    std::vector<std::vector<std::uint32_t>> found(g.size());
+    for (std::uint32_t i = 0; i < g.size(); ++i)
+      grid.for_each_after(i, g.x[i], [&](std::uint32_t j) { found[i].push_back(j); });
+    std::size_t pairs = 0;
+    for (std::uint32_t i = 0; i < g.size(); ++i)
+      for (std::uint32_t j = i + 1; j < g.size(); ++j) {
+        const int by_i = static_cast<int>(std::count(found[i].begin(), found[i].end(), j));
+        const int by_j = static_cast<int>(std::count(found[j].begin(), found[j].end(), i));
+        if (norm(g.x[i] - g.x[j]) < grid.cell_size()) {
+          ASSERT_EQ(by_i + by_j, 1) << "grains " << i << " and " << j << ", cells of " << cell;
+          ++pairs;
+        } else {
+          ASSERT_LE(by_i + by_j, 1);
+        }
+      }
+    EXPECT_GT(pairs, 2000u);
+    for (std::uint32_t i = 0; i < g.size(); ++i)
+      EXPECT_EQ(std::count(found[i].begin(), found[i].end(), i), 0);
   }
 }
 
