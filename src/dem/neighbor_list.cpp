@@ -353,39 +353,44 @@ void build_wall_list(const Grains& grains, const std::vector<Real>& allow, const
   // obstacles within reach of each grain (twice its allowance: an obstacle does not move, the
   // margin is spare), history carried by grain id
   const std::size_t n = grains.size(), n_obs = geometry.size();
-  auto near = [&](std::size_t i, std::size_t k) {
-    return geometry.obstacles()[k].solid->closest(grains.x[i]).distance <
-           grains.r[i] + 2 * allow[i];
-  };
   out.start.assign(n + 1, 0);
-#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
-  for (std::size_t i = 0; i < n; ++i) {
-    std::uint32_t c = 0;
-    for (std::size_t k = 0; k < n_obs; ++k) c += near(i, k);
-    out.start[i + 1] = c;
+  // one pass of distance queries (each thread's rows into its own buffer, joined in thread
+  // order: the rows' order), then the history
+  std::vector<std::vector<std::uint32_t>> buffers;
+#pragma omp parallel if (n >= kParallelMinGrains)
+  {
+#pragma omp single
+    buffers.resize(static_cast<std::size_t>(omp_get_num_threads()));
+    std::vector<std::uint32_t> buf;  // (the thread's own until the end: see build_pair_list)
+#pragma omp for schedule(static) nowait
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t first = buf.size();
+      for (std::uint32_t k = 0; k < n_obs; ++k)
+        if (geometry.obstacles()[k].solid->closest(grains.x[i]).distance <
+            grains.r[i] + 2 * allow[i])
+          buf.push_back(k);
+      out.start[i + 1] = static_cast<std::uint32_t>(buf.size() - first);
+    }
+    buffers[static_cast<std::size_t>(omp_get_thread_num())] = std::move(buf);
   }
   for (std::size_t i = 0; i < n; ++i) out.start[i + 1] += out.start[i];
-  const std::size_t slots = out.start[n];
-  out.obstacle.resize(slots);
+  out.obstacle.clear();
+  for (const auto& buf : buffers) out.obstacle.insert(out.obstacle.end(), buf.begin(), buf.end());
+  const std::size_t slots = out.obstacle.size();
   out.xi.assign(slots, Vec3{});
   out.psi.assign(slots, Vec3{});
 #pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i) {
-    std::uint32_t s = out.start[i];
     const GrainId id = grains.id[i];
     const std::uint32_t oi =
         old.start.empty() || id >= old_slot_of_id.size() ? kNoSlot : old_slot_of_id[id];
-    for (std::uint32_t k = 0; k < n_obs; ++k) {
-      if (!near(i, k)) continue;
-      out.obstacle[s] = k;
-      if (oi != kNoSlot)
-        for (std::uint32_t os = old.start[oi]; os < old.start[oi + 1]; ++os)
-          if (old.obstacle[os] == k) {
-            out.xi[s] = old.xi[os];
-            out.psi[s] = old.psi[os];
-          }
-      ++s;
-    }
+    if (oi == kNoSlot) continue;
+    for (std::uint32_t s = out.start[i]; s < out.start[i + 1]; ++s)
+      for (std::uint32_t os = old.start[oi]; os < old.start[oi + 1]; ++os)
+        if (old.obstacle[os] == out.obstacle[s]) {
+          out.xi[s] = old.xi[os];
+          out.psi[s] = old.psi[os];
+        }
   }
 }
 
