@@ -347,15 +347,14 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   out.c_n.resize(slots);
 }
 
-void build_wall_list(const Grains& grains, const std::vector<Real>& allow, const Geometry& geometry,
-                     const WallList& old, const std::vector<std::uint32_t>& old_slot_of_id,
-                     WallList& out) {
-  // obstacles within reach of each grain (twice its allowance: an obstacle does not move, the
-  // margin is spare), history carried by grain id
-  const std::size_t n = grains.size(), n_obs = geometry.size();
+namespace {
+
+// Fills the rows of a wall or boundary list (start, obstacle) in one pass: row(i, buf) appends
+// grain i's entries, ascending, to buf. Each thread's rows go into its own buffer, joined in
+// thread order: the rows' order, for any thread count.
+template <class Row>
+void fill_rows(std::size_t n, WallList& out, Row&& row) {
   out.start.assign(n + 1, 0);
-  // one pass of distance queries (each thread's rows into its own buffer, joined in thread
-  // order: the rows' order), then the history
   std::vector<std::vector<std::uint32_t>> buffers;
 #pragma omp parallel if (n >= kParallelMinGrains)
   {
@@ -365,10 +364,7 @@ void build_wall_list(const Grains& grains, const std::vector<Real>& allow, const
 #pragma omp for schedule(static) nowait
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t first = buf.size();
-      for (std::uint32_t k = 0; k < n_obs; ++k)
-        if (geometry.obstacles()[k].solid->closest(grains.x[i]).distance <
-            grains.r[i] + 2 * allow[i])
-          buf.push_back(k);
+      row(i, buf);
       out.start[i + 1] = static_cast<std::uint32_t>(buf.size() - first);
     }
     buffers[static_cast<std::size_t>(omp_get_thread_num())] = std::move(buf);
@@ -376,60 +372,15 @@ void build_wall_list(const Grains& grains, const std::vector<Real>& allow, const
   for (std::size_t i = 0; i < n; ++i) out.start[i + 1] += out.start[i];
   out.obstacle.clear();
   for (const auto& buf : buffers) out.obstacle.insert(out.obstacle.end(), buf.begin(), buf.end());
-  const std::size_t slots = out.obstacle.size();
-  out.xi.assign(slots, Vec3{});
-  out.psi.assign(slots, Vec3{});
-#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
-  for (std::size_t i = 0; i < n; ++i) {
-    const GrainId id = grains.id[i];
-    const std::uint32_t oi =
-        old.start.empty() || id >= old_slot_of_id.size() ? kNoSlot : old_slot_of_id[id];
-    if (oi == kNoSlot) continue;
-    for (std::uint32_t s = out.start[i]; s < out.start[i + 1]; ++s)
-      for (std::uint32_t os = old.start[oi]; os < old.start[oi + 1]; ++os)
-        if (old.obstacle[os] == out.obstacle[s]) {
-          out.xi[s] = old.xi[os];
-          out.psi[s] = old.psi[os];
-        }
-  }
 }
 
-void build_boundary_list(const Grains& grains, const std::vector<Real>& allow,
-                         const std::vector<Vec3>& centres, Real radius, const CellGrid& grid,
-                         const WallList& old, const std::vector<std::uint32_t>& old_slot_of_id,
-                         WallList& out) {
-  const std::size_t n = grains.size();
-  out.start.assign(n + 1, 0);
-  out.obstacle.clear();
-  if (centres.empty()) return;
-  auto each_near = [&](std::size_t i, auto&& f) {
-    if (grains.state[i] != GrainState::Active) return;
-    const Real reach = grains.r[i] + radius + 2 * allow[i];  // (a particle does not move: spare)
-    grid.for_each_in_ball(grains.x[i], reach, [&](std::uint32_t b) {
-      if (norm2(grains.x[i] - centres[b]) < reach * reach) f(b);
-    });
-  };
-  std::vector<std::vector<std::uint32_t>> buffers;
-#pragma omp parallel if (n >= kParallelMinGrains)
-  {
-#pragma omp single
-    buffers.resize(omp_get_num_threads());
-    std::vector<std::uint32_t> buf;  // (the thread's own until the end: see build_pair_list)
-#pragma omp for schedule(static) nowait
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t first = buf.size();
-      each_near(i, [&](std::uint32_t b) { buf.push_back(b); });
-      std::sort(buf.begin() + first, buf.end());
-      out.start[i + 1] = static_cast<std::uint32_t>(buf.size() - first);
-    }
-    buffers[omp_get_thread_num()] = std::move(buf);
-  }
-  for (std::size_t i = 0; i < n; ++i) out.start[i + 1] += out.start[i];
-  for (const auto& buf : buffers) out.obstacle.insert(out.obstacle.end(), buf.begin(), buf.end());
-  const std::size_t slots = out.obstacle.size();
+// The history of each entry of out's rows, carried over from old's by grain id (both rows
+// ascending); an entry without one starts from none.
+void carry_history(const Grains& grains, const WallList& old,
+                   const std::vector<std::uint32_t>& old_slot_of_id, WallList& out) {
+  const std::size_t n = grains.size(), slots = out.obstacle.size();
   out.xi.assign(slots, Vec3{});
   out.psi.assign(slots, Vec3{});
-  // history by grain id: both rows ascending
 #pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i) {
     const GrainId id = grains.id[i];
@@ -446,6 +397,43 @@ void build_boundary_list(const Grains& grains, const std::vector<Real>& allow,
       }
     }
   }
+}
+
+}  // namespace
+
+void build_wall_list(const Grains& grains, const std::vector<Real>& allow, const Geometry& geometry,
+                     const WallList& old, const std::vector<std::uint32_t>& old_slot_of_id,
+                     WallList& out) {
+  // obstacles within reach of each grain (twice its allowance: an obstacle does not move, the
+  // margin is spare), in obstacle order, each distance asked once
+  const std::size_t n_obs = geometry.size();
+  fill_rows(grains.size(), out, [&](std::size_t i, std::vector<std::uint32_t>& row) {
+    for (std::uint32_t k = 0; k < n_obs; ++k)
+      if (geometry.obstacles()[k].solid->closest(grains.x[i]).distance < grains.r[i] + 2 * allow[i])
+        row.push_back(k);
+  });
+  carry_history(grains, old, old_slot_of_id, out);
+}
+
+void build_boundary_list(const Grains& grains, const std::vector<Real>& allow,
+                         const std::vector<Vec3>& centres, Real radius, const CellGrid& grid,
+                         const WallList& old, const std::vector<std::uint32_t>& old_slot_of_id,
+                         WallList& out) {
+  if (centres.empty()) {
+    out.start.assign(grains.size() + 1, 0);
+    out.obstacle.clear();
+    return;
+  }
+  fill_rows(grains.size(), out, [&](std::size_t i, std::vector<std::uint32_t>& row) {
+    if (grains.state[i] != GrainState::Active) return;
+    const Real reach = grains.r[i] + radius + 2 * allow[i];  // (a particle does not move: spare)
+    const std::size_t first = row.size();
+    grid.for_each_in_ball(grains.x[i], reach, [&](std::uint32_t b) {
+      if (norm2(grains.x[i] - centres[b]) < reach * reach) row.push_back(b);
+    });
+    std::sort(row.begin() + static_cast<std::ptrdiff_t>(first), row.end());
+  });
+  carry_history(grains, old, old_slot_of_id, out);
 }
 
 std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(
