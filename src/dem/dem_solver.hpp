@@ -89,6 +89,11 @@ struct DeepestOverlap {
   std::uint32_t other = 0;   ///< the other grain's slot, the obstacle or the boundary particle
 };
 
+/// The order DemSolver keeps its grains in: row-major over cells of side 2 r_max + skin, the
+/// axis the grains spread furthest along outermost (dem_solver.cpp). Slot k of the sorted grains
+/// holds perm[k].
+std::vector<std::uint32_t> cell_order(const Grains& grains, Real skin);
+
 class DemSolver {
  public:
   explicit DemSolver(const DemParams& params);
