@@ -129,6 +129,8 @@ void DemSolver::build_near(const Grains& grains, Real dt) {
   const Real fall = 0.5 * norm(params_.gravity) * horizon * horizon;
   const Real a_min = params_.skin / 2;  // (a grain allowed more is fast: its margin is that)
   std::vector<Real> margin(n);
+  watch2_.resize(n);
+  const bool built_here = x_at_build_.size() == n;
 #pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i) {
     margin[i] = grains.state[i] != GrainState::Active ? 0
@@ -136,6 +138,9 @@ void DemSolver::build_near(const Grains& grains, Real dt) {
                     ? allow_[i]
                     : std::min(allow_[i], std::max(b_min, norm(grains.v[i]) * horizon + fall));
     near2_[i] = margin[i] * margin[i];
+    watch2_[i] = built_here ? watch_radius2(grains.x[i], margin[i], allow_[i], x_at_build_[i],
+                                            domain_lo_, domain_hi_)
+                            : -1;
   }
   pairs_.near.resize(pairs_.j.size());
   pairs_.near_count.assign(listed, 0);
@@ -295,6 +300,19 @@ std::vector<std::uint32_t> cell_order(const Grains& grains, Real skin) {
   std::iota(perm.begin(), perm.end(), 0u);
   std::stable_sort(perm.begin(), perm.end(), [&](auto a, auto b) { return key[a] < key[b]; });
   return perm;
+}
+
+Real watch_radius2(const Vec3& x, Real margin, Real allow, const Vec3& x_at_build, const Vec3& lo,
+                   const Vec3& hi) {
+  const Vec3 to_lo = x - lo, to_hi = hi - x;
+  const Real to_wall = std::min({to_lo.x, to_lo.y, to_lo.z, to_hi.x, to_hi.y, to_hi.z});
+  const Real size = std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z), 1.0});
+  // (the margin is within the allowance, for most grains with room to spare: no square root)
+  const Real moved2 = norm2(x - x_at_build), spare = allow - margin;
+  const Real to_allowance =
+      spare >= 0 && moved2 <= spare * spare ? margin : allow - std::sqrt(moved2);
+  const Real watch = std::min({margin, to_allowance, to_wall}) * (1 - 1e-9) - 1e-15 * size;
+  return watch > 0 ? watch * watch : -1;  // (a position that is not finite fails the test anyway)
 }
 
 void DemSolver::sort_by_cell(Grains& grains) {
@@ -662,7 +680,8 @@ struct SweepData {
   const Vec3* x_at_build;
   const Real* allow2;  ///< per grain: its allowance, squared [m^2]
   const Vec3* x_at_near;
-  const Real* near2;  ///< per grain: its near margin, squared [m^2]
+  const Real* near2;   ///< per grain: its near margin, squared [m^2]
+  const Real* watch2;  ///< per grain: DemSolver::watch2_ [m^2]
   Vec3 domain_lo, domain_hi;
   Vec3 gravity;
   Real dt;
@@ -678,6 +697,7 @@ struct FixedPartners {
   WallList& bounds;
   const BoundaryParticles& boundary;
   const std::vector<ContactParams>& boundary_params;  ///< per group
+  bool any_boundary;  ///< (most scenes have no boundary particles: their grains skip the loop)
 };
 
 /// The kernels' data for a step of dt: the grains' arrays, and the solver's pair list,
@@ -686,7 +706,8 @@ SweepData sweep_data(const DemParams& p, PairList& pairs, Grains& grains, std::v
                      std::vector<Vec3>& acc_q, std::vector<Vec3>& acc_t,
                      const std::vector<Vec3>& x_at_build, const std::vector<Real>& allow2,
                      const std::vector<Vec3>& x_at_near, const std::vector<Real>& near2,
-                     const Vec3& domain_lo, const Vec3& domain_hi, Real dt) {
+                     const std::vector<Real>& watch2, const Vec3& domain_lo, const Vec3& domain_hi,
+                     Real dt) {
   return {.cp = p.contact,
           .pl = pairs,
           .slots = {.start = pairs.start.data(),
@@ -717,6 +738,7 @@ SweepData sweep_data(const DemParams& p, PairList& pairs, Grains& grains, std::v
           .allow2 = allow2.data(),
           .x_at_near = x_at_near.data(),
           .near2 = near2.data(),
+          .watch2 = watch2.data(),
           .domain_lo = domain_lo,
           .domain_hi = domain_hi,
           .gravity = p.gravity,
@@ -816,6 +838,7 @@ template <bool kRolling>
                           walls.xi[s], walls.psi[s], f, torque, tally);
   }
   // boundary particles: a grain that never moves, damped as against a wall
+  if (!fixed.any_boundary) return;
   const Real rb = fixed.boundary.radius;
   for (std::uint32_t s = bounds.start[i]; s < bounds.start[i + 1]; ++s) {
     const Vec3 dx = x[i] - fixed.boundary.x[bounds.obstacle[s]];
@@ -907,14 +930,12 @@ template <bool kRolling>
 }
 
 /// Grain i's pair sums, into f, q and tr: its remaining pairs (computed here, their reverses
-/// scattered), its waiting ones (those reaching past its range's end, computed in the thread
-/// partition), then its accumulator, which is cleared.
+/// scattered), its waiting ones (from slot `split` on: those reaching past its range's end,
+/// computed in the thread partition), then its accumulator, which is cleared.
 template <bool kRolling>
-[[gnu::always_inline]] inline void pair_sums(const SweepData& d, std::size_t range_end,
-                                             std::size_t i, Vec3& f, Vec3& q, Vec3& tr,
-                                             Tally& tally) {
+[[gnu::always_inline]] inline void pair_sums(const SweepData& d, std::uint32_t split, std::size_t i,
+                                             Vec3& f, Vec3& q, Vec3& tr, Tally& tally) {
   const Slots& pl = d.slots;
-  const std::uint32_t split = first_reaching(pl, i, range_end);
   const RowGrain gi = row_grain(d, i);
   const std::uint32_t* near = pl.near + pl.start[i];
   for (std::uint32_t k = 0, count = pl.near_count[i]; k < count && near[k] < split; ++k) {
@@ -935,8 +956,10 @@ template <bool kRolling>
   f += d.acc_f[i];
   q += d.acc_q[i];
   if constexpr (kRolling) tr += d.acc_t[i];
-  d.acc_f[i] = d.acc_q[i] = {};
-  if constexpr (kRolling) d.acc_t[i] = {};
+  // (one at a time: a chained assignment read the first back from memory for the second)
+  store(d.acc_f[i], Vec3{});
+  store(d.acc_q[i], Vec3{});
+  if constexpr (kRolling) store(d.acc_t[i], Vec3{});
 }
 
 // --- integration -----------------------------------------------------------------------------
@@ -956,8 +979,12 @@ template <bool kRolling>
   store(d.v[i], v_new);
   d.w[i] += torque * (d.inv_I[i] * dt);
   store(d.x[i], x_new);
+  // one test for the three limits (watch_radius2); NaN fails it
+  const Real moved2 = norm2(x_new - d.x_at_near[i]);
+  if (moved2 <= d.watch2[i]) [[likely]]
+    return 0;
   return (norm2(x_new - d.x_at_build[i]) > d.allow2[i] ? kLeftAllowance : 0) |
-         (norm2(x_new - d.x_at_near[i]) > d.near2[i] ? kLeftNearMargin : 0) |
+         (moved2 > d.near2[i] ? kLeftNearMargin : 0) |
          (in_box(x_new, d.domain_lo, d.domain_hi) ? 0 : kLeftDomain);
 }
 
@@ -1033,9 +1060,11 @@ int DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     // each thread's own copy: no store through the arrays can change it, so the compiler need
     // not load the pointers again after each store
-    const SweepData data = sweep_data(params_, pairs_, grains, acc_f_, acc_q_, acc_t_, x_at_build_,
-                                      allow2_, x_at_near_, near2_, domain_lo_, domain_hi_, dt);
-    const FixedPartners fixed{geometry, walls_, wall_params_, bounds_, boundary_, boundary_params_};
+    const SweepData data =
+        sweep_data(params_, pairs_, grains, acc_f_, acc_q_, acc_t_, x_at_build_, allow2_,
+                   x_at_near_, near2_, watch2_, domain_lo_, domain_hi_, dt);
+    const FixedPartners fixed{geometry,  walls_,           wall_params_,        bounds_,
+                              boundary_, boundary_params_, boundary_.size() > 0};
     // this thread's tallies, added into the reductions once its work is done
     Tally tally{.max_ov = max_ov};
 
@@ -1051,9 +1080,14 @@ int DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
     // its waiting ones, and i moves (all of it timed: the thread's share follows its time)
     const double sweep_start = omp_get_wtime();
     take_cross_pairs<kRolling>(data, cross_rows_, lo, hi);
+    // the next row with pairs past hi: only those rows need their split searched
+    auto next_cross = std::lower_bound(cross_rows_.begin(), cross_rows_.end(), lo);
     for (std::size_t i = lo; i < hi; ++i) {
+      std::uint32_t split = data.slots.start[i + 1];
+      if (next_cross != cross_rows_.end() && *next_cross == i) [[unlikely]]
+        split = first_reaching(data.slots, i, hi), ++next_cross;
       Vec3 f{}, q{}, tr{};
-      pair_sums<kRolling>(data, hi, i, f, q, tr, tally);
+      pair_sums<kRolling>(data, split, i, f, q, tr, tally);
       if (data.st[i] != GrainState::Active) continue;
       Vec3 torque = tr + q * (-data.r[i]);
       fixed_forces<kRolling>(data, fixed, i, f, torque, tally);

@@ -94,6 +94,14 @@ struct DeepestOverlap {
 /// holds perm[k].
 std::vector<std::uint32_t> cell_order(const Grains& grains, Real skin);
 
+/// The squared radius of the ball around x (where the grain stands as the near list is made) in
+/// which it is inside its near margin, its allowance (around x_at_build) and the domain [lo, hi]:
+/// the sweep tests this ball alone and the three only outside it (DemSolver::watch2_), -1 when
+/// the grain is outside one already. A billionth of slack, and a few ulps of the coordinates,
+/// keep the triangle inequality true through the tests' rounding (of order 1e-16).
+Real watch_radius2(const Vec3& x, Real margin, Real allow, const Vec3& x_at_build, const Vec3& lo,
+                   const Vec3& hi);
+
 class DemSolver {
  public:
   explicit DemSolver(const DemParams& params);
@@ -115,6 +123,7 @@ class DemSolver {
     domain_lo_ = lo;
     domain_hi_ = hi;
     maybe_outside_ = true;
+    need_near_ = true;  // (the near list's build measures each grain's way to the domain's walls)
   }
   /// True when the last sweep left every ACTIVE grain inside the domain with a finite position
   /// (a non-finite velocity makes the position non-finite); false before the first sweep and after
@@ -220,6 +229,9 @@ class DemSolver {
   std::vector<Vec3> acc_f_, acc_q_, acc_t_;  ///< per grain: reversed pair results of this step
   std::vector<Vec3> x_at_near_;  ///< per grain: where it stood when the near list was made
   std::vector<Real> near2_;      ///< per grain: its near margin, squared [m^2]
+  /// per grain: the squared radius around x_at_near_ within which it is inside its near margin,
+  /// its allowance and the domain (made with the near list; -1: outside one) [m^2]
+  std::vector<Real> watch2_;
   bool need_near_ = true;
   static constexpr Real kFar = std::numeric_limits<Real>::infinity();
   Vec3 domain_lo_{-kFar, -kFar, -kFar}, domain_hi_{kFar, kFar, kFar};  ///< (set_domain)

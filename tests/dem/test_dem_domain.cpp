@@ -3,8 +3,10 @@
 // finite, and ignore the frozen ones as the guard does.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 
+#include "core/rng.hpp"
 #include "dem/dem_solver.hpp"
 
 namespace sandflow {
@@ -86,6 +88,70 @@ TEST(DemDomain, ARestoredSolverHasNotLooked) {
   EXPECT_FALSE(restored.all_inside());
   restored.step(g, Geometry{}, kDt, prof);
   EXPECT_TRUE(restored.all_inside());
+}
+
+TEST(DemDomain, AGrainThatCrossesTheWallWithinItsNearMarginIsSeen) {
+  // 1.5 um inside the wall at 1 mm/s: out after two steps of 1 ms, 2 um moved, well within its
+  // near margin (the way it goes in 32 steps, 32 um): the sweep's one test per grain must still
+  // know the wall is nearer than that
+  DemSolver dem(without_gravity());
+  dem.set_domain({-1, -1, -1}, {1, 1, 1});
+  Grains g = two_grains({1 - 1.5e-6, 0, 0}, 1e-3);
+  Profile prof;
+  dem.step(g, Geometry{}, kDt, prof);
+  ASSERT_LT(g.x[1].x, 1.0);
+  EXPECT_TRUE(dem.all_inside());
+  dem.step(g, Geometry{}, kDt, prof);
+  ASSERT_GT(g.x[1].x, 1.0);
+  EXPECT_FALSE(dem.all_inside());
+}
+
+// The ball the sweep watches (watch_radius2): every point in it, as the sweep computes its
+// distances, is within the grain's near margin, within its allowance of where it stood at the
+// rebuild, and inside the domain; and the ball is not needlessly small.
+TEST(DemWatch, EveryPointOfTheWatchedBallIsInsideTheThreeLimits) {
+  Rng rng(7);
+  int watched = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const Real scale = trial % 2 ? 1.0 : 1e3;  // (coordinates of a metre and of a kilometre)
+    const Vec3 x{rng.uniform(-scale, scale), rng.uniform(-scale, scale),
+                 rng.uniform(-scale, scale)};
+    const Real margin = rng.uniform(1e-6, 1e-3), allow = margin * rng.uniform(1.0, 3.0);
+    const Vec3 dir = Vec3{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)};
+    const Vec3 x_at_build = x + dir * (allow * rng.uniform(0.0, 1.2) / std::max(norm(dir), 1e-9));
+    // walls at a few margins, some nearer than the margin, one side open
+    const Vec3 lo = x - Vec3{margin * rng.uniform(0.0, 3.0), margin * rng.uniform(0.0, 3.0),
+                             std::numeric_limits<Real>::infinity()};
+    const Vec3 hi = x + Vec3{margin * rng.uniform(0.0, 3.0), margin * rng.uniform(0.0, 3.0),
+                             margin * rng.uniform(0.0, 3.0)};
+    const Real w2 = watch_radius2(x, margin, allow, x_at_build, lo, hi);
+    if (norm(x - x_at_build) > allow) {
+      EXPECT_EQ(w2, -1) << "outside its allowance already";
+    }
+    if (w2 <= 0) continue;
+    ++watched;
+    for (int k = 0; k < 20; ++k) {  // points on the ball's surface and just inside
+      Vec3 u{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)};
+      if (k < 6) {  // (along the axes, toward each wall)
+        u = Vec3{k % 3 == 0 ? 1.0 : 0.0, k % 3 == 1 ? 1.0 : 0.0, k % 3 == 2 ? 1.0 : 0.0} *
+            (k < 3 ? 1.0 : -1.0);
+      }
+      const Vec3 y = x + u * (std::sqrt(w2) * (k % 2 ? 1.0 : 1 - 1e-12) / norm(u));
+      if (!(norm2(y - x) <= w2)) continue;  // (the sweep would look closer: nothing to check)
+      ASSERT_LE(norm2(y - x), margin * margin) << "trial " << trial;
+      ASSERT_LE(norm2(y - x_at_build), allow * allow) << "trial " << trial;
+      ASSERT_TRUE(y.x >= lo.x && y.x <= hi.x && y.y >= lo.y && y.y <= hi.y && y.z >= lo.z &&
+                  y.z <= hi.z)
+          << "trial " << trial;
+    }
+  }
+  EXPECT_GT(watched, 2000);
+  // a grain where it stood at the rebuild, far from the walls: the ball is its margin
+  const Real far = std::numeric_limits<Real>::infinity();
+  const Real w2 = watch_radius2({0.3, 0.2, 0.1}, 1e-4, 2e-4, {0.3, 0.2, 0.1}, {-far, -far, -far},
+                                {far, far, far});
+  EXPECT_GT(w2, 0.9999 * 1e-8);
+  EXPECT_LE(w2, 1e-8);
 }
 
 }  // namespace
