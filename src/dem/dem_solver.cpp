@@ -1084,8 +1084,10 @@ int DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
     auto next_cross = std::lower_bound(cross_rows_.begin(), cross_rows_.end(), lo);
     for (std::size_t i = lo; i < hi; ++i) {
       std::uint32_t split = data.slots.start[i + 1];
-      if (next_cross != cross_rows_.end() && *next_cross == i) [[unlikely]]
-        split = first_reaching(data.slots, i, hi), ++next_cross;
+      if (next_cross != cross_rows_.end() && *next_cross == i) [[unlikely]] {
+        split = first_reaching(data.slots, i, hi);
+        ++next_cross;
+      }
       Vec3 f{}, q{}, tr{};
       pair_sums<kRolling>(data, split, i, f, q, tr, tally);
       if (data.st[i] != GrainState::Active) continue;
