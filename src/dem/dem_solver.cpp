@@ -937,7 +937,7 @@ template <bool kRolling>
                                              Vec3& f, Vec3& q, Vec3& tr, Tally& tally) {
   const Slots& pl = d.slots;
   // (a grain in flight has no near pair: its state is copied for the row only when there is one,
-  // which took 20 of the 148 instructions a falling grain cost a step)
+  // which took 19 of the 148 instructions a falling grain cost a step)
   if (const std::uint32_t count = pl.near_count[i]; count > 0) {
     const RowGrain gi = row_grain(d, i);
     const std::uint32_t* near = pl.near + pl.start[i];
