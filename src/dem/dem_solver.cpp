@@ -88,7 +88,12 @@ template <class Pairs>
 
 DemSolver::DemSolver(const DemParams& params)
     : params_(params),
-      rolling_(params.contact.mu_r > 0 || params.contact.mu_tw > 0 || params.walls_resist_turning) {
+      rolling_(params.contact.mu_r > 0 || params.contact.mu_tw > 0 || params.walls_resist_turning),
+      use_avx512_(avx512_available()) {}
+
+bool DemSolver::avx512_available() {
+  // (the operating system's support for the registers' state included)
+  return __builtin_cpu_supports("avx512f");
 }
 
 void DemSolver::step(Grains& grains, const Geometry& geometry, Real dt, Profile& profile) {
@@ -620,6 +625,16 @@ void DemSolver::balance_ranges(const Grains& grains, std::size_t threads) {
   ranges_stale_ = false;
 }
 
+/// One thread's tallies, added into the sweep's reductions at its end. (Values of the thread's
+/// own: references to the reduction variables were kept in memory across every pair's stores.)
+struct SweepTally {
+  std::int64_t contacts = 0;
+  std::int64_t wall_contacts = 0;
+  Real max_ov = 0;
+  std::int64_t inert_fj = 0;    ///< in the springs of contacts going inert [fJ]
+  std::int64_t relaxed_fj = 0;  ///< the work of preloads relaxing [fJ]
+};
+
 // The force pass and the integration are one sweep over the grains in storage order. Each pair
 // (i, j), i < j, is computed once, from the state at the start of the step, when the sweep reaches
 // i: its force goes to i's own sum and, reversed, to j's accumulator. Once i's own pairs are done,
@@ -755,16 +770,6 @@ SweepData sweep_data(const DemParams& p, PairList& pairs, Grains& grains, std::v
   return static_cast<std::int64_t>(std::llround(energy * 1e15));
 }
 
-/// One thread's tallies, added into the sweep's reductions at its end. (Values of the thread's
-/// own: references to the reduction variables were kept in memory across every pair's stores.)
-struct Tally {
-  std::int64_t contacts = 0;
-  std::int64_t wall_contacts = 0;
-  Real max_ov = 0;
-  std::int64_t inert_fj = 0;    ///< in the springs of contacts going inert [fJ]
-  std::int64_t relaxed_fj = 0;  ///< the work of preloads relaxing [fJ]
-};
-
 // --- fixed partners: walls, boundary particles, frozen grains --------------------------------
 
 /// Grain i's state as its row of pairs reads it, loaded once for the row: the pairs' stores (to
@@ -795,7 +800,7 @@ template <bool kRolling>
 [[gnu::always_inline]] inline void touch_fixed(const SweepData& d, std::size_t i,
                                                const ContactParams& p, const ContactGeometry& cg,
                                                Vec3& xi, Vec3& psi, Vec3& f, Vec3& torque,
-                                               Tally& tally) {
+                                               SweepTally& tally) {
   const Vec3* v = d.v;
   const Vec3* w = d.w;
   ContactHistory h{xi, psi};
@@ -818,7 +823,7 @@ template <bool kRolling>
 template <bool kRolling>
 [[gnu::always_inline]] inline void fixed_forces(const SweepData& d, const FixedPartners& fixed,
                                                 std::size_t i, Vec3& f, Vec3& torque,
-                                                Tally& tally) {
+                                                SweepTally& tally) {
   const Vec3* x = d.x;
   const Real r_i = d.r[i];
   WallList& walls = fixed.walls;
@@ -864,7 +869,7 @@ template <bool kRolling>
 /// inert, and the energy in its springs leaves with it.
 template <bool kRolling>
 [[gnu::always_inline]] inline void end_contact(const SweepData& d, std::uint32_t s, Real rsum,
-                                               Real dist2, Tally& tally) {
+                                               Real dist2, SweepTally& tally) {
   const Slots& pl = d.slots;
   if (!pl.touch[s]) return;
   if (dist2 < rsum * rsum) [[unlikely]]
@@ -877,7 +882,7 @@ template <bool kRolling>
 template <bool kRolling>
 [[gnu::always_inline]] inline bool pair_force(const SweepData& d, const RowGrain& gi,
                                               [[maybe_unused]] std::size_t i, std::uint32_t s,
-                                              ContactForce& cf, Tally& tally) {
+                                              ContactForce& cf, SweepTally& tally) {
   const ContactParams& cp = d.cp;
   const Slots& pl = d.slots;
   const std::uint32_t j = pl.j[s];
@@ -934,7 +939,7 @@ template <bool kRolling>
 /// computed in the thread partition), then its accumulator, which is cleared.
 template <bool kRolling>
 [[gnu::always_inline]] inline void pair_sums(const SweepData& d, std::uint32_t split, std::size_t i,
-                                             Vec3& f, Vec3& q, Vec3& tr, Tally& tally) {
+                                             Vec3& f, Vec3& q, Vec3& tr, SweepTally& tally) {
   const Slots& pl = d.slots;
   // (a grain in flight has no near pair: its state is copied for the row only when there is one,
   // which took 19 of the 148 instructions a falling grain cost a step)
@@ -1003,7 +1008,7 @@ template <bool kRolling>
 [[gnu::always_inline]] inline void cross_range_pairs(const SweepData& d,
                                                      const std::vector<std::size_t>& range,
                                                      const std::vector<std::uint32_t>& cross_rows,
-                                                     Tally& tally) {
+                                                     SweepTally& tally) {
   const Slots& pl = d.slots;
 #pragma omp for schedule(dynamic, 16)
   for (std::size_t k = 0; k < cross_rows.size(); ++k) {
@@ -1056,50 +1061,14 @@ int DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   Real max_ov = counters_.max_overlap_rel;
   std::int64_t inert_fj = 0, relaxed_fj = 0;  // (femtojoules: see there)
   int moved_out = 0;  // what some grain left: kLeftAllowance, kLeftNearMargin, kLeftDomain
+  const bool wide = use_avx512_;
 
 #pragma omp parallel if (n >= kParallelMinGrains) \
     reduction(+ : contacts, wall_contacts, inert_fj, relaxed_fj) reduction(max : max_ov) reduction(| : moved_out)
   {
-    const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
-    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
-    // each thread's own copy: no store through the arrays can change it, so the compiler need
-    // not load the pointers again after each store
-    const SweepData data =
-        sweep_data(params_, pairs_, grains, acc_f_, acc_q_, acc_t_, x_at_build_, allow2_,
-                   x_at_near_, near2_, watch2_, domain_lo_, domain_hi_, dt);
-    const FixedPartners fixed{geometry,  walls_,           wall_params_,        bounds_,
-                              boundary_, boundary_params_, boundary_.size() > 0};
-    // this thread's tallies, added into the reductions once its work is done
-    Tally tally{.max_ov = max_ov};
-
-    // 1. the threads' ranges (cut again after a rebuild), and the pairs that reach into a later
-    // thread's range
-#pragma omp single
-    if (ranges_stale_ || range_start_.size() != threads + 1 || range_start_.back() != n)
-      balance_ranges(grains, threads);
-    const std::size_t lo = range_start_[t], hi = range_start_[t + 1];
-    cross_range_pairs<kRolling>(data, range_start_, cross_rows_, tally);
-
-    // 2. the sweep: the pairs of phase 1 that reach into this range, then i's remaining pairs,
-    // its waiting ones, and i moves (all of it timed: the thread's share follows its time)
-    const double sweep_start = omp_get_wtime();
-    take_cross_pairs<kRolling>(data, cross_rows_, lo, hi);
-    // the next row with pairs past hi: only those rows need their split searched
-    auto next_cross = std::lower_bound(cross_rows_.begin(), cross_rows_.end(), lo);
-    for (std::size_t i = lo; i < hi; ++i) {
-      std::uint32_t split = data.slots.start[i + 1];
-      if (next_cross != cross_rows_.end() && *next_cross == i) [[unlikely]] {
-        split = first_reaching(data.slots, i, hi);
-        ++next_cross;
-      }
-      Vec3 f{}, q{}, tr{};
-      pair_sums<kRolling>(data, split, i, f, q, tr, tally);
-      if (data.st[i] != GrainState::Active) continue;
-      Vec3 torque = tr + q * (-data.r[i]);
-      fixed_forces<kRolling>(data, fixed, i, f, torque, tally);
-      moved_out |= integrate(data, i, f, torque);
-    }
-    busy_[t] += omp_get_wtime() - sweep_start;
+    SweepTally tally{.max_ov = max_ov};
+    moved_out |= wide ? sweep_part_avx512<kRolling>(grains, geometry, dt, tally)
+                      : sweep_part<kRolling>(grains, geometry, dt, tally);
     contacts += tally.contacts;
     wall_contacts += tally.wall_contacts;
     max_ov = std::max(max_ov, tally.max_ov);
@@ -1112,6 +1081,63 @@ int DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   counters_.energy_inert += static_cast<Real>(inert_fj) * 1e-15;
   counters_.energy_released += static_cast<Real>(relaxed_fj) * 1e-15;
   return moved_out;
+}
+
+template <bool kRolling>
+[[gnu::always_inline]] inline int DemSolver::sweep_part(Grains& grains, const Geometry& geometry,
+                                                        Real dt, SweepTally& tally) {
+  const std::size_t n = grains.size();
+  const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
+  const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+  // each thread's own copy: no store through the arrays can change it, so the compiler need
+  // not load the pointers again after each store
+  const SweepData data =
+      sweep_data(params_, pairs_, grains, acc_f_, acc_q_, acc_t_, x_at_build_, allow2_, x_at_near_,
+                 near2_, watch2_, domain_lo_, domain_hi_, dt);
+  const FixedPartners fixed{geometry,  walls_,           wall_params_,        bounds_,
+                            boundary_, boundary_params_, boundary_.size() > 0};
+  int moved_out = 0;
+
+  // 1. the threads' ranges (cut again after a rebuild), and the pairs that reach into a later
+  // thread's range
+#pragma omp single
+  if (ranges_stale_ || range_start_.size() != threads + 1 || range_start_.back() != n)
+    balance_ranges(grains, threads);
+  const std::size_t lo = range_start_[t], hi = range_start_[t + 1];
+  cross_range_pairs<kRolling>(data, range_start_, cross_rows_, tally);
+
+  // 2. the sweep: the pairs of phase 1 that reach into this range, then i's remaining pairs,
+  // its waiting ones, and i moves (all of it timed: the thread's share follows its time)
+  const double sweep_start = omp_get_wtime();
+  take_cross_pairs<kRolling>(data, cross_rows_, lo, hi);
+  // the next row with pairs past hi: only those rows need their split searched
+  auto next_cross = std::lower_bound(cross_rows_.begin(), cross_rows_.end(), lo);
+  for (std::size_t i = lo; i < hi; ++i) {
+    std::uint32_t split = data.slots.start[i + 1];
+    if (next_cross != cross_rows_.end() && *next_cross == i) [[unlikely]] {
+      split = first_reaching(data.slots, i, hi);
+      ++next_cross;
+    }
+    Vec3 f{}, q{}, tr{};
+    pair_sums<kRolling>(data, split, i, f, q, tr, tally);
+    if (data.st[i] != GrainState::Active) continue;
+    Vec3 torque = tr + q * (-data.r[i]);
+    fixed_forces<kRolling>(data, fixed, i, f, torque, tally);
+    moved_out |= integrate(data, i, f, torque);
+  }
+  busy_[t] += omp_get_wtime() - sweep_start;
+  return moved_out;
+}
+
+// The same code compiled for AVX-512 (chosen at run time, DemSolver::use_avx512): its 32 vector
+// registers hold the row's grain and sums that the 16 of x86-64 spill to the stack, 10 % off the
+// sweep of a pour (docs/performance.md, eighty-fifth). The same operations in the same order and
+// no fused multiply-add (-ffp-contract=off): the results are bit for bit those of x86-64.
+template <bool kRolling>
+[[gnu::target("avx512f")]] int DemSolver::sweep_part_avx512(Grains& grains,
+                                                            const Geometry& geometry, Real dt,
+                                                            SweepTally& tally) {
+  return sweep_part<kRolling>(grains, geometry, dt, tally);
 }
 
 }  // namespace sandflow

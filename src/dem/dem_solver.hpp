@@ -102,6 +102,8 @@ std::vector<std::uint32_t> cell_order(const Grains& grains, Real skin);
 Real watch_radius2(const Vec3& x, Real margin, Real allow, const Vec3& x_at_build, const Vec3& lo,
                    const Vec3& hi);
 
+struct SweepTally;  // (one thread's tallies of a sweep: dem_solver.cpp)
+
 class DemSolver {
  public:
   explicit DemSolver(const DemParams& params);
@@ -188,6 +190,13 @@ class DemSolver {
   const PairList& pairs() const { return pairs_; }
   DemCounters& counters() { return counters_; }
 
+  /// Whether this processor has AVX-512 (the sweep then runs its build for it, which gives the
+  /// same results bit for bit, faster).
+  static bool avx512_available();
+  /// Runs the sweep's AVX-512 build (when available) or the portable one: for tests, which check
+  /// that the two agree. Each solver starts with the AVX-512 build where there is one.
+  void use_avx512(bool on) { use_avx512_ = on && avx512_available(); }
+
  private:
   /// A grain woken or dislodged (apply): consumed by the next rebuild, in the same step.
   void release(GrainId id) {
@@ -208,12 +217,20 @@ class DemSolver {
   /// since the near list was made (flags: dem_solver.cpp).
   template <bool kRolling>
   int sweep(Grains& grains, const Geometry& geometry, Real dt);
+  /// One thread's part of the sweep, in its parallel region: its tallies into `tally`, and what
+  /// its grains left (as sweep); compiled for x86-64 and, as sweep_part_avx512, for AVX-512.
+  template <bool kRolling>
+  int sweep_part(Grains& grains, const Geometry& geometry, Real dt, SweepTally& tally);
+  template <bool kRolling>
+  [[gnu::target("avx512f")]] int sweep_part_avx512(Grains& grains, const Geometry& geometry,
+                                                   Real dt, SweepTally& tally);
   /// Splits the grains into `threads` contiguous ranges of about equal time for the sweep: each
   /// thread's share of the estimated work follows the speed it showed since the last split.
   void balance_ranges(const Grains& grains, std::size_t threads);
 
   DemParams params_;
   bool rolling_;  ///< resists_turning()
+  bool use_avx512_;  ///< the sweep runs sweep_part_avx512
   std::vector<ContactParams> wall_params_;
   PairGrids grids_;
   PairList pairs_, old_pairs_;

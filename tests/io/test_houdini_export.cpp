@@ -33,7 +33,7 @@ namespace fs = std::filesystem;
 using HoudiniTest = test::ScratchTest;
 using test::read_bytes;
 
-float as_float(double v) {
+float as_float32(double v) {
   return static_cast<float>(v);
 }
 
@@ -73,8 +73,8 @@ TEST_F(HoudiniTest, GeoGzIsGzipDataOfThePlainFile) {
   for (std::size_t i = 0; i < f.size(); ++i) {
     const test::GeoPoint& p = g.points[i];
     EXPECT_EQ(g.part[i], i);
-    for (int c = 0; c < 3; ++c) EXPECT_EQ(p.P[c], as_float(f.position[i][c])) << i;
-    EXPECT_EQ(as_float(p.attr.at("pscale")[0]), as_float(f.radius[i])) << i;
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(p.P[c], as_float32(f.position[i][c])) << i;
+    EXPECT_EQ(as_float32(p.attr.at("pscale")[0]), as_float32(f.radius[i])) << i;
     EXPECT_EQ(p.attr.at("id")[0], f.id[i]);
     EXPECT_EQ(p.attr.at("Cd").size(), 3u);
     EXPECT_EQ(p.attr.at("orient").size(), 4u);
@@ -197,7 +197,7 @@ TEST_F(HoudiniTest, FileNHoldsTheStateAtTimeNMinusOneOverFps) {
     ASSERT_EQ(g.points.size(), want.size());
     for (std::size_t i = 0; i < want.size(); ++i) {
       EXPECT_EQ(g.points[i].attr.at("id")[0], want.id[i]);
-      for (int c = 0; c < 3; ++c) EXPECT_EQ(g.points[i].P[c], as_float(want.position[i][c]));
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(g.points[i].P[c], as_float32(want.position[i][c]));
     }
   };
   const auto points = [&](const char* name) {
