@@ -1130,7 +1130,7 @@ template <bool kRolling>
 }
 
 // The same code compiled for AVX-512 (chosen at run time, DemSolver::use_avx512): its 32 vector
-// registers hold the row's grain and sums that the 16 of x86-64 spill to the stack, 10 % off the
+// registers hold the row's grain and sums that the 16 of x86-64 spill to the stack: 8 % off the
 // sweep of a pour (docs/performance.md, eighty-fifth). The same operations in the same order and
 // no fused multiply-add (-ffp-contract=off): the results are bit for bit those of x86-64.
 template <bool kRolling>
