@@ -46,18 +46,24 @@ constexpr std::size_t kPairCheckMaxGrains = 2000;
                         {pl.xi[s], rolling ? pl.psi[s] : Vec3{}});
 }
 
+/// What relax_preload leaves: the overlap the spring sees [m], and the energy it gained [J].
+struct Relaxed {
+  Real delta;
+  Real work;
+};
+
 /// A preloaded contact (opened inside by a change of state): its spring rests at delta0, which
 /// follows the grains apart and decays by `decay`, so that it gives back only the overlap they
-/// add and pushes them apart slowly. Sets delta to what the spring sees; returns the energy the
-/// spring gained by the decay [J].
-[[gnu::cold, gnu::noinline]] Real relax_preload(Real k_n, Real decay, Real& delta0, Real& delta) {
+/// add and pushes them apart slowly. Returns what the spring sees of overlap delta, and the
+/// energy the spring gained by the decay. (delta by value: an address taken would keep the
+/// sweep's contact geometry on the stack for every contact.)
+[[gnu::cold, gnu::noinline]] Relaxed relax_preload(Real k_n, Real decay, Real& delta0, Real delta) {
   const Real d0 = delta0, d0_new = std::min(d0 * decay, delta);
   const Real work = d0_new < d0 && delta > d0
                         ? 0.5 * k_n * (d0 - d0_new) * (2 * delta - d0 - d0_new)
                         : 0.0;
   delta0 = d0_new;
-  delta -= d0_new;
-  return work;
+  return {delta - d0_new, work};
 }
 
 /// What a grain's move leaves (DemSolver::sweep): its allowance (the lists are rebuilt), its near
@@ -907,8 +913,11 @@ template <bool kRolling>
   // relative overlap; the division only when it may be a new largest one
   const Real d_small = 2 * std::min(gi.r, r_j);
   if (g.delta > tally.max_ov * d_small) tally.max_ov = g.delta / d_small;
-  if (pl.touch[s] & kPreloaded) [[unlikely]]
-    tally.relaxed_fj += femtojoules(relax_preload(cp.k_n, d.decay, pl.delta0[s], g.delta));
+  if (pl.touch[s] & kPreloaded) [[unlikely]] {
+    const Relaxed relaxed = relax_preload(cp.k_n, d.decay, pl.delta0[s], g.delta);
+    g.delta = relaxed.delta;
+    tally.relaxed_fj += femtojoules(relaxed.work);
+  }
   ContactHistory h{pl.xi[s], kRolling ? pl.psi[s] : Vec3{}};
   const Vec3 v_j = d.v[j], w_j = d.w[j];
   cf = contact_force<kRolling>(cp, g, gi.v - v_j, gi.w, w_j, h, d.dt);
