@@ -715,6 +715,7 @@ struct FixedPartners {
   const Geometry& geometry;
   WallList& walls;
   const std::vector<ContactParams>& wall_params;  ///< per obstacle
+  const std::vector<const HalfSpace*>& planes;    ///< per obstacle: the plane it is, or null
   WallList& bounds;
   const BoundaryParticles& boundary;
   const std::vector<ContactParams>& boundary_params;  ///< per group
@@ -837,7 +838,11 @@ template <bool kRolling>
   // walls: the same law, the obstacle an immovable body with no radius
   for (std::uint32_t s = walls.start[i]; s < walls.start[i + 1]; ++s) {
     const std::uint32_t k = walls.obstacle[s];
-    const SurfacePoint sp = fixed.geometry.obstacles()[k].solid->closest(x[i]);
+    // (a plane, the most common obstacle, inline: a call out of the sweep makes it save every
+    // vector register it holds)
+    const HalfSpace* plane = fixed.planes[k];
+    const SurfacePoint sp =
+        plane ? plane->closest(x[i]) : fixed.geometry.obstacles()[k].solid->closest(x[i]);
     const Real delta = r_i - sp.distance;
     if (delta <= 0) {
       walls.xi[s] = {};
@@ -1071,6 +1076,9 @@ int DemSolver::sweep(Grains& grains, const Geometry& geometry, Real dt) {
   std::int64_t inert_fj = 0, relaxed_fj = 0;  // (femtojoules: see there)
   int moved_out = 0;  // what some grain left: kLeftAllowance, kLeftNearMargin, kLeftDomain
   const bool wide = use_avx512_;
+  wall_planes_.resize(geometry.size());
+  for (std::size_t k = 0; k < geometry.size(); ++k)
+    wall_planes_[k] = dynamic_cast<const HalfSpace*>(geometry.obstacles()[k].solid.get());
 
 #pragma omp parallel if (n >= kParallelMinGrains) \
     reduction(+ : contacts, wall_contacts, inert_fj, relaxed_fj) reduction(max : max_ov) reduction(| : moved_out)
@@ -1103,8 +1111,8 @@ template <bool kRolling>
   const SweepData data =
       sweep_data(params_, pairs_, grains, acc_f_, acc_q_, acc_t_, x_at_build_, allow2_, x_at_near_,
                  near2_, watch2_, domain_lo_, domain_hi_, dt);
-  const FixedPartners fixed{geometry,  walls_,           wall_params_,        bounds_,
-                            boundary_, boundary_params_, boundary_.size() > 0};
+  const FixedPartners fixed{geometry, walls_,    wall_params_,     wall_planes_,
+                            bounds_,  boundary_, boundary_params_, boundary_.size() > 0};
   int moved_out = 0;
 
   // 1. the threads' ranges (cut again after a rebuild), and the pairs that reach into a later

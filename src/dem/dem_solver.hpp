@@ -232,6 +232,9 @@ class DemSolver {
   bool rolling_;  ///< resists_turning()
   bool use_avx512_;  ///< the sweep runs sweep_part_avx512
   std::vector<ContactParams> wall_params_;
+  /// per obstacle: the plane it is, or null; found before each sweep (an obstacle can be
+  /// replaced), so that the sweep calls a plane's closest point inline
+  std::vector<const HalfSpace*> wall_planes_;
   PairGrids grids_;
   PairList pairs_, old_pairs_;
   WallList walls_, old_walls_;
