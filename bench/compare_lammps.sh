@@ -161,7 +161,10 @@ run_sandflow() {
   local cmd=("$BENCH_BED" --case "$CASE" --grains "$GRAINS" "$@" --threads "$t" --steps "$STEPS")
   [[ "$CASE" == bed ]] && cmd+=(--bed "$BED")
   note "sandflow, $t thread(s): ${cmd[*]}  (log: ${log#"$ROOT"/})"
-  if ! OMP_NUM_THREADS=$t "${cmd[@]}" >"$log" 2>&1; then
+  # threads bound to cores, one each, as mpirun binds LAMMPS's processes (--report-bindings:
+  # "rank 0 bound to core 0, rank 1 to core 1"): unbound, the pour at 2 threads took 70.4 and
+  # 71.9 s, bound 69.7 and 69.5 s (docs/performance.md, eighty-sixth)
+  if ! OMP_NUM_THREADS=$t OMP_PROC_BIND=true OMP_PLACES=cores "${cmd[@]}" >"$log" 2>&1; then
     tail -n 20 "$log" >&2
     die "bench_bed failed (threads=$t), see $log"
   fi
