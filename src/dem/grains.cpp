@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <stdexcept>
 #include <utility>
 
@@ -31,18 +32,26 @@ void apply_permutation(std::vector<T>& a, std::span<const std::uint32_t> perm) {
   for (std::size_t k = 0; k < perm.size(); ++k) out[k] = a[perm[k]];
   a = std::move(out);
 }
+
+/// The grains `keep` names (ascending), moved down in place: keep[k] >= k, so nothing is
+/// overwritten before it is read, and no array is allocated and filled anew.
+template <class T>
+void keep_in_place(std::vector<T>& a, std::span<const std::uint32_t> keep) {
+  for (std::size_t k = 0; k < keep.size(); ++k)
+    if (keep[k] != k) a[k] = a[keep[k]];
+  a.resize(keep.size());
+}
 }  // namespace
 
 void Grains::permute(std::span<const std::uint32_t> perm) {
-  apply_permutation(id, perm);
-  apply_permutation(state, perm);
-  apply_permutation(x, perm);
-  apply_permutation(v, perm);
-  apply_permutation(w, perm);
-  apply_permutation(r, perm);
-  apply_permutation(m, perm);
-  apply_permutation(inv_m, perm);
-  apply_permutation(inv_I, perm);
+  auto each = [this](auto&& f) {
+    f(id), f(state), f(x), f(v), f(w), f(r), f(m), f(inv_m), f(inv_I);
+  };
+  // (a surface run drops the grains that fell asleep at most transfers: a compaction)
+  if (std::adjacent_find(perm.begin(), perm.end(), std::greater_equal<>()) == perm.end())
+    each([perm](auto& a) { keep_in_place(a, perm); });
+  else
+    each([perm](auto& a) { apply_permutation(a, perm); });
 }
 
 // ---- StaticStore

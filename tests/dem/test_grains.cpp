@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "dem/grains.hpp"
 
@@ -63,6 +64,34 @@ TEST(Stores, AStaticGrainInTheHotStoreOrATwiceHeldOneIsNamed) {
   hot.id[1] = 3;
   hot.v.pop_back();
   EXPECT_TRUE(says(store_error(hot, statics, 7, 6), "arrays differ in length"));
+}
+
+// A shorter, ascending perm (the grains that stay awake) is done in place; every array must follow
+// it, as a reordering does.
+TEST(Stores, PermuteKeepsTheNamedGrainsInEveryArrayOrReordersThem) {
+  Grains g;
+  for (GrainId id = 0; id < 6; ++id) {
+    g.add(id, {0.1 * id, 0, 0}, {0, 0.2 * id, 0}, 0.004 + 0.0002 * id, 2600);
+    g.w.back() = {0, 0, 0.3 * id};
+    g.state.back() = id % 2 ? GrainState::Interface : GrainState::Active;
+  }
+  const Grains before = g;
+  auto holds = [&](const Grains& now, std::size_t k, std::size_t was) {
+    return now.id[k] == before.id[was] && now.state[k] == before.state[was] &&
+           now.x[k] == before.x[was] && now.v[k] == before.v[was] && now.w[k] == before.w[was] &&
+           now.r[k] == before.r[was] && now.m[k] == before.m[was] &&
+           now.inv_m[k] == before.inv_m[was] && now.inv_I[k] == before.inv_I[was];
+  };
+  const std::vector<std::uint32_t> keep{0, 2, 3, 5};
+  g.permute(keep);
+  ASSERT_EQ(g.size(), keep.size());
+  ASSERT_EQ(g.x.size(), keep.size());
+  ASSERT_EQ(g.inv_I.size(), keep.size());
+  for (std::size_t k = 0; k < keep.size(); ++k) EXPECT_TRUE(holds(g, k, keep[k])) << "slot " << k;
+  Grains h = before;
+  const std::vector<std::uint32_t> order{4, 1, 5, 0, 3, 2};
+  h.permute(order);
+  for (std::size_t k = 0; k < order.size(); ++k) EXPECT_TRUE(holds(h, k, order[k])) << "slot " << k;
 }
 
 }  // namespace
