@@ -8,10 +8,10 @@ For each run folder (RUN/frames/NNNN.ply and RUN/stats.csv) and every --every-th
 faster than --speed (m/s), and those at rest that touch one (centres nearer than the two radii).
 As in `compare`, each share is the sum over the frames divided by the sum of all grains present
 (n_total in stats.csv): a plain-DEM run gives a floor under what any split of the grains into a
-moving layer and a frozen layer in contact with it must simulate. Where the PLY has `state` (a
-surface run), also its ACTIVE grains by speed, the slow ones touching a fast one or within 2 d of
-one, and its INTERFACE grains (docs/performance.md, 2026-12-07).
-(Standard library only, the PLY reader of column_collapse.py.)
+moving layer and a frozen layer in contact with it must simulate. Where the PLY has `state` (in
+plain DEM every grain is ACTIVE), also the ACTIVE grains by speed, the slow ones touching a fast
+one or within 2 d of one, and the INTERFACE grains (docs/performance.md, 2026-12-07).
+(Standard library only, the frame reader of flowing_layer.py.)
 """
 import argparse
 import csv
@@ -20,9 +20,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from column_collapse import read_ply  # noqa: E402
-
-ACTIVE, INTERFACE = 0, 1
+from flowing_layer import ACTIVE, INTERFACE, grains_of  # noqa: E402
 
 
 def totals_of(run):
@@ -73,6 +71,8 @@ def shares(run, speed, every, first):
     # (compare's last half: frames n/2 + 1 to n of a run of n frames)
     start = first if first is not None else max(frames) // 2 + 1
     picked = [f for f in frames if f >= start and (f - start) % every == 0]
+    if not picked:
+        sys.exit(f"moving_share.py: {run}/frames: no frame from {start} on")
     sums = {}
 
     def add(key, value):
@@ -81,20 +81,16 @@ def shares(run, speed, every, first):
     for fr in picked:
         if fr not in totals:
             sys.exit(f"moving_share.py: {run}: frame {fr} is not in stats.csv")
-        path = os.path.join(run, "frames", f"{fr:04d}.ply")
-        with open(path, "rb") as f:
-            has_state = b"property uchar state" in f.read(4096)
-        names = ("x", "y", "z", "radius", "vx", "vy", "vz") + (("state",) if has_state else ())
-        grains = [tuple(g) for g in read_ply(path, names)]
+        grains = grains_of(os.path.join(folder, f"{fr:04d}.ply"))
         d = 2 * sum(g[3] for g in grains) / max(len(grains), 1)
-        fast = {i for i, g in enumerate(grains) if math.hypot(g[4], g[5], g[6]) > speed}
+        fast = {i for i, g in enumerate(grains) if g[4] > speed}
         touching, within = near_counts(grains, fast, 2 * d)
         add("all grains", totals[fr])
         add("in the frames", len(grains))
         add(f"faster than {speed:g} m/s", len(fast))
         add("  and those touching them", len(fast) + len(touching))
-        if has_state:
-            state = [int(g[7]) for g in grains]
+        state = [g[5] for g in grains]
+        if any(s >= 0 for s in state):
             add("ACTIVE", state.count(ACTIVE))
             add(f"  faster than {speed:g} m/s", sum(1 for i in fast if state[i] == ACTIVE))
             slow = [i for i, s in enumerate(state) if s == ACTIVE and i not in fast]
