@@ -231,7 +231,14 @@ double packed_bed_level(const SceneConfig& scene, const Geometry& geometry, cons
 std::string last_frame(const std::string& dir);
 
 int run_command(const RunOptions& o);
-int measure_command(const std::string& dir);
+/// What `sandflow measure` reads and leaves out.
+struct MeasureOptions {
+  std::string dir;
+  int frame = 0;           ///< frames/NNNN.ply of a plain-DEM run; 0: the final state
+  double slower_than = 0;  ///< leave out grains this fast or faster [m/s]; 0: none
+};
+
+int measure_command(const MeasureOptions& o);
 int compare_command(const RunOptions& o, const CompareOptions& co);
 /// `command`: the command line as typed, recorded in table1.md.
 int table1_command(const Table1Options& o, const std::string& command);

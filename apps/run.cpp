@@ -2,6 +2,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -918,25 +919,46 @@ int run_command(const RunOptions& o) {
   return 0;
 }
 
-/// The last frame file of a run folder.
-std::string last_frame(const std::string& dir) {
+namespace {
+
+/// Refuses what is not one run's folder: missing, not a folder, or a comparison's (name one of its
+/// runs).
+void check_run_folder(const std::string& dir) {
   if (const std::string problem = folder_problem(dir); !problem.empty())
     throw InputError(dir + ": " + problem + " (expected a run folder)");
-  // a comparison's or a table's folder holds runs: name one
   for (const char* inside : {"surface", "dem"})
     if (fs::is_regular_file(fs::path(dir) / "compare.json") &&
         fs::is_directory(fs::path(dir) / inside / "frames"))
       throw InputError(fmt::format("{}: a comparison's folder: measure one of its runs, {}", dir,
                                    (fs::path(dir) / inside).string()));
-  std::string best;
+}
+
+/// The frame numbers of DIR/frames/NNNN.ply, ascending (by number: 10000 follows 9999).
+std::vector<int> frame_numbers(const std::string& dir) {
+  std::vector<int> frames;
   std::error_code ec;
-  for (const auto& e : fs::directory_iterator(fs::path(dir) / "frames", ec))
-    if (e.path().extension() == ".ply" && e.path().string() > best) best = e.path().string();
-  if (best.empty())
+  for (const auto& e : fs::directory_iterator(fs::path(dir) / "frames", ec)) {
+    const std::string stem = e.path().stem().string();
+    int n = 0;
+    const auto [p, err] = std::from_chars(stem.data(), stem.data() + stem.size(), n);
+    if (e.path().extension() == ".ply" && err == std::errc() && p == stem.data() + stem.size())
+      frames.push_back(n);
+  }
+  std::sort(frames.begin(), frames.end());
+  return frames;
+}
+
+}  // namespace
+
+/// The last frame file of a run folder.
+std::string last_frame(const std::string& dir) {
+  check_run_folder(dir);
+  const std::vector<int> frames = frame_numbers(dir);
+  if (frames.empty())
     throw InputError(fmt::format(
         "{}: no frames/NNNN.ply in this folder (a run writes them unless --export leaves out ply)",
         dir));
-  return best;
+  return frame_path(dir, frames.back());
 }
 
 double packed_bed_level(const SceneConfig& scene, const Geometry& geometry, const CraterSite& site,
@@ -976,10 +998,61 @@ FrameData grains_at_checkpoint(const SceneConfig& scene, const nlohmann::json& r
   return world.all_grains_frame();
 }
 
-int measure_command(const std::string& dir) {
+namespace {
+
+/// DIR/frames/N.ply of a plain-DEM run, every grain it held then.
+FrameData frame_of_plain_dem_run(const std::string& dir, const std::optional<SceneConfig>& scene,
+                                 int n) {
+  check_run_folder(dir);
+  const std::string surface_why = fmt::format(
+      "{}: a surface run's frames hold only the grains it simulates, not the sand asleep under "
+      "them, so its heap at frame {} cannot be measured from them. Without --frame, measure reads "
+      "its final state or last checkpoint: run it to frame {} (sandflow run ... --frames {}) and "
+      "measure that",
+      dir, n, n, n);
+  if (scene && scene->simulation.mode == Mode::Surface) throw InputError(surface_why);
+  const std::string path = frame_path(dir, n);
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    const std::vector<int> frames = frame_numbers(dir);
+    throw InputError(
+        frames.empty()
+            ? fmt::format("{}: no such frame; this folder has no frames/NNNN.ply (a run writes "
+                          "them unless --export leaves out ply)",
+                          path)
+            : fmt::format("{}: no such frame; this folder's frames are {} to {}", path,
+                          frames.front(), frames.back()));
+  }
+  FrameData f = read_ply(path);
+  // (a folder without its run.json: an INTERFACE grain is only in a surface run's frames)
+  if (std::any_of(f.state.begin(), f.state.end(), [](std::uint8_t s) {
+        return s != static_cast<std::uint8_t>(GrainState::Active);
+      }))
+    throw InputError(surface_why);
+  return f;
+}
+
+/// The grains of f slower than v [m/s].
+FrameData slower_than(const FrameData& f, double v) {
+  FrameData slow;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (norm(f.velocity[i]) >= v) continue;
+    slow.position.push_back(f.position[i]);
+    slow.radius.push_back(f.radius[i]);
+    slow.velocity.push_back(f.velocity[i]);
+    slow.id.push_back(f.id[i]);
+    slow.state.push_back(f.state[i]);
+  }
+  return slow;
+}
+
+}  // namespace
+
+int measure_command(const MeasureOptions& o) {
   // the final state, every grain; else, for a run not finished, its last checkpoint (a surface
   // run's frames hold only the grains it simulates: a sleeping column's top is not in them) or,
-  // in plain DEM, its last frame
+  // in plain DEM, its last frame; or the plain-DEM frame asked for
+  const std::string& dir = o.dir;
   std::error_code ec;
   std::optional<SceneConfig> scene;
   nlohmann::json record;
@@ -992,7 +1065,10 @@ int measure_command(const std::string& dir) {
   const fs::path checkpoint = fs::path(dir) / "checkpoint.bin";
   const bool finished = fs::exists(fs::path(dir) / "summary.json", ec);
   FrameData f;
-  if (fs::exists(final_state, ec)) {
+  if (o.frame > 0) {
+    f = frame_of_plain_dem_run(dir, scene, o.frame);
+    fmt::print("frame            {}\n", frame_path(dir, o.frame));
+  } else if (fs::exists(final_state, ec)) {
     f = read_ply(final_state.string());
     fmt::print("frame            {}\n", final_state.string());
   } else if (scene && scene->simulation.mode == Mode::Surface) {
@@ -1016,10 +1092,21 @@ int measure_command(const std::string& dir) {
     fmt::print("frame            {}\n", path);
   }
   fmt::print("grains           {}\n", f.size());
-  if (!finished)
+  if (o.slower_than > 0) {
+    const std::size_t all = f.size();
+    f = slower_than(f, o.slower_than);
+    fmt::print("left out         {} as fast as {:g} m/s or faster\n",
+               counted(all - f.size(), "grain"), o.slower_than);
+  } else if (o.frame > 0) {
+    fmt::print(
+        "note             frame {} of the run: grains still falling or flowing are measured with "
+        "the rest (--slower-than V leaves them out)\n",
+        o.frame);
+  } else if (!finished) {
     fmt::print(
         "note             the run is not finished: grains still falling or flowing are "
-        "measured with the rest\n");
+        "measured with the rest (--slower-than V leaves them out)\n");
+  }
   // a scene with a bed makes a crater, not a heap (kNoHeapInABed)
   if (scene) {
     if (const CraterSite site = crater_site(*scene); site.bed) {

@@ -300,11 +300,21 @@ int main(int argc, char** argv) {
       "(calibration_cache_dir: $SANDFLOW_CACHE_DIR, $XDG_CACHE_HOME/sandflow or\n"
       "~/.cache/sandflow), and surface mode uses it where the scene sets no angle.");
 
-  std::string dir;
+  MeasureOptions mo;
   auto* measure = app.add_subcommand(
       "measure",
       "print the angle of repose of a run's final state, or its crater in a scene with a bed");
-  measure->add_option("dir", dir, "run folder")->required();
+  measure->add_option("dir", mo.dir, "run folder")->required();
+  measure
+      ->add_option("--frame", mo.frame,
+                   "measure frames/NNNN.ply of a plain-DEM run instead of its final state (a "
+                   "surface run's frames hold only the grains it simulates)")
+      ->check(whole(1, 10000000));
+  measure
+      ->add_option("--slower-than", mo.slower_than,
+                   "leave out the grains as fast as this or faster [m/s]: a stream still "
+                   "falling onto the heap, a flow")
+      ->check(real_in(1e-9, 1e9));
 
   RunOptions co;
   auto* compare = app.add_subcommand(
@@ -483,7 +493,7 @@ int main(int argc, char** argv) {
         return compare_command(co, cmp);
       }
       if (*table1) return table1_command(to, command_line(argc, argv));
-      if (*measure) return measure_command(dir);
+      if (*measure) return measure_command(mo);
       if (*calibrate) return calibrate_command(cao, calibration_trials, calibrate_again, rig);
       if (*render) return render_command(rdo);
       if (*report) {

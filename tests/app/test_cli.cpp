@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -193,6 +195,69 @@ TEST(Cli, MeasureReadsAnUnfinishedSurfaceRunFromItsCheckpointWithEveryGrain) {
   EXPECT_EQ(run_sandflow("measure " + out.string(), &log), 2) << log;
   EXPECT_NE(log.find("the run finished, but its final_grains.ply and checkpoint.bin are gone"),
             std::string::npos)
+      << log;
+}
+
+// measure --frame reads one frame of a plain-DEM run (every grain is in it); --slower-than leaves
+// out the grains as fast as V or faster; a surface run's frame is refused, by its run.json or,
+// without one, by the INTERFACE grains only its frames hold.
+TEST(Cli, MeasureReadsAFrameOfAPlainDemRunAndLeavesOutFastGrains) {
+  Sandbox box;
+  const auto scene = box.write("t.toml", kTinyScene);
+  const auto out = box.dir / "dem";
+  std::string log;
+  ASSERT_EQ(
+      run_sandflow("run " + scene.string() + " --mode dem --frames 3 --out " + out.string(), &log),
+      0)
+      << log;
+  ASSERT_EQ(run_sandflow("measure " + out.string() + " --frame 2", &log), 0) << log;
+  EXPECT_NE(log.find("frames/0002.ply"), std::string::npos) << log;
+  EXPECT_NE(log.find("frame 2 of the run"), std::string::npos) << log;
+  // the grains left out are those at least as fast as the bound: half of them at their median
+  const sandflow::FrameData f = sandflow::read_ply((out / "frames" / "0002.ply").string());
+  std::vector<double> speeds;
+  for (const auto& v : f.velocity) speeds.push_back(std::sqrt(sandflow::norm2(v)));
+  std::sort(speeds.begin(), speeds.end());
+  const double bound = speeds[speeds.size() / 2];
+  ASSERT_GT(bound, speeds.front()) << "the grains all move alike: the test shows nothing";
+  const auto fast =
+      std::count_if(speeds.begin(), speeds.end(), [&](double s) { return s >= bound; });
+  ASSERT_EQ(
+      run_sandflow(fmt::format("measure {} --frame 2 --slower-than {:.17g}", out.string(), bound),
+                   &log),
+      0)
+      << log;
+  EXPECT_NE(log.find(fmt::format("left out         {} grains as fast as", fast)), std::string::npos)
+      << log;
+  // a frame the run did not write names those it did
+  EXPECT_EQ(run_sandflow("measure " + out.string() + " --frame 9", &log), 2) << log;
+  EXPECT_NE(log.find("0009.ply: no such frame; this folder's frames are 1 to 3"), std::string::npos)
+      << log;
+  // the last frame is the highest number, not the last name: 10000 follows 9999
+  fs::remove(out / "final_grains.ply");
+  fs::copy_file(out / "frames" / "0002.ply", out / "frames" / "9999.ply");
+  fs::copy_file(out / "frames" / "0003.ply", out / "frames" / "10000.ply");
+  ASSERT_EQ(run_sandflow("measure " + out.string(), &log), 0) << log;
+  EXPECT_NE(log.find("frames/10000.ply"), std::string::npos) << log;
+
+  const auto surface = box.dir / "surface";
+  ASSERT_EQ(run_sandflow("run " + scene.string() +
+                             " --mode surface --frames 30 --set surface.close_after=0.1 --out " +
+                             surface.string(),
+                         &log),
+            0)
+      << log;
+  EXPECT_EQ(run_sandflow("measure " + surface.string() + " --frame 30", &log), 2) << log;
+  EXPECT_NE(log.find("a surface run's frames hold only the grains it simulates"), std::string::npos)
+      << log;
+  const sandflow::FrameData s = sandflow::read_ply((surface / "frames" / "0030.ply").string());
+  ASSERT_TRUE(std::any_of(s.state.begin(), s.state.end(), [](std::uint8_t k) { return k != 0; }))
+      << "no INTERFACE grain in the frame: the test shows nothing";
+  const auto bare = box.dir / "bare";
+  fs::create_directories(bare / "frames");
+  fs::copy_file(surface / "frames" / "0030.ply", bare / "frames" / "0030.ply");
+  EXPECT_EQ(run_sandflow("measure " + bare.string() + " --frame 30", &log), 2) << log;
+  EXPECT_NE(log.find("a surface run's frames hold only the grains it simulates"), std::string::npos)
       << log;
 }
 
