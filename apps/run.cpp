@@ -2,7 +2,6 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -34,6 +33,7 @@
 #include "io/ply.hpp"
 #include "io/run_output.hpp"
 #include "progress.hpp"
+#include "report/run_data.hpp"
 #include "scene/scene_loader.hpp"
 #include "sim/emitters.hpp"
 #include "sim/world.hpp"
@@ -933,31 +933,17 @@ void check_run_folder(const std::string& dir) {
                                    (fs::path(dir) / inside).string()));
 }
 
-/// The frame numbers of DIR/frames/NNNN.ply, ascending (by number: 10000 follows 9999).
-std::vector<int> frame_numbers(const std::string& dir) {
-  std::vector<int> frames;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(fs::path(dir) / "frames", ec)) {
-    const std::string stem = e.path().stem().string();
-    int n = 0;
-    const auto [p, err] = std::from_chars(stem.data(), stem.data() + stem.size(), n);
-    if (e.path().extension() == ".ply" && err == std::errc() && p == stem.data() + stem.size())
-      frames.push_back(n);
-  }
-  std::sort(frames.begin(), frames.end());
-  return frames;
-}
+/// Why a folder gives no frame to measure.
+constexpr const char* kNoFrames =
+    "no frames/NNNN.ply in this folder (a run writes them unless --export leaves out ply)";
 
 }  // namespace
 
 /// The last frame file of a run folder.
 std::string last_frame(const std::string& dir) {
   check_run_folder(dir);
-  const std::vector<int> frames = frame_numbers(dir);
-  if (frames.empty())
-    throw InputError(fmt::format(
-        "{}: no frames/NNNN.ply in this folder (a run writes them unless --export leaves out ply)",
-        dir));
+  const std::vector<int> frames = list_frames(dir);  // (by number: 10000 follows 9999)
+  if (frames.empty()) throw InputError(fmt::format("{}: {}", dir, kNoFrames));
   return frame_path(dir, frames.back());
 }
 
@@ -1014,14 +1000,11 @@ FrameData frame_of_plain_dem_run(const std::string& dir, const std::optional<Sce
   const std::string path = frame_path(dir, n);
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) {
-    const std::vector<int> frames = frame_numbers(dir);
-    throw InputError(
-        frames.empty()
-            ? fmt::format("{}: no such frame; this folder has no frames/NNNN.ply (a run writes "
-                          "them unless --export leaves out ply)",
-                          path)
-            : fmt::format("{}: no such frame; this folder's frames are {} to {}", path,
-                          frames.front(), frames.back()));
+    const std::vector<int> frames = list_frames(dir);
+    throw InputError(frames.empty() ? fmt::format("{}: no such frame; {}", path, kNoFrames)
+                                    : fmt::format("{}: no such frame; this folder's frames are "
+                                                  "{} to {}",
+                                                  path, frames.front(), frames.back()));
   }
   FrameData f = read_ply(path);
   // (a folder without its run.json: an INTERFACE grain is only in a surface run's frames)
