@@ -40,6 +40,7 @@
 #include "geometry/mesh.hpp"
 #include "geometry/shapes.hpp"
 #include "io/folder_lock.hpp"
+#include "io/height_export.hpp"
 #include "io/media_check.hpp"
 #include "io/ply.hpp"
 #include "io/png_gray.hpp"
@@ -357,66 +358,27 @@ RenderScene load_render_scene(const std::string& scene_option, const std::vector
 
 // ---- The static layer: the height field's h, from the run's heightfield/ files --------------
 
-/// The grid and z range of a run's height images (heightfield/heightfield.json), when it has them.
-struct HeightImages {
-  Real origin_x = 0, origin_y = 0, cell = 0, z_min = 0, z_max = 0;
-  int nx = 0, ny = 0;
-};
-
-std::optional<HeightImages> read_height_images(const std::string& run) {
-  const std::optional<std::string> text =
-      read_file_if_present((fs::path(run) / "heightfield" / "heightfield.json").string(),
-                           "height field's record", kAnyFileSize);
-  if (!text) return std::nullopt;
-  const auto j = nlohmann::json::parse(*text, nullptr, false);
-  try {
-    HeightImages h;
-    h.origin_x = j.at("origin").at(0).get<Real>();
-    h.origin_y = j.at("origin").at(1).get<Real>();
-    h.cell = j.at("cell_size").get<Real>();
-    h.nx = j.at("nx").get<int>();
-    h.ny = j.at("ny").get<int>();
-    h.z_min = j.at("png").at("z_min").get<Real>();
-    h.z_max = j.at("png").at("z_max").get<Real>();
-    if (h.nx < 2 || h.ny < 2 || !(h.cell > 0) || !(h.z_max > h.z_min)) return std::nullopt;
-    return h;
-  } catch (const nlohmann::json::exception&) {
-    // not a height field this build wrote: the picture goes without its static layer
-    return std::nullopt;
-  }
-}
-
 /// Frame `frame`'s static layer (heightfield/h_NNNN.png): a column holds sand where h stands a
 /// quarter of a grain above the solid top under it. Empty when the run did not export it.
 SandSurface static_layer(const std::string& run, int frame, const HeightImages& hi,
                          const RenderScene& scene) {
   SandSurface sf;
-  const fs::path png = fs::path(run) / "heightfield" / fmt::format("h_{:04d}.png", frame);
-  std::error_code ec;
-  if (!scene.solids || !fs::exists(png, ec)) return sf;
-  const GrayImage img = read_gray_png(png.string(), std::max(hi.nx, hi.ny));
-  if (img.width != hi.nx || img.height != hi.ny)
-    throw InputError(fmt::format("{}: {} x {} pixels, but heightfield.json says {} x {}",
-                                 png.string(), img.width, img.height, hi.nx, hi.ny));
+  if (!scene.solids) return sf;
+  const std::vector<Real> h = read_height_frame(run, "h", frame, hi);
+  if (h.empty()) return sf;
   sf.origin_x = hi.origin_x;
   sf.origin_y = hi.origin_y;
   sf.cell = hi.cell;
   sf.nx = hi.nx;
   sf.ny = hi.ny;
   sf.grain_diameter = scene.diameter;
-  sf.z.resize(static_cast<std::size_t>(hi.nx) * hi.ny);
-  sf.sand.resize(sf.z.size());
-  for (int j = 0; j < hi.ny; ++j)
-    for (int i = 0; i < hi.nx; ++i) {
-      const std::size_t k = static_cast<std::size_t>(j) * hi.nx + i;
-      // image row 0 holds the columns of highest y
-      const Real h = hi.z_min + img.value[static_cast<std::size_t>(hi.ny - 1 - j) * hi.nx + i] *
-                                    (hi.z_max - hi.z_min);
-      const Real x = hi.origin_x + (i + 0.5) * hi.cell, y = hi.origin_y + (j + 0.5) * hi.cell;
-      const Real ground = scene.solids->top_below(x, y, h + 0.1 * scene.diameter, h - 1e3);
-      sf.z[k] = h;
-      sf.sand[k] = h > ground + 0.25 * scene.diameter;
-    }
+  sf.z = h;
+  sf.sand.resize(h.size());
+  for (std::size_t k = 0; k < h.size(); ++k) {
+    const Real ground =
+        scene.solids->top_below(hi.x_of(k), hi.y_of(k), h[k] + 0.1 * scene.diameter, h[k] - 1e3);
+    sf.sand[k] = h[k] > ground + 0.25 * scene.diameter;
+  }
   return sf;
 }
 

@@ -30,6 +30,7 @@
 #include "io/export_formats.hpp"
 #include "io/folder_lock.hpp"
 #include "io/frame_exporter.hpp"
+#include "io/height_export.hpp"
 #include "io/ply.hpp"
 #include "io/run_output.hpp"
 #include "progress.hpp"
@@ -986,17 +987,8 @@ FrameData grains_at_checkpoint(const SceneConfig& scene, const nlohmann::json& r
 
 namespace {
 
-/// DIR/frames/N.ply of a plain-DEM run, every grain it held then.
-FrameData frame_of_plain_dem_run(const std::string& dir, const std::optional<SceneConfig>& scene,
-                                 int n) {
-  check_run_folder(dir);
-  const std::string surface_why = fmt::format(
-      "{}: a surface run's frames hold only the grains it simulates, not the sand asleep under "
-      "them, so its heap at frame {} cannot be measured from them. Without --frame, measure reads "
-      "its final state or last checkpoint: run it to frame {} (sandflow run ... --frames {}) and "
-      "measure that",
-      dir, n, n, n);
-  if (scene && scene->simulation.mode == Mode::Surface) throw InputError(surface_why);
+/// DIR/frames/N.ply, refused with the frames the folder holds when it is not there.
+FrameData read_frame(const std::string& dir, int n) {
   const std::string path = frame_path(dir, n);
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) {
@@ -1006,13 +998,76 @@ FrameData frame_of_plain_dem_run(const std::string& dir, const std::optional<Sce
                                                   "{} to {}",
                                                   path, frames.front(), frames.back()));
   }
-  FrameData f = read_ply(path);
+  return read_ply(path);
+}
+
+/// A frame of a run, every grain in it or standing in for it, and the height the heap stands on.
+struct MeasuredFrame {
+  FrameData grains;
+  double floor_z = std::nan("");   ///< NaN: the lowest grain's bottom (measure_heap's default)
+  std::size_t static_columns = 0;  ///< columns of static sand, each standing in as one grain
+};
+
+/// Frame n of a run. A plain-DEM frame holds every grain. A surface run's holds only the grains it
+/// simulates: the sand asleep under them is its height field's static top h, which the run writes
+/// beside the frame (heightfield/h_NNNN.png, the `height` export, on by default in surface mode).
+/// Each column that holds static sand (h a quarter of a grain above the solid under it, the rule
+/// `render` draws it by) then stands in as one grain of the mean diameter whose top is h: the heap
+/// fit reads only each cell's highest top, and a column is a grain wide. The heap then stands on
+/// the lowest of the grains' bottoms and the solid under the static sand.
+MeasuredFrame frame_of_run(const std::string& dir, const std::optional<SceneConfig>& scene, int n) {
+  check_run_folder(dir);
+  MeasuredFrame m;
+  const bool surface_recorded = scene && scene->simulation.mode == Mode::Surface;
+  m.grains = read_frame(dir, n);
   // (a folder without its run.json: an INTERFACE grain is only in a surface run's frames)
-  if (std::any_of(f.state.begin(), f.state.end(), [](std::uint8_t s) {
+  const bool surface =
+      surface_recorded ||
+      std::any_of(m.grains.state.begin(), m.grains.state.end(), [](std::uint8_t s) {
         return s != static_cast<std::uint8_t>(GrainState::Active);
-      }))
-    throw InputError(surface_why);
-  return f;
+      });
+  if (!surface) return m;
+  const std::string why = fmt::format(
+      "{}: a surface run's frames hold only the grains it simulates; the sand asleep under them is "
+      "the static top of its height field",
+      dir);
+  const std::string instead = fmt::format(
+      "Without --frame, measure reads the final state or last checkpoint: run it to frame {} "
+      "(sandflow run ... --frames {}) and measure that",
+      n, n);
+  if (!scene)
+    throw InputError(
+        fmt::format("{}, and without the run's run.json the solid under it is not "
+                    "known. {}",
+                    why, instead));
+  const std::optional<HeightImages> grid = read_height_images(dir);
+  const std::vector<Real> h = grid ? read_height_frame(dir, "h", n, *grid) : std::vector<Real>{};
+  if (h.empty())
+    throw InputError(fmt::format(
+        "{}, written as heightfield/h_{:04d}.png by the `height` export, which this run {}. {}",
+        why, n, grid ? "did not write for that frame" : "left out", instead));
+  const Geometry solids = Geometry::from_config(scene->geometry, scene->material, scene->path);
+  const Real d = scene->material.diameter, r = d / 2;
+  double floor_z = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < m.grains.size(); ++i)
+    floor_z = std::min(floor_z, m.grains.position[i].z - m.grains.radius[i]);
+  for (std::size_t k = 0; k < h.size(); ++k) {
+    const Real x = grid->x_of(k), y = grid->y_of(k), z_from = h[k] + 0.1 * d;
+    // the top of the solid under the column (meshes too): -inf over none
+    Real ground = -std::numeric_limits<Real>::infinity();
+    for (const auto& [bottom, top] : solids.solid_intervals(x, y, z_from, h[k] - 1e3))
+      ground = std::max(ground, std::min(top, z_from));
+    if (!(h[k] > ground + 0.25 * d)) continue;
+    m.grains.position.push_back(Vec3{x, y, h[k] - r});
+    m.grains.radius.push_back(r);
+    m.grains.velocity.push_back(Vec3{});
+    m.grains.id.push_back(0);
+    m.grains.state.push_back(static_cast<std::uint8_t>(GrainState::Static));
+    floor_z = std::min(floor_z, ground);
+    ++m.static_columns;
+  }
+  if (std::isfinite(floor_z)) m.floor_z = floor_z;  // (no grain and no solid: the default)
+  return m;
 }
 
 /// The grains of f slower than v [m/s].
@@ -1048,9 +1103,19 @@ int measure_command(const MeasureOptions& o) {
   const fs::path checkpoint = fs::path(dir) / "checkpoint.bin";
   const bool finished = fs::exists(fs::path(dir) / "summary.json", ec);
   FrameData f;
+  double floor_z = std::nan("");
+  std::size_t stand_ins = 0;  // static columns standing in as grains (a surface run's frame)
   if (o.frame > 0) {
-    f = frame_of_plain_dem_run(dir, scene, o.frame);
+    MeasuredFrame m = frame_of_run(dir, scene, o.frame);
+    f = std::move(m.grains);
+    floor_z = m.floor_z;
+    stand_ins = m.static_columns;
     fmt::print("frame            {}\n", frame_path(dir, o.frame));
+    if (m.static_columns > 0)
+      fmt::print(
+          "static sand      heightfield/h_{:04d}.png: {} columns, each as one grain whose "
+          "top is the static top\n",
+          o.frame, m.static_columns);
   } else if (fs::exists(final_state, ec)) {
     f = read_ply(final_state.string());
     fmt::print("frame            {}\n", final_state.string());
@@ -1074,7 +1139,7 @@ int measure_command(const MeasureOptions& o) {
     f = read_ply(path);
     fmt::print("frame            {}\n", path);
   }
-  fmt::print("grains           {}\n", f.size());
+  fmt::print("grains           {}\n", f.size() - stand_ins);
   if (o.slower_than > 0) {
     const std::size_t all = f.size();
     f = slower_than(f, o.slower_than);
@@ -1097,7 +1162,7 @@ int measure_command(const MeasureOptions& o) {
       return 0;
     }
   }
-  const HeapFit fit = measure_heap(f.position, f.radius);
+  const HeapFit fit = measure_heap(f.position, f.radius, floor_z);
   if (!fit.ok) {
     fmt::print("repose angle     n/a ({})\n", fit.reason);
     return 0;

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <iterator>
 
 #include <fmt/format.h>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/read_file.hpp"
 #include "io/export_formats.hpp"
 #include "io/png_gray.hpp"
 
@@ -95,6 +97,48 @@ nlohmann::json height_sidecar(const HeightFieldParams& grid, const HeightRange& 
         {"h_NNNN", "h, the top of the static layer"}}},
       {"units", "metres, scene frame (z up) for origin, extent and the z range"},
   };
+}
+
+std::optional<HeightImages> read_height_images(const std::string& run) {
+  namespace fs = std::filesystem;
+  const std::optional<std::string> text =
+      read_file_if_present((fs::path(run) / "heightfield" / "heightfield.json").string(),
+                           "height field's record", kAnyFileSize);
+  if (!text) return std::nullopt;
+  const auto j = nlohmann::json::parse(*text, nullptr, false);
+  try {
+    HeightImages h;
+    h.origin_x = j.at("origin").at(0).get<Real>();
+    h.origin_y = j.at("origin").at(1).get<Real>();
+    h.cell = j.at("cell_size").get<Real>();
+    h.nx = j.at("nx").get<int>();
+    h.ny = j.at("ny").get<int>();
+    h.z_min = j.at("png").at("z_min").get<Real>();
+    h.z_max = j.at("png").at("z_max").get<Real>();
+    if (h.nx < 2 || h.ny < 2 || !(h.cell > 0) || !(h.z_max > h.z_min)) return std::nullopt;
+    return h;
+  } catch (const nlohmann::json::exception&) {
+    return std::nullopt;  // not a height field this build wrote
+  }
+}
+
+std::vector<Real> read_height_frame(const std::string& run, const char* name, int frame,
+                                    const HeightImages& grid) {
+  namespace fs = std::filesystem;
+  const fs::path png = fs::path(run) / "heightfield" / fmt::format("{}_{:04d}.png", name, frame);
+  std::error_code ec;
+  if (!fs::exists(png, ec)) return {};
+  const GrayImage img = read_gray_png(png.string(), std::max(grid.nx, grid.ny));
+  if (img.width != grid.nx || img.height != grid.ny)
+    throw InputError(fmt::format("{}: {} x {} pixels, but heightfield.json says {} x {}",
+                                 png.string(), img.width, img.height, grid.nx, grid.ny));
+  std::vector<Real> z(static_cast<std::size_t>(grid.nx) * grid.ny);
+  for (int j = 0; j < grid.ny; ++j)
+    for (int i = 0; i < grid.nx; ++i)  // (image row 0 holds the columns of highest y)
+      z[static_cast<std::size_t>(j) * grid.nx + i] =
+          grid.z_min + img.value[static_cast<std::size_t>(grid.ny - 1 - j) * grid.nx + i] *
+                           (grid.z_max - grid.z_min);
+  return z;
 }
 
 }  // namespace sandflow

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,5 +46,25 @@ void write_height_obj(const std::string& path, const HeightFieldParams& grid,
 /// What heightfield.json holds: the grid (origin, cell size, nx, ny), the extent of the column
 /// centres, the PNG's range and formula, and the OBJ files' up axis.
 nlohmann::json height_sidecar(const HeightFieldParams& grid, const HeightRange& range, UpAxis up);
+
+/// A run's height images as its heightfield.json describes them: the grid and the z range.
+struct HeightImages {
+  Real origin_x = 0, origin_y = 0, cell = 0, z_min = 0, z_max = 0;
+  int nx = 0, ny = 0;
+  /// The centre of column k (row-major, x fastest) [m].
+  Real x_of(std::size_t k) const { return origin_x + (static_cast<Real>(k % nx) + 0.5) * cell; }
+  Real y_of(std::size_t k) const { return origin_y + (static_cast<Real>(k / nx) + 0.5) * cell; }
+};
+
+/// RUN/heightfield/heightfield.json, when the run exported its height field and the file is one
+/// this build writes (a grid of at least 2 x 2 columns and a z range); else nullopt.
+std::optional<HeightImages> read_height_images(const std::string& run);
+
+/// Frame `frame`'s heights from RUN/heightfield/`name`_NNNN.png (name "H" or "h"), one per column,
+/// row-major with x fastest as `write_height_png` took them, within half a grey level. Empty
+/// when the run did not write that frame's image; InputError naming the file when its size is not
+/// the grid's.
+std::vector<Real> read_height_frame(const std::string& run, const char* name, int frame,
+                                    const HeightImages& grid);
 
 }  // namespace sandflow
