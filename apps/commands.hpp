@@ -234,7 +234,8 @@ int run_command(const RunOptions& o);
 /// What `sandflow measure` reads and leaves out.
 struct MeasureOptions {
   std::string dir;
-  int frame = 0;           ///< frames/NNNN.ply of a plain-DEM run; 0: the final state
+  int frame = 0;           ///< frames/NNNN.ply; 0: the final state
+  std::string frames;      ///< a series of frames, one line each ("A:B:K", ...); "": `frame`
   double slower_than = 0;  ///< leave out grains this fast or faster [m/s]; 0: none
 };
 

@@ -37,6 +37,7 @@
 #include "core/process.hpp"
 #include "core/read_file.hpp"
 #include "core/threads.hpp"
+#include "frames_spec.hpp"
 #include "geometry/mesh.hpp"
 #include "geometry/shapes.hpp"
 #include "io/folder_lock.hpp"
@@ -56,42 +57,6 @@ namespace sandflow {
 namespace {
 
 // ---- Which frames -------------------------------------------------------------------------------
-
-/// --frames as written: either end may be open (A:, :B, all).
-struct FramesSpec {
-  std::optional<int> first, last;
-};
-
-constexpr const char* kFramesForms = "expected N, A:B, A:, :B, all or : (frames count from 1)";
-
-FramesSpec parse_frames(const std::string& text) {
-  const auto bad = [&](const std::string& why) {
-    throw InputError(fmt::format("--frames {}: {}", text, why));
-  };
-  const auto number = [&](const std::string& s) -> std::optional<int> {
-    if (s.empty()) return std::nullopt;
-    int v = 0;
-    const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
-    if (res.ec == std::errc::result_out_of_range) bad(fmt::format("{} is too large", s));
-    if (res.ec != std::errc() || res.ptr != s.data() + s.size())
-      bad(fmt::format("\"{}\" is not a frame number; {}", s, kFramesForms));
-    if (v < 1) bad(fmt::format("frame {} does not exist: frames count from 1", v));
-    return v;
-  };
-  if (text == "all" || text == ":") return {};
-  if (text.empty()) bad(kFramesForms);
-  const std::size_t colon = text.find(':');
-  if (colon == std::string::npos) {
-    const auto n = number(text);
-    return {n, n};
-  }
-  if (text.find(':', colon + 1) != std::string::npos) bad(kFramesForms);
-  FramesSpec spec{number(text.substr(0, colon)), number(text.substr(colon + 1))};
-  if (spec.first && spec.last && *spec.last < *spec.first)
-    bad(fmt::format("the last frame {} comes before the first {}: expected A:B with A <= B",
-                    *spec.last, *spec.first));
-  return spec;
-}
 
 /// The frame numbers NNNN of DIR/frames/NNNN.ply, ascending.
 std::vector<int> frame_numbers(const std::string& run) {

@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <numeric>
 #include <optional>
 #include <set>
 #include <string>
@@ -25,6 +27,7 @@
 #include "core/memory.hpp"
 #include "core/read_file.hpp"
 #include "core/threads.hpp"
+#include "frames_spec.hpp"
 #include "geometry/heightmap.hpp"
 #include "geometry/mesh.hpp"
 #include "io/export_formats.hpp"
@@ -1086,6 +1089,77 @@ FrameData slower_than(const FrameData& f, double v) {
 
 }  // namespace
 
+namespace {
+
+/// `measure --frames`: the heap of each frame of a series, one line each, then their mean, spread
+/// and range: how a heap's angle moves through a run (a pour's avalanches), beside the one angle
+/// of its final state.
+int measure_series(const MeasureOptions& o, const std::optional<SceneConfig>& scene) {
+  const FramesSpec spec = parse_frames(o.frames, true);
+  const std::string& dir = o.dir;
+  check_run_folder(dir);
+  if (scene && crater_site(*scene).bed)
+    throw InputError(
+        fmt::format("--frames {}: {}: {}; measure its crater a frame at a time with "
+                    "--frame N",
+                    o.frames, dir, kNoHeapInABed));
+  const std::vector<int> have = list_frames(dir);
+  if (have.empty()) throw InputError(fmt::format("{}: {}", dir, kNoFrames));
+  const int first = spec.first.value_or(have.front()), last = spec.last.value_or(have.back());
+  if (last > have.back() || first < have.front())
+    throw InputError(fmt::format("--frames {}: {} holds frames {} to {}", o.frames, dir,
+                                 have.front(), have.back()));
+  std::vector<int> frames;
+  for (int n = first; n <= last; n += spec.step) {
+    if (!std::binary_search(have.begin(), have.end(), n))
+      throw InputError(fmt::format("--frames {}: {} is missing", o.frames, frame_path(dir, n)));
+    frames.push_back(n);
+  }
+  fmt::print("frames           {}/frames, {} to {}{}: {}{}\n", dir, frames.front(), frames.back(),
+             spec.step > 1 ? fmt::format(" in steps of {}", spec.step) : std::string(),
+             counted(frames.size(), "frame"),
+             o.slower_than > 0 ? fmt::format(", the grains slower than {:g} m/s", o.slower_than)
+                               : std::string());
+  fmt::print("{:>6} {:>16} {:>14} {:>13} {:>9} {:>9} {:>14}\n", "frame", "repose_angle_deg",
+             "standard_error", "heap_height_m", "grains", "left_out", "static_columns");
+  std::vector<double> angles;
+  for (int n : frames) {
+    MeasuredFrame m = frame_of_run(dir, scene, n);
+    const std::size_t grains = m.grains.size() - m.static_columns;
+    const FrameData f = o.slower_than > 0 ? slower_than(m.grains, o.slower_than) : m.grains;
+    const HeapFit fit = measure_heap(f.position, f.radius, m.floor_z);
+    const std::size_t left_out = m.grains.size() - f.size();
+    if (fit.ok) {
+      angles.push_back(fit.repose_angle_deg);
+      fmt::print("{:>6} {:>16.2f} {:>14.2f} {:>13.4f} {:>9} {:>9} {:>14}\n", n,
+                 fit.repose_angle_deg, fit.repose_angle_se_deg, fit.height, grains, left_out,
+                 m.static_columns);
+    } else {
+      fmt::print("{:>6} {:>16} {:>14} {:>13} {:>9} {:>9} {:>14}  ({})\n", n, "n/a", "", "", grains,
+                 left_out, m.static_columns, fit.reason);
+    }
+    std::fflush(stdout);  // (a line a frame: the progress of a long series)
+  }
+  if (angles.empty()) {
+    fmt::print("mean             n/a (no frame of the series has a heap to measure)\n");
+    return 0;
+  }
+  const double mean = std::accumulate(angles.begin(), angles.end(), 0.0) / angles.size();
+  double ss = 0;
+  for (double a : angles) ss += (a - mean) * (a - mean);
+  const auto [lo, hi] = std::minmax_element(angles.begin(), angles.end());
+  fmt::print("mean             {:.2f} deg over {}{} (standard deviation {}, {:.2f} to {:.2f})\n",
+             mean, counted(angles.size(), "frame"),
+             angles.size() < frames.size()
+                 ? fmt::format("; {} without a heap", frames.size() - angles.size())
+                 : std::string(),
+             angles.size() > 1 ? fmt::format("{:.2f}", std::sqrt(ss / (angles.size() - 1))) : "n/a",
+             *lo, *hi);
+  return 0;
+}
+
+}  // namespace
+
 int measure_command(const MeasureOptions& o) {
   // the final state, every grain; else, for a run not finished, its last checkpoint (a surface
   // run's frames hold only the grains it simulates: a sleeping column's top is not in them) or,
@@ -1102,6 +1176,7 @@ int measure_command(const MeasureOptions& o) {
   const fs::path final_state = fs::path(dir) / "final_grains.ply";
   const fs::path checkpoint = fs::path(dir) / "checkpoint.bin";
   const bool finished = fs::exists(fs::path(dir) / "summary.json", ec);
+  if (!o.frames.empty()) return measure_series(o, scene);
   FrameData f;
   double floor_z = std::nan("");
   std::size_t stand_ins = 0;  // static columns standing in as grains (a surface run's frame)

@@ -305,11 +305,17 @@ int main(int argc, char** argv) {
       "measure",
       "print the angle of repose of a run's final state, or its crater in a scene with a bed");
   measure->add_option("dir", mo.dir, "run folder")->required();
+  auto* measure_frame =
+      measure
+          ->add_option("--frame", mo.frame,
+                       "measure frames/NNNN.ply instead of the final state (a surface run's with "
+                       "its static top, heightfield/h_NNNN.png, for the sand asleep under them)")
+          ->check(whole(1, 10000000));
   measure
-      ->add_option("--frame", mo.frame,
-                   "measure frames/NNNN.ply of a plain-DEM run instead of its final state (a "
-                   "surface run's frames hold only the grains it simulates)")
-      ->check(whole(1, 10000000));
+      ->add_option("--frames", mo.frames,
+                   "measure a series of frames, one line each and their mean: A:B (inclusive), "
+                   "A:B:K (every K-th from A), A:, :B or all")
+      ->excludes(measure_frame);
   measure
       ->add_option("--slower-than", mo.slower_than,
                    "leave out the grains as fast as this or faster [m/s]: a stream still "

@@ -230,6 +230,14 @@ TEST(Cli, MeasureReadsAFrameOfEitherModeAndLeavesOutFastGrains) {
       << log;
   EXPECT_NE(log.find(fmt::format("left out         {} grains as fast as", fast)), std::string::npos)
       << log;
+  // a series: a line a frame, and each line is that frame's own measure
+  ASSERT_EQ(run_sandflow("measure " + out.string() + " --frames 1:3:2", &log), 0) << log;
+  EXPECT_NE(log.find("1 to 3 in steps of 2: 2 frames"), std::string::npos) << log;
+  EXPECT_EQ(log.find("\n     2 "), std::string::npos) << log;
+  EXPECT_NE(log.find("\n     3 "), std::string::npos) << log;
+  for (const char* bad : {"1:3:0", "3:1", "1:9", "x", "1:2:3:4"})
+    EXPECT_EQ(run_sandflow("measure " + out.string() + " --frames " + bad, &log), 2) << bad;
+  EXPECT_NE(run_sandflow("measure " + out.string() + " --frames 1:3 --frame 2", &log), 0) << log;
   // a frame the run did not write names those it did
   EXPECT_EQ(run_sandflow("measure " + out.string() + " --frame 9", &log), 2) << log;
   EXPECT_NE(log.find("0009.ply: no such frame; this folder's frames are 1 to 3"), std::string::npos)
@@ -308,6 +316,23 @@ TEST(Cli, MeasureOfASurfaceRunsFrameStandsItsStaticTopInForTheSleepingSand) {
   EXPECT_NE(log.find("static sand      heightfield/h_0449.png"), std::string::npos) << log;
   EXPECT_NEAR(frame_height, height, 0.01) << log;
   EXPECT_NEAR(frame_angle, angle, 2.5) << log;
+  // the series' last line is that frame's own measure, its mean the mean of its lines
+  const double slow_angle = read("repose_angle_deg", " --frame 449 --slower-than 0.3");
+  ASSERT_EQ(
+      run_sandflow("measure " + out.string() + " --frames 409:449:20 --slower-than 0.3", &log), 0)
+      << log;
+  std::vector<double> angles;
+  for (int n : {409, 429, 449}) {
+    const std::size_t at = log.find(fmt::format("\n{:>6} ", n));
+    ASSERT_NE(at, std::string::npos) << log;
+    angles.push_back(std::stod(log.substr(at + 8)));
+  }
+  EXPECT_EQ(fmt::format("{:.2f}", angles.back()), fmt::format("{:.2f}", slow_angle)) << log;
+  const std::size_t at = log.find("mean             ");
+  ASSERT_NE(at, std::string::npos) << log;
+  // (the mean and the angles are printed to two decimals: each is within 0.005 of its value)
+  EXPECT_NEAR(std::stod(log.substr(at + 17)), (angles[0] + angles[1] + angles[2]) / 3, 0.011)
+      << log;
 }
 
 TEST(Cli, CompareWritesBothRunsAndTheTable) {
