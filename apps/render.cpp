@@ -338,12 +338,7 @@ SandSurface static_layer(const std::string& run, int frame, const HeightImages& 
   sf.ny = hi.ny;
   sf.grain_diameter = scene.diameter;
   sf.z = h;
-  sf.sand.resize(h.size());
-  for (std::size_t k = 0; k < h.size(); ++k) {
-    const Real ground =
-        scene.solids->top_below(hi.x_of(k), hi.y_of(k), h[k] + 0.1 * scene.diameter, h[k] - 1e3);
-    sf.sand[k] = h[k] > ground + 0.25 * scene.diameter;
-  }
+  sf.sand = static_sand_columns(h, hi, *scene.solids, scene.diameter);
   return sf;
 }
 

@@ -1051,22 +1051,19 @@ MeasuredFrame frame_of_run(const std::string& dir, const std::optional<SceneConf
         why, n, grid ? "did not write for that frame" : "left out", instead));
   const Geometry solids = Geometry::from_config(scene->geometry, scene->material, scene->path);
   const Real d = scene->material.diameter, r = d / 2;
+  std::vector<Real> ground;
+  const std::vector<std::uint8_t> sand = static_sand_columns(h, *grid, solids, d, &ground);
   double floor_z = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < m.grains.size(); ++i)
     floor_z = std::min(floor_z, m.grains.position[i].z - m.grains.radius[i]);
   for (std::size_t k = 0; k < h.size(); ++k) {
-    const Real x = grid->x_of(k), y = grid->y_of(k), z_from = h[k] + 0.1 * d;
-    // the top of the solid under the column (meshes too): -inf over none
-    Real ground = -std::numeric_limits<Real>::infinity();
-    for (const auto& [bottom, top] : solids.solid_intervals(x, y, z_from, h[k] - 1e3))
-      ground = std::max(ground, std::min(top, z_from));
-    if (!(h[k] > ground + 0.25 * d)) continue;
-    m.grains.position.push_back(Vec3{x, y, h[k] - r});
+    if (!sand[k]) continue;
+    m.grains.position.push_back(Vec3{grid->x_of(k), grid->y_of(k), h[k] - r});
     m.grains.radius.push_back(r);
     m.grains.velocity.push_back(Vec3{});
     m.grains.id.push_back(0);
     m.grains.state.push_back(static_cast<std::uint8_t>(GrainState::Static));
-    floor_z = std::min(floor_z, ground);
+    floor_z = std::min(floor_z, ground[k]);  // (-inf over no solid: then the default below)
     ++m.static_columns;
   }
   if (std::isfinite(floor_z)) m.floor_z = floor_z;  // (no grain and no solid: the default)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iterator>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -139,6 +140,23 @@ std::vector<Real> read_height_frame(const std::string& run, const char* name, in
           grid.z_min + img.value[static_cast<std::size_t>(grid.ny - 1 - j) * grid.nx + i] *
                            (grid.z_max - grid.z_min);
   return z;
+}
+
+std::vector<std::uint8_t> static_sand_columns(const std::vector<Real>& h, const HeightImages& grid,
+                                              const Geometry& solids, Real d,
+                                              std::vector<Real>* ground) {
+  std::vector<std::uint8_t> sand(h.size(), 0);
+  if (ground) ground->assign(h.size(), -std::numeric_limits<Real>::infinity());
+  for (std::size_t k = 0; k < h.size(); ++k) {
+    const Real z_from = h[k] + 0.1 * d;
+    Real top = -std::numeric_limits<Real>::infinity();
+    for (const auto& [bottom, t] :
+         solids.solid_intervals(grid.x_of(k), grid.y_of(k), z_from, h[k] - 1e3))
+      top = std::max(top, std::min(t, z_from));
+    sand[k] = h[k] > top + 0.25 * d;
+    if (ground) (*ground)[k] = top;
+  }
+  return sand;
 }
 
 }  // namespace sandflow

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "config/scene_config.hpp"
+#include "geometry/shapes.hpp"
 #include "surface/height_field.hpp"
 
 namespace sandflow {
@@ -66,5 +68,12 @@ std::optional<HeightImages> read_height_images(const std::string& run);
 /// the grid's.
 std::vector<Real> read_height_frame(const std::string& run, const char* name, int frame,
                                     const HeightImages& grid);
+
+/// Which columns of a frame's static top h hold static sand (1) and which are bare (0): sand where
+/// h stands a quarter of a grain (`d`) above the solid under the column's centre, a mesh's
+/// included. `ground`, when given, gets that solid's top per column (-infinity over none).
+std::vector<std::uint8_t> static_sand_columns(const std::vector<Real>& h, const HeightImages& grid,
+                                              const Geometry& solids, Real d,
+                                              std::vector<Real>* ground = nullptr);
 
 }  // namespace sandflow

@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "geometry/shapes.hpp"
+#include "io/height_export.hpp"
 #include "sim/world.hpp"
 #include "support/scratch.hpp"
 #include "support/test_scenes.hpp"
@@ -32,6 +33,36 @@ GeometryConfig cube_entry() {
   g.mesh_size = 0.2;  // the file's cube is 2 units wide
   g.position = {0, 0, 0};
   return g;
+}
+
+// A frame's static top h tells sand from bare solid by the solid under each column, a mesh's
+// too (render draws the sand, measure stands it in for the sleeping grains): h at a mesh's top is
+// bare. Asking the primitive solids alone (Geometry::top_below) took the floor under the mesh for
+// the ground, and every column over a mesh for sand.
+TEST(MeshObstacle, StaticSandIsToldFromTheBareTopOfAMesh) {
+  const test::ScratchFolder scratch;
+  const fs::path dir = cube_folder(scratch);
+  MaterialConfig mat;
+  mat.diameter = 0.02;
+  const Geometry geo = Geometry::from_config({test::floor_plane(), cube_entry()}, mat,
+                                             (dir / "scene.toml").string());
+  const Real d = mat.diameter, top = 0.2 + geo.meshes()[0].particle_radius;
+  HeightImages grid;  // 4 x 4 columns of 0.1 m: the middle four over the cube (|x|, |y| < 0.1)
+  grid.origin_x = grid.origin_y = -0.2;
+  grid.cell = 0.1;
+  grid.nx = grid.ny = 4;
+  std::vector<Real> h(16, 0.0);       // the floor's columns bare ...
+  h[0] = 0.5 * d;                     // ... but one, half a grain of sand on the floor
+  h[1 * 4 + 1] = top;                 // over the cube: bare
+  h[1 * 4 + 2] = top + d;             // a grain of sand on it
+  h[2 * 4 + 1] = h[2 * 4 + 2] = top;  // bare
+  std::vector<Real> ground;
+  const std::vector<std::uint8_t> sand = static_sand_columns(h, grid, geo, d, &ground);
+  for (std::size_t k = 0; k < h.size(); ++k) {
+    const bool over_cube = (k / 4 == 1 || k / 4 == 2) && (k % 4 == 1 || k % 4 == 2);
+    EXPECT_NEAR(ground[k], over_cube ? top : 0.0, 1e-12) << k;
+    EXPECT_EQ(sand[k], k == 0 || k == 1 * 4 + 2 ? 1 : 0) << k;
+  }
 }
 
 TEST(MeshObstacle, IsScaledAndSetDownOnItsPosition) {
