@@ -1011,64 +1011,81 @@ struct MeasuredFrame {
   std::size_t static_columns = 0;  ///< columns of static sand, each standing in as one grain
 };
 
-/// Frame n of a run. A plain-DEM frame holds every grain. A surface run's holds only the grains it
-/// simulates: the sand asleep under them is its height field's static top h, which the run writes
-/// beside the frame (heightfield/h_NNNN.png, the `height` export, on by default in surface mode).
-/// Each column that holds static sand (h a quarter of a grain above the solid under it, the rule
-/// `render` draws it by) then stands in as one grain of the mean diameter whose top is h: the heap
-/// fit reads only each cell's highest top, and a column is a grain wide. The heap then stands on
-/// the lowest of the grains' bottoms and the solid under the static sand.
-MeasuredFrame frame_of_run(const std::string& dir, const std::optional<SceneConfig>& scene, int n) {
-  check_run_folder(dir);
-  MeasuredFrame m;
-  const bool surface_recorded = scene && scene->simulation.mode == Mode::Surface;
-  m.grains = read_frame(dir, n);
-  // (a folder without its run.json: an INTERFACE grain is only in a surface run's frames)
-  const bool surface =
-      surface_recorded ||
-      std::any_of(m.grains.state.begin(), m.grains.state.end(), [](std::uint8_t s) {
-        return s != static_cast<std::uint8_t>(GrainState::Active);
-      });
-  if (!surface) return m;
-  const std::string why = fmt::format(
-      "{}: a surface run's frames hold only the grains it simulates; the sand asleep under them is "
-      "the static top of its height field",
-      dir);
-  const std::string instead = fmt::format(
-      "Without --frame, measure reads the final state or last checkpoint: run it to frame {} "
-      "(sandflow run ... --frames {}) and measure that",
-      n, n);
-  if (!scene)
-    throw InputError(
-        fmt::format("{}, and without the run's run.json the solid under it is not "
-                    "known. {}",
-                    why, instead));
-  const std::optional<HeightImages> grid = read_height_images(dir);
-  const std::vector<Real> h = grid ? read_height_frame(dir, "h", n, *grid) : std::vector<Real>{};
-  if (h.empty())
-    throw InputError(fmt::format(
-        "{}, written as heightfield/h_{:04d}.png by the `height` export, which this run {}. {}",
-        why, n, grid ? "did not write for that frame" : "left out", instead));
-  const Geometry solids = Geometry::from_config(scene->geometry, scene->material, scene->path);
-  const Real d = scene->material.diameter, r = d / 2;
-  std::vector<Real> ground;
-  const std::vector<std::uint8_t> sand = static_sand_columns(h, *grid, solids, d, &ground);
-  double floor_z = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < m.grains.size(); ++i)
-    floor_z = std::min(floor_z, m.grains.position[i].z - m.grains.radius[i]);
-  for (std::size_t k = 0; k < h.size(); ++k) {
-    if (!sand[k]) continue;
-    m.grains.position.push_back(Vec3{grid->x_of(k), grid->y_of(k), h[k] - r});
-    m.grains.radius.push_back(r);
-    m.grains.velocity.push_back(Vec3{});
-    m.grains.id.push_back(0);
-    m.grains.state.push_back(static_cast<std::uint8_t>(GrainState::Static));
-    floor_z = std::min(floor_z, ground[k]);  // (-inf over no solid: then the default below)
-    ++m.static_columns;
+/// The frames of one run, for `measure`. A plain-DEM frame holds every grain. A surface run's holds
+/// only the grains it simulates: the sand asleep under them is its height field's static top h,
+/// which the run writes beside the frame (heightfield/h_NNNN.png, the `height` export, on by
+/// default in surface mode). Each column that holds static sand (h a quarter of a grain above the
+/// solid under it, the rule `render` draws it by) then stands in as one grain of the mean diameter
+/// whose top is h: the heap fit reads only each cell's highest top, and a column is a grain wide.
+/// The heap then stands on the lowest of the grains' bottoms and the solid under the static sand.
+/// The height images' grid and the scene's solids are read once, at the first surface frame, for
+/// all the frames of a series.
+class RunFrames {
+ public:
+  RunFrames(const std::string& dir, const std::optional<SceneConfig>& scene)
+      : dir_(dir), scene_(scene) {
+    check_run_folder(dir);
   }
-  if (std::isfinite(floor_z)) m.floor_z = floor_z;  // (no grain and no solid: the default)
-  return m;
-}
+
+  MeasuredFrame operator()(int n) {
+    MeasuredFrame m;
+    m.grains = read_frame(dir_, n);
+    // (a folder without its run.json: an INTERFACE grain is only in a surface run's frames)
+    const bool surface =
+        (scene_ && scene_->simulation.mode == Mode::Surface) ||
+        std::any_of(m.grains.state.begin(), m.grains.state.end(), [](std::uint8_t s) {
+          return s != static_cast<std::uint8_t>(GrainState::Active);
+        });
+    if (!surface) return m;
+    const std::string why = fmt::format(
+        "{}: a surface run's frames hold only the grains it simulates; the sand asleep under them "
+        "is the static top of its height field",
+        dir_);
+    const std::string instead = fmt::format(
+        "Without --frame, measure reads the final state or last checkpoint: run it to frame {} "
+        "(sandflow run ... --frames {}) and measure that",
+        n, n);
+    if (!scene_)
+      throw InputError(
+          fmt::format("{}, and without the run's run.json the solid under it is not "
+                      "known. {}",
+                      why, instead));
+    if (!solids_) {
+      grid_ = read_height_images(dir_);
+      solids_ = Geometry::from_config(scene_->geometry, scene_->material, scene_->path);
+    }
+    const std::vector<Real> h =
+        grid_ ? read_height_frame(dir_, "h", n, *grid_) : std::vector<Real>{};
+    if (h.empty())
+      throw InputError(fmt::format(
+          "{}, written as heightfield/h_{:04d}.png by the `height` export, which this run {}. {}",
+          why, n, grid_ ? "did not write for that frame" : "left out", instead));
+    const Real d = scene_->material.diameter, r = d / 2;
+    std::vector<Real> ground;
+    const std::vector<std::uint8_t> sand = static_sand_columns(h, *grid_, *solids_, d, &ground);
+    double floor_z = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < m.grains.size(); ++i)
+      floor_z = std::min(floor_z, m.grains.position[i].z - m.grains.radius[i]);
+    for (std::size_t k = 0; k < h.size(); ++k) {
+      if (!sand[k]) continue;
+      m.grains.position.push_back(Vec3{grid_->x_of(k), grid_->y_of(k), h[k] - r});
+      m.grains.radius.push_back(r);
+      m.grains.velocity.push_back(Vec3{});
+      m.grains.id.push_back(0);
+      m.grains.state.push_back(static_cast<std::uint8_t>(GrainState::Static));
+      floor_z = std::min(floor_z, ground[k]);  // (-inf over no solid: then the default below)
+      ++m.static_columns;
+    }
+    if (std::isfinite(floor_z)) m.floor_z = floor_z;  // (no grain and no solid: the default)
+    return m;
+  }
+
+ private:
+  std::string dir_;
+  const std::optional<SceneConfig>& scene_;
+  std::optional<HeightImages> grid_;  // read with solids_, at the first surface frame
+  std::optional<Geometry> solids_;
+};
 
 /// The grains of f slower than v [m/s].
 FrameData slower_than(const FrameData& f, double v) {
@@ -1084,17 +1101,13 @@ FrameData slower_than(const FrameData& f, double v) {
   return slow;
 }
 
-}  // namespace
-
-namespace {
-
 /// `measure --frames`: the heap of each frame of a series, one line each, then their mean, spread
 /// and range: how a heap's angle moves through a run (a pour's avalanches), beside the one angle
 /// of its final state.
 int measure_series(const MeasureOptions& o, const std::optional<SceneConfig>& scene) {
   const FramesSpec spec = parse_frames(o.frames, true);
   const std::string& dir = o.dir;
-  check_run_folder(dir);
+  RunFrames read(dir, scene);  // (checks the folder)
   if (scene && crater_site(*scene).bed)
     throw InputError(
         fmt::format("--frames {}: {}: {}; measure its crater a frame at a time with "
@@ -1121,7 +1134,7 @@ int measure_series(const MeasureOptions& o, const std::optional<SceneConfig>& sc
              "standard_error", "heap_height_m", "grains", "left_out", "static_columns");
   std::vector<double> angles;
   for (int n : frames) {
-    MeasuredFrame m = frame_of_run(dir, scene, n);
+    MeasuredFrame m = read(n);
     const std::size_t grains = m.grains.size() - m.static_columns;
     const FrameData f = o.slower_than > 0 ? slower_than(m.grains, o.slower_than) : m.grains;
     const HeapFit fit = measure_heap(f.position, f.radius, m.floor_z);
@@ -1178,7 +1191,7 @@ int measure_command(const MeasureOptions& o) {
   double floor_z = std::nan("");
   std::size_t stand_ins = 0;  // static columns standing in as grains (a surface run's frame)
   if (o.frame > 0) {
-    MeasuredFrame m = frame_of_run(dir, scene, o.frame);
+    MeasuredFrame m = RunFrames(dir, scene)(o.frame);
     f = std::move(m.grains);
     floor_z = m.floor_z;
     stand_ins = m.static_columns;
