@@ -335,6 +335,7 @@ RunResult run_scene(const SceneConfig& scene, const std::string& out, const std:
         {"flowing_min", hf.params().flowing_floor()},
         // as used: never longer than close_after
         {"flowing_hold", hf.params().hold_time()},
+        {"erosion_reach", hf.params().erosion_reach},
         {"close_after", hf.params().close_after},
         {"interface_thickness", sf->params().interface.thickness},
         // as speeds of a grain of the mean size without rotation (seat.hpp)

@@ -67,6 +67,8 @@ struct SurfaceConfig {
   std::optional<Real> rolling_min;          ///< R_min [m]; default one mean diameter
   std::optional<Real> flowing_min;          ///< R_min under a flowing layer [m]; default 2 d
   Real flowing_hold = 0.5;                  ///< how long a stopped flow keeps flowing_min [s]
+  /// a flowing column erodes where a moving grain's bottom lies within this of h [m]; default d/2
+  std::optional<Real> erosion_reach;
   Real close_after = 2.0;                   ///< rest after which a column's top freezes [s]
   /// a body striking the bed opens it as far as its whole momentum reaches (the blow rule)
   bool blows = false;

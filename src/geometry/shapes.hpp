@@ -185,8 +185,11 @@ class Geometry {
   const std::vector<Obstacle>& obstacles() const { return obstacles_; }
   std::size_t size() const { return obstacles_.size(); }
 
-  /// Height of the highest solid surface met going down the vertical line at (x, y) from z_from
-  /// (z_from itself when it starts inside a solid), or z_floor when there is none above it.
+  /// Height of the highest surface of a primitive solid met going down the vertical line at
+  /// (x, y) from z_from (z_from itself when it starts inside one), or z_floor when there is none
+  /// above it. Meshes are not asked: a pour's fall measured past a mesh to the ground under it
+  /// bounds the speed of the grains that run off the mesh onto that ground (stiffness, a throw's
+  /// landing, a frame's camera). Where sand lies on a mesh, ask solid_intervals.
   Real top_below(Real x, Real y, Real z_from, Real z_floor) const;
   /// The solid intervals [bottom, top] along the vertical line at (x, y) between z_floor and
   /// z_from, ascending (a bottom at or below z_floor is -infinity: the solid goes on down), the

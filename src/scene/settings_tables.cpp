@@ -151,6 +151,7 @@ void read_surface(TableReader r, SurfaceConfig& s, Real diameter) {
   r.read("rolling_min", s.rolling_min, kNonNegative);
   r.read("flowing_min", s.flowing_min, kNonNegative);
   r.read("flowing_hold", s.flowing_hold, kNonNegative);
+  r.read("erosion_reach", s.erosion_reach, kNonNegative);
   r.read("close_after", s.close_after, kNonNegative);
   r.read("blows", s.blows);
   r.read("interface_thickness", s.interface_thickness, kPositive);

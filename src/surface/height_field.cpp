@@ -307,7 +307,7 @@ void HeightField::exchange(Real dt, const std::vector<std::uint8_t>& flowing) {
   exchange(dt, flow_all_);
 }
 
-void HeightField::exchange(Real dt, const ColumnSet& flowing) {
+void HeightField::exchange(Real dt, const ColumnSet& flowing, const ColumnSet* eroding) {
   const int nx = p_.nx, ny = p_.ny;
   const Real dx = p_.cell;
   // the columns that can change (see the top of the file)
@@ -370,6 +370,9 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing) {
         // updates stop (docs/design.md §4, "Only what can change")
         if (R - dh < 1e-3 * dx && R <= cap) dh = R;
       }
+      // a flow that does not reach the static top (grains moving over grains at rest) does not
+      // dig it
+      if (dh < 0 && flows && eroding && !eroding->contains(c)) dh = 0;
       // an avalanche: a static slope above theta_max erodes even with no rolling layer
       if (theta > p_.theta_max) dh -= p_.gamma * p_.avalanche_depth * (theta - p_.theta_max) * dt;
       // erosion stops where the slope would fall below theta0 (no overshoot between updates)

@@ -42,6 +42,10 @@ struct HeightFieldParams {
   /// shears comes to rest on its own instead of on a bed frozen under it (no longer than
   /// close_after) [s]
   Real flowing_hold = 0;
+  /// A flowing column erodes its static layer only where a moving grain reaches down to within
+  /// this of the static top (infinity: wherever grains flow); grains flowing over grains at rest
+  /// do not dig the static sand under those (docs/physics.md, "The flowing layer") [m]
+  Real erosion_reach = std::numeric_limits<Real>::infinity();
   Real avalanche_depth = 0.01;///< thickness that rolls where theta > theta_max [m]
   Real gap = 0.01;            ///< a grain separated from the pile below by more is airborne [m]
   /// A column whose grains have not moved the pile for this long is closed: R_min no longer holds
@@ -153,7 +157,10 @@ class HeightField {
   /// static layer down to theta0 (the hysteresis of the angle of repose).
   void exchange(Real dt, const std::vector<std::uint8_t>& flowing = {});
   /// As above, with the flowing columns listed (each once): the update's work follows them.
-  void exchange(Real dt, const ColumnSet& flowing);
+  /// `eroding`, when given, lists those of them whose static top a moving grain reaches
+  /// (erosion_reach): the others deposit down to theta0 but do not erode. Without it every
+  /// flowing column erodes.
+  void exchange(Real dt, const ColumnSet& flowing, const ColumnSet* eroding = nullptr);
   /// Lowers h of column c to at most z (never below L): the static layer cannot reach up to where
   /// grains are moving.
   void limit_static_top(std::size_t c, Real z) {

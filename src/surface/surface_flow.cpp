@@ -43,20 +43,27 @@ void SurfaceFlow::update_height_field(const Grains& hot, const StaticStore& st,
   // seat (seat.hpp). There the rolling layer flows (BCRE with theta0); elsewhere it is at rest
   // and deposits up to theta_max.
   if (flowing_.columns() != hf_.columns()) flowing_.resize(hf_.columns());
+  if (eroding_.columns() != hf_.columns()) eroding_.resize(hf_.columns());
   flowing_.clear();
+  eroding_.clear();
   // (the threads flag the grains, which are then taken in grain order)
   moving_.resize(n);
 #pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
   for (std::size_t i = 0; i < n; ++i)
     moving_[i] = hot.state[i] == GrainState::Active &&
                  moves_pile(p_.interface.seat, hot, i, contacts_[i]) && !below_level(hot.x[i]);
+  // Of those, the flow digs the static layer only where a moving grain reaches down to it: the
+  // layer of grains at rest between a flow and the static top shields it, as it does in DEM.
+  const std::vector<Real>& h = hf_.static_top();
+  const Real reach = hf_.params().erosion_reach;
   for (std::size_t i = 0; i < n; ++i) {
     if (!moving_[i]) continue;
-    hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real, Real) {
+    hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real bottom, Real) {
       flowing_.add(static_cast<std::uint32_t>(c));
+      if (bottom <= h[c] + reach) eroding_.add(static_cast<std::uint32_t>(c));
     });
   }
-  hf_.exchange(dt, flowing_);
+  hf_.exchange(dt, flowing_, &eroding_);
 }
 
 SurfaceFlow::Seating SurfaceFlow::seat_bed(Grains& hot, StaticStore& st,

@@ -112,6 +112,7 @@ class SurfaceFlow {
 
   std::vector<std::uint8_t> contacts_, counts_, moving_;
   ColumnSet flowing_;                 ///< the columns where grains move the pile
+  ColumnSet eroding_;                 ///< those whose static top a moving grain reaches
   std::vector<std::uint32_t> moved_;  ///< scratch of take_moved()
   template <class Strike>
   void strike_with_blows(const Grains& hot, Real dt, Strike&& strike);

@@ -87,6 +87,8 @@ SurfaceParams surface_params(const SceneConfig& scene, const Geometry& geometry,
   hf.rolling_min = rolling_min(scene);
   hf.flowing_min = flowing_min(scene);
   hf.flowing_hold = sc.flowing_hold;
+  // a grain that touches the static top: its bottom within half a diameter of it
+  hf.erosion_reach = sc.erosion_reach.value_or(0.5 * d);
   hf.close_after = sc.close_after;
   hf.avalanche_depth = d;
   hf.gap = d;  // a quarter of d cut H at gaps left below grains held up from the side

@@ -290,8 +290,10 @@ TEST(Cli, MeasureReadsAFrameOfEitherModeAndLeavesOutFastGrains) {
 // grain sleeps below h - T / cos(theta) (docs/physics.md, step 6), its top below h by up to about a
 // grain (T, the sleeping margin and the gaps of a packing), so the heap's height agrees within a
 // diameter (0.1-5.0 mm with and without the calibration when this test was written). The angle:
-// within the fits' standard errors on a heap six grains high (1.1-2.4 degrees; the fits were
-// 1.4-1.5 degrees apart). Without the static sand the frame's 34-82 grains give no angle at all.
+// within twice the two fits' combined standard error, on a heap six grains high whose fits have
+// 1.1-2.4 degrees each (1.4-1.5 degrees apart when this test was written, 2.9 degrees with
+// standard errors of about 2 each once the flow eroded only the static top it reaches). Without
+// the static sand the frame's 28-82 grains give no angle at all.
 TEST(Cli, MeasureOfASurfaceRunsFrameStandsItsStaticTopInForTheSleepingSand) {
   if constexpr (sandflow::test::kSanitizers)
     GTEST_SKIP() << "a long run, left to the Release suite";
@@ -311,11 +313,14 @@ TEST(Cli, MeasureOfASurfaceRunsFrameStandsItsStaticTopInForTheSleepingSand) {
     return at == std::string::npos ? std::nan("") : std::stod(log.substr(at + what.size()));
   };
   const double angle = read("repose_angle_deg", ""), height = read("heap height", "");
+  const double error = read("(standard error", "");
   const double frame_angle = read("repose_angle_deg", " --frame 449");
+  const double frame_error = read("(standard error", " --frame 449");
   const double frame_height = read("heap height", " --frame 449");
   EXPECT_NE(log.find("static sand      heightfield/h_0449.png"), std::string::npos) << log;
   EXPECT_NEAR(frame_height, height, 0.01) << log;
-  EXPECT_NEAR(frame_angle, angle, 2.5) << log;
+  EXPECT_LT(std::hypot(error, frame_error), 3.5) << log;  // (else the bound below says little)
+  EXPECT_NEAR(frame_angle, angle, 2 * std::hypot(error, frame_error)) << log;
   // the series' last line is that frame's own measure, its mean the mean of its lines
   const double slow_angle = read("repose_angle_deg", " --frame 449 --slower-than 0.3");
   ASSERT_EQ(

@@ -419,6 +419,7 @@ TEST(SceneLoader, SurfaceTableIsReadWithAnglesInRadians) {
       "rolling_min = 0\n"
       "flowing_min = 0.03\n"
       "flowing_hold = 0.25\n"
+      "erosion_reach = 0.007\n"
       "interface_thickness = 0.015\n"
       "update_interval = 0.004\n"
       "trap_speed = 0.05\n"
@@ -437,6 +438,8 @@ TEST(SceneLoader, SurfaceTableIsReadWithAnglesInRadians) {
   EXPECT_EQ(*s.rolling_min, 0.0);
   EXPECT_EQ(*s.flowing_min, 0.03);
   EXPECT_EQ(s.flowing_hold, 0.25);
+  ASSERT_TRUE(s.erosion_reach);
+  EXPECT_EQ(*s.erosion_reach, 0.007);
   EXPECT_EQ(*s.interface_thickness, 0.015);
   EXPECT_EQ(*s.update_interval, 0.004);
   EXPECT_EQ(*s.trap_speed, 0.05);
@@ -475,6 +478,8 @@ TEST(SceneLoader, BadSurfaceValuesNameTheKey) {
                {"t.toml:4:1: surface.flowing_min = -0.01 is not >= 0"});
   expect_error(s + "flowing_hold = -0.5\n",
                {"t.toml:4:1: surface.flowing_hold = -0.5 is not >= 0"});
+  expect_error(s + "erosion_reach = -0.001\n",
+               {"t.toml:4:1: surface.erosion_reach = -0.001 is not >= 0"});
   expect_error(s + "interface_thickness = 0\n",
                {"t.toml:4:1: surface.interface_thickness = 0 is not > 0"});
   expect_error(s + "update_interval = 0\n", {"t.toml:4:1: surface.update_interval = 0 is not > 0"});

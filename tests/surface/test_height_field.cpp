@@ -8,6 +8,7 @@
 
 #include <omp.h>
 
+#include "surface/column_set.hpp"
 #include "surface/height_field.hpp"
 
 namespace sandflow {
@@ -98,6 +99,31 @@ TEST(Exchange, LayerAtRestDepositsUpToThetaMaxAndAFlowingOneErodesToTheta0) {
   const std::vector<Real> s0 = steep.static_top();
   steep.exchange(0.003, std::vector<std::uint8_t>(steep.columns(), 0));
   for_interior(steep, [&](std::size_t c) { EXPECT_LT(steep.static_top()[c], s0[c]) << c; });
+}
+
+// Grains flowing over grains at rest do not dig the static top beneath those (erosion_reach): a
+// flowing column that no moving grain reaches keeps its static top above theta0, still deposits
+// below it, and still fails above theta_max; one a moving grain reaches erodes.
+TEST(Exchange, AFlowThatDoesNotReachTheStaticTopDoesNotErodeIt) {
+  for (const Real angle : {35.0, 25.0, 42.0}) {
+    HeightField shielded = ramp(angle, 0.03), reached = ramp(angle, 0.03);
+    const std::vector<Real> before = shielded.static_top();
+    ColumnSet all(shielded.columns()), none(shielded.columns());
+    all.add_all();
+    shielded.exchange(0.003, all, &none);
+    reached.exchange(0.003, all, &all);
+    for_interior(shielded, [&](std::size_t c) {
+      if (angle == 35.0) {
+        EXPECT_EQ(shielded.static_top()[c], before[c]) << c;  // no erosion
+        EXPECT_LT(reached.static_top()[c], before[c]) << c;   // the flow that reaches it digs
+      } else if (angle == 25.0) {
+        EXPECT_GT(shielded.static_top()[c], before[c]) << c;  // a deposit all the same
+        EXPECT_EQ(shielded.static_top()[c], reached.static_top()[c]) << c;
+      } else {
+        EXPECT_LT(shielded.static_top()[c], before[c]) << c;  // an avalanche all the same
+      }
+    });
+  }
 }
 
 TEST(Exchange, DepositionNeverTakesMoreThanTheRollingLayer) {
