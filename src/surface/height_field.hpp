@@ -44,7 +44,7 @@ struct HeightFieldParams {
   Real flowing_hold = 0;
   /// A flowing column erodes its static layer only where a moving grain reaches down to within
   /// this of the static top (infinity: wherever grains flow); grains flowing over grains at rest
-  /// do not dig the static sand under those (docs/physics.md, "The flowing layer") [m]
+  /// do not dig the static sand under those (docs/physics.md, step 3 of the surface flow) [m]
   Real erosion_reach = std::numeric_limits<Real>::infinity();
   Real avalanche_depth = 0.01;///< thickness that rolls where theta > theta_max [m]
   Real gap = 0.01;            ///< a grain separated from the pile below by more is airborne [m]
