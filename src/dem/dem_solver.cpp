@@ -176,6 +176,8 @@ void DemSolver::build_near(const Grains& grains, Real dt) {
 
 void DemSolver::apply(std::span<const StateChange> changes) {
   for (const StateChange& c : changes) {
+    // (only a grain woken into the interface leaves the kept allowances as they are)
+    if (c.from != GrainState::Static || c.to == GrainState::Active) kept_ids_.clear();
     if (c.from == GrainState::Static) forget_history(c.id);  // woken: no history
     if (c.to == GrainState::Static)
       need_rebuild_ = true;  // asleep: it leaves the lists
@@ -189,6 +191,7 @@ void DemSolver::advance(Grains& grains, const Geometry& geometry, Real dt) {
   const int left =
       rolling_ ? sweep<true>(grains, geometry, dt) : sweep<false>(grains, geometry, dt);
   if (left & kLeftAllowance) need_rebuild_ = true;
+  kept_ids_.clear();  // (the grains moved)
   if (left & kLeftNearMargin) need_near_ = true;
   maybe_outside_ = (left & kLeftDomain) != 0;
   // (assertions) the lists are the grains' (added or removed ones rebuild them)
@@ -430,7 +433,20 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
 
   // allowances; a frozen grain has none, so its pairs reach only as far as the active partner
   // may go and it searches for none itself
-  allowances(grains, dt, allow_);
+  if (kept_allowances_hold(grains)) {
+    allow_.swap(kept_allow_);
+    allow_.resize(n, 0.0);  // (the frozen grains appended since)
+  } else {
+    allowances(grains, dt, allow_);
+  }
+  kept_allow_.clear();
+  kept_ids_.clear();
+  // (assertions) the kept allowances are those the rebuild would compute
+  if constexpr (kAssertions) {
+    std::vector<Real> fresh;
+    allowances(grains, dt, fresh);
+    SANDFLOW_ASSERT(fresh == allow_, "the kept allowances are not the rebuild's");
+  }
   allow2_.resize(n);
   for (std::size_t i = 0; i < n; ++i) allow2_[i] = allow_[i] * allow_[i];
 
@@ -478,6 +494,21 @@ void DemSolver::rebuild(Grains& grains, const Geometry& geometry, Real dt) {
   need_rebuild_ = false;
   need_near_ = true;
   ranges_stale_ = true;
+}
+
+const std::vector<Real>& DemSolver::allowances_for_rebuild(const Grains& grains, Real dt) {
+  allowances(grains, dt, kept_allow_);
+  kept_ids_ = grains.id;
+  return kept_allow_;
+}
+
+bool DemSolver::kept_allowances_hold(const Grains& grains) const {
+  const std::size_t kept = kept_ids_.size(), n = grains.size();
+  if (kept == 0 || kept > n || !std::equal(kept_ids_.begin(), kept_ids_.end(), grains.id.begin()))
+    return false;
+  for (std::size_t i = kept; i < n; ++i)
+    if (grains.state[i] == GrainState::Active) return false;
+  return true;
 }
 
 void DemSolver::allowances(const Grains& grains, Real dt, std::vector<Real>& out) const {

@@ -146,6 +146,13 @@ class DemSolver {
   /// steps: a grain struck by a faster one leaves at up to the striker's speed, and with the
   /// allowance of its own old speed it would leave it within a few steps and force a rebuild.
   void allowances(const Grains& grains, Real dt, std::vector<Real>& out) const;
+  /// The same, kept for the rebuild that follows before the next step: the invariant of the
+  /// layers reads them just before it (SurfaceFlow::wake_within_reach), and computing them twice
+  /// cost a surface run about 1 % of its time. What may come between leaves every other grain's
+  /// allowance as it was: grains appended frozen (woken into the interface), which have no speed
+  /// and, frozen, are raised by none. Anything else (a step, a sort, another change of state,
+  /// grains removed) makes the rebuild compute them again.
+  const std::vector<Real>& allowances_for_rebuild(const Grains& grains, Real dt);
   /// Applies the changes of state the surface flow decided, before the next step: a grain that
   /// goes to sleep leaves the lists, a woken one joins them without contact history, and a woken
   /// or dislodged one is released: the lists are rebuilt, and a contact it opens there with a
@@ -246,6 +253,12 @@ class DemSolver {
   std::vector<GrainId> ids_at_build_;      ///< the ids slot_of_id_ holds a slot for
   std::vector<Vec3> x_at_build_;
   std::vector<Real> allow_, allow2_;  ///< per grain: how far it may move before a rebuild [m, m^2]
+  /// allowances_for_rebuild's: the allowances and the ids of the grains they are for (empty when
+  /// none are kept)
+  std::vector<Real> kept_allow_;
+  std::vector<GrainId> kept_ids_;
+  /// The kept allowances are for these grains: the same ids first, then only frozen ones.
+  bool kept_allowances_hold(const Grains& grains) const;
   std::vector<Vec3> acc_f_, acc_q_, acc_t_;  ///< per grain: reversed pair results of this step
   std::vector<Vec3> x_at_near_;  ///< per grain: where it stood when the near list was made
   std::vector<Real> near2_;      ///< per grain: its near margin, squared [m^2]

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <omp.h>
+
 #include "dem/neighbor_list.hpp"  // kParallelMinGrains
 
 namespace sandflow {
@@ -46,23 +48,37 @@ void SurfaceFlow::update_height_field(const Grains& hot, const StaticStore& st,
   if (eroding_.columns() != hf_.columns()) eroding_.resize(hf_.columns());
   flowing_.clear();
   eroding_.clear();
-  // (the threads flag the grains, which are then taken in grain order)
-  moving_.resize(n);
-#pragma omp parallel for schedule(static) if (n >= kParallelMinGrains)
-  for (std::size_t i = 0; i < n; ++i)
-    moving_[i] = hot.state[i] == GrainState::Active &&
-                 moves_pile(p_.interface.seat, hot, i, contacts_[i]) && !below_level(hot.x[i]);
   // Of those, the flow digs the static layer only where a moving grain reaches down to it: the
   // layer of grains at rest between a flow and the static top shields it, as it does in DEM.
   const std::vector<Real>& h = hf_.static_top();
   const Real reach = hf_.params().erosion_reach;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!moving_[i]) continue;
-    hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real bottom, Real) {
-      flowing_.add(static_cast<std::uint32_t>(c));
-      if (bottom <= h[c] + reach) eroding_.add(static_cast<std::uint32_t>(c));
-    });
+  // (each thread lists the columns of its share of the grains in grain order, 2c + 1 for one
+  // eroded; the lists joined in thread order fill the sets as one thread would)
+#pragma omp parallel if (n >= kParallelMinGrains)
+  {
+#pragma omp single
+    ray_columns_.resize(static_cast<std::size_t>(omp_get_num_threads()));
+    // (the thread's own vector while it fills it: side by side in ray_columns_, each push_back
+    // would pass their cache line between the cores)
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    std::vector<std::uint64_t> mine = std::move(ray_columns_[t]);
+    mine.clear();
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) {
+      if (hot.state[i] != GrainState::Active ||
+          !moves_pile(p_.interface.seat, hot, i, contacts_[i]) || below_level(hot.x[i]))
+        continue;
+      hf_.for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real bottom, Real) {
+        mine.push_back(2 * std::uint64_t{c} + (bottom <= h[c] + reach ? 1 : 0));
+      });
+    }
+    ray_columns_[t] = std::move(mine);
   }
+  for (const std::vector<std::uint64_t>& list : ray_columns_)
+    for (const std::uint64_t e : list) {
+      flowing_.add(static_cast<std::uint32_t>(e / 2));
+      if (e % 2) eroding_.add(static_cast<std::uint32_t>(e / 2));
+    }
   hf_.exchange(dt, flowing_, &eroding_);
 }
 
@@ -218,10 +234,9 @@ Transitions SurfaceFlow::transfer(Grains& hot, StaticStore& st, const DemSolver&
   return interface_.transfer(hf_, hot, st, contacts_, true, take_moved());
 }
 
-Transitions SurfaceFlow::wake_within_reach(Grains& hot, StaticStore& st, const DemSolver& dem,
-                                           Real dt) {
-  dem.allowances(hot, dt, allow_);
-  return interface_.wake_within_reach(hf_, hot, st, allow_);
+Transitions SurfaceFlow::wake_within_reach(Grains& hot, StaticStore& st, DemSolver& dem, Real dt) {
+  // (the rebuild after it takes the same allowances)
+  return interface_.wake_within_reach(hf_, hot, st, dem.allowances_for_rebuild(hot, dt));
 }
 
 Transitions SurfaceFlow::catch_up(Grains& hot, StaticStore& st, const DemSolver& dem,

@@ -67,7 +67,7 @@ class SurfaceFlow {
 
   /// Stage "reach", the invariant of the layers, before `dem` rebuilds its lists for steps of dt:
   /// every STATIC grain within reach of an ACTIVE grain wakes (InterfaceLayer::wake_within_reach).
-  Transitions wake_within_reach(Grains& hot, StaticStore& st, const DemSolver& dem, Real dt);
+  Transitions wake_within_reach(Grains& hot, StaticStore& st, DemSolver& dem, Real dt);
 
   /// A bed born at rest (sim/emitters.hpp, docs/design.md §7): new grains ids[k] at x[k] with
   /// radii r[k] go straight to the layers an update would keep a pile at rest in. H, where they
@@ -110,7 +110,8 @@ class SurfaceFlow {
   /// may have).
   const std::vector<std::uint32_t>* take_moved();
 
-  std::vector<std::uint8_t> contacts_, counts_, moving_;
+  std::vector<std::uint8_t> contacts_, counts_;
+  std::vector<std::vector<std::uint64_t>> ray_columns_;  ///< per thread: update_height_field's
   ColumnSet flowing_;                 ///< the columns where grains move the pile
   ColumnSet eroding_;                 ///< those whose static top a moving grain reaches
   std::vector<std::uint32_t> moved_;  ///< scratch of take_moved()
@@ -118,7 +119,6 @@ class SurfaceFlow {
   void strike_with_blows(const Grains& hot, Real dt, Strike&& strike);
   std::vector<Blow> blows_;              ///< the blows under way (the blow rule)
   std::unordered_set<GrainId> counted_;  ///< the grains the blows under way have counted
-  std::vector<Real> allow_;
   /// ACTIVE grains seated by seat_bed: part of the pile at the next measure (sorted ids)
   std::vector<GrainId> seated_;
   bool pending_ = false;  ///< transitions that change the pair list wait for its next rebuild

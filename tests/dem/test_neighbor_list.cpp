@@ -320,18 +320,25 @@ TEST(NeighbourList, TheSortPutsTheAxisTheGrainsSpreadFurthestAlongOutermost) {
   }
 }
 
-TEST(NeighbourList, AGrainAFasterPartnerCanReachGetsThePartnersAllowance) {
-  // B flies at 3 m/s towards A, 2 mm away; C lies 10 mm behind B, listed, but further than the
-  // two close in skin_steps steps (9.6 mm); D lies 0.5 mm from A, listed with no fast grain; E is
-  // frozen beside B
-  const Real r = 0.005, dt = 1e-4, v = 3.0;
+/// No gravity, a 2 mm skin, fast grains allowed their way in 32 steps up to 2 cm, and the grains
+/// kept in their slots (allow[k] is grain k's).
+DemParams allowances_up_to_2_cm() {
   DemParams p;
   p.gravity = {0, 0, 0};
   p.skin = 0.002;
   p.skin_steps = 32;
   p.skin_max = 0.02;
-  p.sort_every = 0;  // (the grains keep their slots: allow[k] is grain k's)
+  p.sort_every = 0;
   p.contact.k_n = 1e4;
+  return p;
+}
+
+TEST(NeighbourList, AGrainAFasterPartnerCanReachGetsThePartnersAllowance) {
+  // B flies at 3 m/s towards A, 2 mm away; C lies 10 mm behind B, listed, but further than the
+  // two close in skin_steps steps (9.6 mm); D lies 0.5 mm from A, listed with no fast grain; E is
+  // frozen beside B
+  const Real r = 0.005, dt = 1e-4, v = 3.0;
+  const DemParams p = allowances_up_to_2_cm();
   Grains g;
   g.add(0, {0, 0, 0}, {}, r, 2600);                          // A
   g.add(1, {2 * r + 0.002, 0, 0}, {-v, 0, 0}, r, 2600);      // B
@@ -359,6 +366,50 @@ TEST(NeighbourList, AGrainAFasterPartnerCanReachGetsThePartnersAllowance) {
   EXPECT_DOUBLE_EQ(allow[2], a_min) << "C, further than B goes in skin_steps steps";
   EXPECT_DOUBLE_EQ(allow[3], a_min) << "D, beside A but not B";
   EXPECT_EQ(allow[4], 0) << "E, frozen";
+}
+
+TEST(NeighbourList, AllowancesKeptForTheRebuildAreTakenOnlyWhileTheyHold) {
+  // B flies at 3 m/s past E, frozen 1 mm beside it; F rests 4 mm beyond E. The invariant of the
+  // layers reads the allowances for the coming rebuild (E, frozen: none); then E is dislodged.
+  // The rebuild must give E the allowance of B, which can reach it, and so list E with F (a kept
+  // 0 for E would leave that pair out); a grain woken into the interface after the reading
+  // changes no other grain's allowance, and the list stays complete.
+  const Real r = 0.005, dt = 1e-4, v = 3.0;
+  const DemParams p = allowances_up_to_2_cm();
+  Grains g;
+  g.add(0, {0, 0, 0}, {-v, 0, 0}, r, 2600);      // B
+  g.add(1, {0, 2 * r + 0.001, 0}, {}, r, 2600);  // E
+  g.add(2, {0, 4 * r + 0.005, 0}, {}, r, 2600);  // F
+  g.state[1] = GrainState::Interface;
+  DemSolver dem(p);
+  Profile prof;
+  dem.step(g, Geometry{}, dt, prof);
+  auto listed = [&](std::uint32_t a, std::uint32_t b) {
+    const auto pairs = listed_pairs(dem.pairs());
+    return std::find(pairs.begin(), pairs.end(), std::pair{a, b}) != pairs.end();
+  };
+  ASSERT_TRUE(listed(0, 1));
+  ASSERT_FALSE(listed(1, 2)) << "E, frozen, and F, slow, are 4 mm apart";
+
+  EXPECT_EQ(dem.allowances_for_rebuild(g, dt)[1], 0) << "E, frozen";
+  g.state[1] = GrainState::Active;
+  const StateChange dislodged{1, GrainState::Interface, GrainState::Active};
+  dem.apply({&dislodged, 1});
+  dem.update_lists(g, Geometry{}, dt);
+  EXPECT_TRUE(listed(1, 2)) << "E, dislodged, takes B's allowance";
+
+  // a grain woken into the interface beside F after the reading: the kept allowances hold
+  dem.allowances_for_rebuild(g, dt);
+  g.add(3, {2 * r + 0.0005, 4 * r + 0.005, 0}, {}, r, 2600);
+  g.state[3] = GrainState::Interface;
+  const StateChange woken{3, GrainState::Static, GrainState::Interface};
+  dem.apply({&woken, 1});
+  dem.update_lists(g, Geometry{}, dt);
+  std::vector<Real> fresh;
+  dem.allowances(g, dt, fresh);
+  EXPECT_EQ(pair_list_error(g, fresh, dem.pairs()), "");
+  EXPECT_TRUE(listed(1, 2));
+  EXPECT_TRUE(listed(2, 3)) << "F and the woken grain, 0.5 mm apart";
 }
 
 TEST(NeighbourList, HistorySurvivesARebuildWithResorting) {
