@@ -130,6 +130,11 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   auto searches = [&](std::size_t i) {
     return grains.state[i] == GrainState::Active || !(allow[i] < a_min_active);
   };
+  // the largest allowance among those (none in a run: a frozen grain does not move)
+  Real a_max_frozen = 0;
+#pragma omp parallel for reduction(max : a_max_frozen) if (many)
+  for (std::size_t i = 0; i < n; ++i)
+    if (!searches(i)) a_max_frozen = std::max(a_max_frozen, allow[i]);
   Real a_min = kNone;
 #pragma omp parallel for schedule(static) reduction(min : a_min) if (many)
   for (std::size_t i = 0; i < n; ++i)
@@ -236,12 +241,16 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
         grids.searching.for_each_within(x_i, 1, searching_partner);
       else
         grids.searching.for_each_in_ball(x_i, reach_i, searching_partner);
-      // every frozen grain that searches none is less mobile: an ACTIVE grain lists it
+      // every frozen grain that searches none is less mobile: an ACTIVE grain lists it, out to
+      // the cut of a pair with the most mobile of them (with its own allowance for theirs, as
+      // among the searching grains, a fast grain searched up to three times the volume:
+      // docs/performance.md, ninety-fourth)
       if (any_frozen && active_i) {
-        if (reach_i <= grids.frozen.cell_size())
+        const Real frozen_reach = r_i + r_max + a_i + a_max_frozen;
+        if (frozen_reach <= grids.frozen.cell_size())
           grids.frozen.for_each_within(x_i, 1, list);
         else
-          grids.frozen.for_each_in_ball(x_i, reach_i, list);
+          grids.frozen.for_each_in_ball(x_i, frozen_reach, list);
       }
       // ascending j: a canonical order, independent of how the grid visits cells
       std::sort(buf.begin() + first, buf.end());

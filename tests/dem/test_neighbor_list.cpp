@@ -218,16 +218,25 @@ TEST(NeighbourList, FrozenPairsAreNotListed) {
 // The solver gives frozen grains no allowance: they search for nothing (every pair of theirs is
 // an active grain's), and the cells fit the active grains. A frozen grain with an allowance above
 // the least active one's still searches. The pairs must be the brute-force ones all the same.
+/// 3,000 random grains, three in five frozen with the allowance `frozen`, the others `slow`,
+/// every eleventh (ACTIVE) drawn in [slow, fast]; the grains into g, their allowances returned.
+std::vector<Real> frozen_slow_and_fast(Grains& g, std::uint64_t seed, Real frozen, Real slow,
+                                       Real fast) {
+  g = random_grains(3000, seed, 0.12);
+  Rng rng(seed);
+  std::vector<Real> allow(g.size());
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    const bool is_frozen = i % 5 < 3;
+    if (is_frozen) g.state[i] = GrainState::Interface;
+    allow[i] = is_frozen ? frozen : (i % 11 == 0 ? rng.uniform(slow, fast) : slow);
+  }
+  return allow;
+}
+
 TEST(NeighbourList, FrozenGrainsWithoutAllowanceLoseNoPair) {
   for (std::uint64_t seed : {8, 9}) {
-    Grains g = random_grains(3000, seed, 0.12);
-    Rng rng(seed);
-    std::vector<Real> allow(g.size());
-    for (std::size_t i = 0; i < g.size(); ++i) {
-      const bool frozen = i % 5 < 3;
-      if (frozen) g.state[i] = GrainState::Interface;
-      allow[i] = frozen ? 0.0 : (i % 11 == 0 ? rng.uniform(0.001, 0.012) : 0.001);
-    }
+    Grains g;
+    std::vector<Real> allow = frozen_slow_and_fast(g, seed, 0.0, 0.001, 0.012);
     allow[30] = 0.002;  // frozen, more mobile than the least active grain: it searches
     allow[31] = 0.0005;  // frozen, less mobile: it does not
     PairGrids grid;
@@ -235,6 +244,19 @@ TEST(NeighbourList, FrozenGrainsWithoutAllowanceLoseNoPair) {
     expect_brute_force_pairs(g, allow, grid, pl, seed);
     // sized for the active grains
     EXPECT_LT(grid.searching.cell_size(), 2 * 0.006 + 2 * 0.001 + 1e-12);
+  }
+}
+
+// Frozen grains that may move a little (allowances under the least ACTIVE one's: they search
+// none) and fast ACTIVE grains: an ACTIVE grain's search of the frozen grains must reach the cut
+// of a pair with the most mobile of them, not only with its own allowance.
+TEST(NeighbourList, FrozenGrainsThatMayMoveAreFoundOutToTheirCut) {
+  for (std::uint64_t seed : {13, 14}) {
+    Grains g;
+    const std::vector<Real> allow = frozen_slow_and_fast(g, seed, 0.0039, 0.004, 0.02);
+    PairGrids grid;
+    PairList pl;
+    expect_brute_force_pairs(g, allow, grid, pl, seed);
   }
 }
 
