@@ -130,21 +130,24 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   auto searches = [&](std::size_t i) {
     return grains.state[i] == GrainState::Active || !(allow[i] < a_min_active);
   };
-  // the largest allowance among those (none in a run: a frozen grain does not move)
-  Real a_max_frozen = 0;
-#pragma omp parallel for reduction(max : a_max_frozen) if (many)
-  for (std::size_t i = 0; i < n; ++i)
-    if (!searches(i)) a_max_frozen = std::max(a_max_frozen, allow[i]);
   Real a_min = kNone;
 #pragma omp parallel for schedule(static) reduction(min : a_min) if (many)
   for (std::size_t i = 0; i < n; ++i)
     if (searches(i)) a_min = std::min(a_min, allow[i]);
   if (a_min == kNone) a_min = 0;
-  // The grains that search in one grid, the frozen ones that search none in another. Cells fit
-  // the pairs of the least mobile searching grains; one with a larger allowance looks further.
+  // The grains that search in one grid, the frozen ones that search none in another (and the
+  // largest allowance among those: none in a run, a frozen grain does not move). Cells fit the
+  // pairs of the least mobile searching grains; one with a larger allowance looks further.
   std::vector<std::uint32_t> searching, frozen;
-  for (std::size_t i = 0; i < n; ++i)
-    (searches(i) ? searching : frozen).push_back(static_cast<std::uint32_t>(i));
+  Real a_max_frozen = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (searches(i)) {
+      searching.push_back(static_cast<std::uint32_t>(i));
+    } else {
+      frozen.push_back(static_cast<std::uint32_t>(i));
+      a_max_frozen = std::max(a_max_frozen, allow[i]);
+    }
+  }
   grids.searching.build(x, searching, 2 * r_max + 2 * a_min);
   grids.frozen.build(x, frozen, 2 * r_max + 2 * a_min);
   const Real inv_cell = 1.0 / grids.searching.cell_size();
