@@ -152,12 +152,14 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   grids.frozen.build(x, frozen, 2 * r_max + 2 * a_min);
   const Real inv_cell = 1.0 / grids.searching.cell_size();
 
-  // A pair is listed when the grains are within reach and at least one of them can move. It is
-  // found by the grain with the larger allowance, whose search reaches r_i + r_max + 2 a_i: every
-  // partner with an allowance no larger than its own. On a tie the lower index finds it, but for
-  // the commonest pairs, two grains of the least allowance (the slow grains, all of a plain DEM
-  // run's in a bed), which are found by the grid's half search (CellGrid::for_each_after): half
-  // the candidates, and none of them another's.
+  // A pair is listed when the grains are within reach and at least one of them can move. Two
+  // searching grains in cells next to each other are found by the grid's half search
+  // (CellGrid::for_each_after), which every searching grain makes: half the candidates, none of
+  // them another's, and every pair closer than a cell. A pair further apart (a fast grain's: the
+  // allowances of half a surface run's searching grains are raised, docs/performance.md,
+  // ninety-sixth) is found beyond those cells by the grain with the larger allowance, whose
+  // search reaches r_i + r_max + 2 a_i: every partner with an allowance no larger than its own
+  // (on a tie the lower index finds it).
   // (the search reads the arrays through local pointers, captured by value: through `grains`,
   // every candidate reloaded them, since any store may change a vector's pointer)
   const Vec3* const px = x.data();
@@ -179,7 +181,7 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
     const std::uint64_t k = reach[i];
     const std::uint64_t among_frozen = any_frozen && ps[i] == GrainState::Active ? 27 : 0;
     return k == 0 ? 0
-                  : (pa[i] == a_min ? 14 : (2 * k + 1) * (2 * k + 1) * (2 * k + 1)) + among_frozen;
+                  : (k == 1 ? 14 : 14 + (2 * k + 1) * (2 * k + 1) * (2 * k + 1) / 3) + among_frozen;
   };
 #pragma omp parallel for schedule(static) reduction(+ : work) if (many)
   for (std::size_t i = 0; i < n; ++i) {
@@ -227,23 +229,19 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
         else
           side.emplace_back(j, me);
       };
-      const bool slow = a_i == a_min;
-      auto searching_partner = [&list, pa, ps, me, a_i, a_min, active_i, slow](std::uint32_t j) {
-        const Real a_j = pa[j];
-        // (a slow grain's half search meets only grains that are as slow or faster)
-        if (slow ? a_j > a_min : !(a_i > a_j || (a_i == a_j && me < j))) return;  // (j == i too)
-        if (!active_i && ps[j] != GrainState::Active) return;
-        list(j);
+      auto near_partner = [&list, ps, active_i](std::uint32_t j) {
+        if (active_i || ps[j] == GrainState::Active) list(j);
       };
-      // a reach of one cell: the 27 cells, nine contiguous rows, or half of them; a longer one (a
-      // fast grain): only the cells its ball meets, a third of the cube
+      auto far_partner = [&list, pa, ps, me, a_i, active_i](std::uint32_t j) {
+        const Real a_j = pa[j];
+        if (!(a_i > a_j || (a_i == a_j && me < j))) return;
+        if (active_i || ps[j] == GrainState::Active) list(j);
+      };
+      grids.searching.for_each_after(me, x_i, near_partner);
+      // a longer reach than a cell: only the cells its ball meets beyond the 27
       const Real reach_i = r_i + r_max + 2 * a_i;
-      if (slow)
-        grids.searching.for_each_after(me, x_i, searching_partner);
-      else if (k == 1)
-        grids.searching.for_each_within(x_i, 1, searching_partner);
-      else
-        grids.searching.for_each_in_ball(x_i, reach_i, searching_partner);
+      if (reach_i > grids.searching.cell_size())
+        grids.searching.for_each_in_ball_beyond(x_i, reach_i, far_partner);
       // every frozen grain that searches none is less mobile: an ACTIVE grain lists it, out to
       // the cut of a pair with the most mobile of them (with its own allowance for theirs, as
       // among the searching grains, a fast grain searched up to three times the volume:

@@ -13,8 +13,10 @@
 // count, is told in dem_solver.cpp (DemSolver::sweep).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <span>
 #include <string>
 #include <utility>
@@ -92,6 +94,10 @@ class CellGrid {
   /// fewer candidates.
   template <class F>
   void for_each_in_ball(const Vec3& p, Real reach, F&& f) const;
+  /// The same, without the 27 cells around p's own: the grains of the ball beyond those that
+  /// for_each_after finds from either side.
+  template <class F>
+  void for_each_in_ball_beyond(const Vec3& p, Real reach, F&& f) const;
 
   Real cell_size() const { return cell_; }
 
@@ -111,6 +117,10 @@ class CellGrid {
   std::size_t index(int cx, int cy, int cz) const {
     return (static_cast<std::size_t>(cz) * dims_[1] + cy) * dims_[0] + cx;
   }
+
+  /// Calls row(x0, x1, y, z) for each row of cells whose cells x0..x1 the ball meets.
+  template <class Row>
+  void for_each_row_in_ball(const Vec3& p, Real reach, Row&& row) const;
 
   template <class Which>
   void file(const std::vector<Vec3>& all, std::size_t n, Which which, Real min_cell);
@@ -218,6 +228,42 @@ void CellGrid::for_each_after(std::uint32_t i, const Vec3& x_i, F&& f) const {
 
 template <class F>
 void CellGrid::for_each_in_ball(const Vec3& p, Real reach, F&& f) const {
+  for_each_row_in_ball(p, reach, [&](int x0, int x1, int y, int z) {
+    const std::uint32_t end = cell_start_[index(x1, y, z) + 1];
+    for (std::uint32_t q = cell_start_[index(x0, y, z)]; q < end; ++q) f(items_[q]);
+  });
+}
+
+template <class F>
+void CellGrid::for_each_in_ball_beyond(const Vec3& p, Real reach, F&& f) const {
+  const int cx = coord(p.x, 0), cy = coord(p.y, 1), cz = coord(p.z, 2);
+  // (most fast grains reach a little over a cell: their ball meets no cell beyond the 27 unless
+  // it meets one two cells away along some axis)
+  const Real r2 = reach * reach * (1 + 1e-9);  // (as for_each_row_in_ball's)
+  auto met = [&](int cell, int axis) {
+    const Real d = slab_distance(p[axis], cell, axis);
+    return d * d < r2;
+  };
+  const int c[3] = {cx, cy, cz};
+  bool beyond = false;
+  for (int axis = 0; axis < 3 && !beyond; ++axis)
+    beyond = (c[axis] >= 2 && met(c[axis] - 2, axis)) ||
+             (c[axis] + 2 < dims_[axis] && met(c[axis] + 2, axis));
+  if (!beyond) return;
+  auto cells = [&](int x0, int x1, int y, int z) {
+    if (x0 > x1) return;
+    const std::uint32_t end = cell_start_[index(x1, y, z) + 1];
+    for (std::uint32_t q = cell_start_[index(x0, y, z)]; q < end; ++q) f(items_[q]);
+  };
+  for_each_row_in_ball(p, reach, [&](int x0, int x1, int y, int z) {
+    if (std::abs(y - cy) > 1 || std::abs(z - cz) > 1) return cells(x0, x1, y, z);
+    cells(x0, std::min(x1, cx - 2), y, z);  // (the row's part left and right of the 27 cells)
+    cells(std::max(x0, cx + 2), x1, y, z);
+  });
+}
+
+template <class Row>
+void CellGrid::for_each_row_in_ball(const Vec3& p, Real reach, Row&& row) const {
   const Real r2 = reach * reach * (1 + 1e-9);  // (a margin for the rounding of the distances)
   const int z1 = coord(p.z + reach, 2), y0 = coord(p.y - reach, 1), y1 = coord(p.y + reach, 1);
   for (int z = coord(p.z - reach, 2); z <= z1; ++z) {
@@ -229,8 +275,7 @@ void CellGrid::for_each_in_ball(const Vec3& p, Real reach, F&& f) const {
       if (left <= 0) continue;
       // the row's cells along x that the ball meets are contiguous, and so are their grains
       const Real w = std::sqrt(left);
-      const std::uint32_t end = cell_start_[index(coord(p.x + w, 0), y, z) + 1];
-      for (std::uint32_t q = cell_start_[index(coord(p.x - w, 0), y, z)]; q < end; ++q) f(items_[q]);
+      row(coord(p.x - w, 0), coord(p.x + w, 0), y, z);
     }
   }
 }

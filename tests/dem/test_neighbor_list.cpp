@@ -165,6 +165,40 @@ TEST(CellGrid, ABallQueryVisitsEveryGrainWithinReach) {
   }
 }
 
+// A fast grain's search beyond the 27 cells around it (those the half search covers): with them,
+// every grain within reach, also in the border cells and for reaches just over a cell (where
+// most balls meet nothing beyond), and none of the 27 cells' grains twice.
+TEST(CellGrid, TheBallBeyondTheNearCellsHoldsTheRestOfTheBall) {
+  for (std::uint64_t seed : {13, 14}) {
+    Grains g = random_grains(3000, seed, 0.15);
+    Rng rng(seed);
+    for (int k = 0; k < 10; ++k)  // (clamped into the border cells)
+      g.add(7000 + k, {40 + rng.uniform(0, 0.03), -30 + rng.uniform(0, 0.03), 0.07}, {}, 0.005,
+            2600);
+    CellGrid grid;
+    grid.build(g.x, 0.013);
+    std::size_t beyond_total = 0;
+    for (int q = 0; q < 400; ++q) {
+      const Vec3 p = q % 10 == 0 ? g.x[3000 + q / 10 % 10]
+                                 : Vec3{rng.uniform(-0.01, 0.16), rng.uniform(-0.01, 0.16),
+                                        rng.uniform(-0.01, 0.16)};
+      const Real reach = grid.cell_size() * (q % 2 ? rng.uniform(1.0, 1.1) : rng.uniform(1, 3));
+      std::set<std::uint32_t> near, beyond;
+      grid.for_each_within(p, 1, [&](std::uint32_t j) { near.insert(j); });
+      grid.for_each_in_ball_beyond(p, reach, [&](std::uint32_t j) {
+        EXPECT_FALSE(near.count(j)) << "seed " << seed << ", query " << q;
+        EXPECT_TRUE(beyond.insert(j).second) << "seed " << seed << ", query " << q;
+      });
+      beyond_total += beyond.size();
+      for (std::uint32_t j = 0; j < g.size(); ++j)
+        if (norm(g.x[j] - p) < reach) {
+          EXPECT_TRUE(near.count(j) || beyond.count(j)) << "seed " << seed << ", query " << q;
+        }
+    }
+    EXPECT_GT(beyond_total, 1000u) << "seed " << seed;  // (or the check proves little)
+  }
+}
+
 // The check that follows every rebuild in a build with assertions (pair_list_error): silent on
 // the grid's list, and it names the pair a broken list misses and a row out of order.
 TEST(NeighbourList, TheRebuildCheckNamesAMissingPairAndABadRow) {
