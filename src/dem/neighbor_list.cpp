@@ -170,9 +170,9 @@ void build_pair_list(const Grains& grains, const std::vector<Real>& allow, bool 
   // One pass: each thread lists a contiguous range of grains into its own buffer; the buffers
   // are then joined in thread order, so the list is in grain order for any thread count. A pair
   // found by its higher-index grain goes to a side list and joins the lower one's row after.
-  // The ranges are of about equal work: a grain searches about 14 cells (the half search),
-  // (2k + 1)^3 with k = 1 or 2-3 for the fast grains of a stream, which sit together in the
-  // storage order, and 27 more among the frozen grains.
+  // The ranges are of about equal work: a grain searches about 14 cells (the half search), a
+  // third of (2k + 1)^3 more when its reach is k = 2-3 cells (the fast grains of a stream, which
+  // sit together in the storage order), and 27 more among the frozen grains.
   std::vector<std::uint32_t> own_count(n + 1, 0);
   std::vector<std::uint8_t> reach(n);
   std::uint64_t work = 0;

@@ -118,6 +118,14 @@ class CellGrid {
     return (static_cast<std::size_t>(cz) * dims_[1] + cy) * dims_[0] + cx;
   }
 
+  /// Calls f(j) for every grain j in the cells x0..x1 of row (y, z) (none when x0 > x1): the
+  /// cells along x are contiguous, and so are their grains.
+  template <class F>
+  void for_each_in_row(int x0, int x1, int y, int z, F&& f) const {
+    if (x0 > x1) return;
+    const std::uint32_t end = cell_start_[index(x1, y, z) + 1];
+    for (std::uint32_t q = cell_start_[index(x0, y, z)]; q < end; ++q) f(items_[q]);
+  }
   /// Calls row(x0, x1, y, z) for each row of cells whose cells x0..x1 the ball meets.
   template <class Row>
   void for_each_row_in_ball(const Vec3& p, Real reach, Row&& row) const;
@@ -202,9 +210,7 @@ void CellGrid::for_each_within(const Vec3& p, int k, F&& f) const {
     if (z < 0 || z >= dims_[2]) continue;
     for (int y = cy - k; y <= cy + k; ++y) {
       if (y < 0 || y >= dims_[1]) continue;
-      // the cells along x are contiguous
-      const std::uint32_t end = cell_start_[index(x1, y, z) + 1];
-      for (std::uint32_t q = cell_start_[index(x0, y, z)]; q < end; ++q) f(items_[q]);
+      for_each_in_row(x0, x1, y, z, f);
     }
   }
 }
@@ -228,10 +234,8 @@ void CellGrid::for_each_after(std::uint32_t i, const Vec3& x_i, F&& f) const {
 
 template <class F>
 void CellGrid::for_each_in_ball(const Vec3& p, Real reach, F&& f) const {
-  for_each_row_in_ball(p, reach, [&](int x0, int x1, int y, int z) {
-    const std::uint32_t end = cell_start_[index(x1, y, z) + 1];
-    for (std::uint32_t q = cell_start_[index(x0, y, z)]; q < end; ++q) f(items_[q]);
-  });
+  for_each_row_in_ball(p, reach,
+                       [&](int x0, int x1, int y, int z) { for_each_in_row(x0, x1, y, z, f); });
 }
 
 template <class F>
@@ -250,15 +254,10 @@ void CellGrid::for_each_in_ball_beyond(const Vec3& p, Real reach, F&& f) const {
     beyond = (c[axis] >= 2 && met(c[axis] - 2, axis)) ||
              (c[axis] + 2 < dims_[axis] && met(c[axis] + 2, axis));
   if (!beyond) return;
-  auto cells = [&](int x0, int x1, int y, int z) {
-    if (x0 > x1) return;
-    const std::uint32_t end = cell_start_[index(x1, y, z) + 1];
-    for (std::uint32_t q = cell_start_[index(x0, y, z)]; q < end; ++q) f(items_[q]);
-  };
   for_each_row_in_ball(p, reach, [&](int x0, int x1, int y, int z) {
-    if (std::abs(y - cy) > 1 || std::abs(z - cz) > 1) return cells(x0, x1, y, z);
-    cells(x0, std::min(x1, cx - 2), y, z);  // (the row's part left and right of the 27 cells)
-    cells(std::max(x0, cx + 2), x1, y, z);
+    if (std::abs(y - cy) > 1 || std::abs(z - cz) > 1) return for_each_in_row(x0, x1, y, z, f);
+    for_each_in_row(x0, std::min(x1, cx - 2), y, z, f);  // (the parts beside the 27 cells)
+    for_each_in_row(std::max(x0, cx + 2), x1, y, z, f);
   });
 }
 
@@ -273,7 +272,7 @@ void CellGrid::for_each_row_in_ball(const Vec3& p, Real reach, Row&& row) const 
       const Real dy = slab_distance(p.y, y, 1);
       const Real left = r2 - dz * dz - dy * dy;
       if (left <= 0) continue;
-      // the row's cells along x that the ball meets are contiguous, and so are their grains
+      // (the row's cells along x that the ball meets are contiguous)
       const Real w = std::sqrt(left);
       row(coord(p.x - w, 0), coord(p.x + w, 0), y, z);
     }
