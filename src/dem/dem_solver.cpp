@@ -986,7 +986,8 @@ template <bool kRolling>
 
 /// Grain i's pair sums, into f, q and tr: its remaining pairs (computed here, their reverses
 /// scattered), its waiting ones (from slot `split` on: those reaching past its range's end,
-/// computed in the thread partition), then its accumulator, which is cleared.
+/// computed in the thread partition), then its accumulator, which is cleared. For a frozen grain,
+/// which does not move, only its pairs' reverses.
 template <bool kRolling>
 [[gnu::always_inline]] inline void pair_sums(const SweepData& d, std::uint32_t split, std::size_t i,
                                              Vec3& f, Vec3& q, Vec3& tr, SweepTally& tally) {
@@ -1003,9 +1004,13 @@ template <bool kRolling>
       f += cf.force_i;
       q += cf.q;
       if constexpr (kRolling) tr += cf.t_roll;
-      scatter<kRolling>(d, pl.j[s], cf);
+      // (a frozen grain does not move: nothing is added up for it, so its accumulator stays
+      // zero, and a frozen row's sums end here: a surface run's rows are half frozen)
+      const std::uint32_t j = pl.j[s];
+      if (d.st[j] == GrainState::Active) scatter<kRolling>(d, j, cf);
     }
   }
+  if (d.st[i] != GrainState::Active) return;
   for (std::uint32_t s = split; s < pl.start[i + 1]; ++s) {
     if (!pl.touch[s]) continue;
     f += pl.force[s];
@@ -1094,7 +1099,7 @@ template <bool kRolling>
     const std::uint32_t i = cross_rows[k];
     for (std::uint32_t s = first_reaching(pl, i, lo); s < pl.start[i + 1]; ++s) {
       const std::uint32_t j = pl.j[s];
-      if (!pl.touch[s] || j >= hi) continue;
+      if (!pl.touch[s] || j >= hi || d.st[j] != GrainState::Active) continue;
       d.acc_f[j] -= pl.force[s];
       d.acc_q[j] += pl.q[s];
       if constexpr (kRolling) d.acc_t[j] -= pl.t_roll[s];

@@ -174,40 +174,55 @@ void HeightField::measure(const Grains& hot, const std::vector<Real>& static_top
   auto skip = [&](std::size_t i) { return !counts.empty() && !counts[i]; };
   // 1. every counted grain's ray hits: each thread lists those of its share of the grains, in
   // grain order, so the threads' lists joined in thread order are in grain order for any count
+  // 2. filed by column (a counting sort over the columns hit, not the grid), as the lists joined
+  // in thread order would be: the columns in the order first met, each column's hits thread by
+  // thread. Each thread counts and files its own list; only the columns' offsets are one
+  // thread's work (filed by one thread, the hits were 0.8 % of a surface run's wall time:
+  // docs/performance.md, ninety-seventh)
   const std::size_t n = hot.size();
 #pragma omp parallel if (n >= kParallelMinGrains)
   {
 #pragma omp single
     thread_hits_.resize(static_cast<std::size_t>(omp_get_num_threads()));
-    std::vector<ColumnHit>& mine = thread_hits_[static_cast<std::size_t>(omp_get_thread_num())];
-    mine.clear();
-#pragma omp for schedule(static)
+    ThreadHits& mine = thread_hits_[static_cast<std::size_t>(omp_get_thread_num())];
+    mine.hits.clear();
+    mine.columns.clear();
+    mine.at.resize(columns(), 0);
+#pragma omp for schedule(static) nowait
     for (std::size_t i = 0; i < n; ++i)
       if (!skip(i))
         for_each_ray_hit(hot.x[i], hot.r[i], [&](std::size_t c, Real bottom, Real top) {
-          mine.push_back({static_cast<std::uint32_t>(c), bottom, top,
-                          !counts.empty() && counts[i] == kHeldOnPile});
+          mine.hits.push_back({static_cast<std::uint32_t>(c), bottom, top,
+                               !counts.empty() && counts[i] == kHeldOnPile});
         });
-  }
-  // 2. filed by column (a counting sort over the columns hit, not the grid)
-  hit_columns_.clear();
-  hit_start_.assign(1, 0);
-  for (const std::vector<ColumnHit>& list : thread_hits_)
-    for (const ColumnHit& e : list) {
-      std::uint32_t& slot = hit_slot_[e.column];
-      if (slot == kNoSlot) {
-        slot = static_cast<std::uint32_t>(hit_columns_.size());
-        hit_columns_.push_back(e.column);
-        hit_start_.push_back(0);
+    for (const ColumnHit& e : mine.hits)
+      if (mine.at[e.column]++ == 0) mine.columns.push_back(e.column);
+#pragma omp barrier
+#pragma omp single
+    {
+      hit_columns_.clear();
+      for (const ThreadHits& list : thread_hits_)
+        for (const std::uint32_t c : list.columns)
+          if (hit_slot_[c] == kNoSlot) {
+            hit_slot_[c] = static_cast<std::uint32_t>(hit_columns_.size());
+            hit_columns_.push_back(c);
+          }
+      // each thread's count of a column becomes where its first hit there goes
+      hit_start_.resize(hit_columns_.size() + 1);
+      std::uint32_t filed = 0;
+      for (std::size_t k = 0; k < hit_columns_.size(); ++k) {
+        hit_start_[k] = filed;
+        for (ThreadHits& list : thread_hits_) {
+          std::uint32_t& at = list.at[hit_columns_[k]];
+          filed += std::exchange(at, filed);
+        }
       }
-      ++hit_start_[slot + 1];
+      hit_start_.back() = filed;
+      hits_.resize(filed);
     }
-  for (std::size_t k = 1; k < hit_start_.size(); ++k) hit_start_[k] += hit_start_[k - 1];
-  hits_.resize(hit_start_.back());
-  hit_fill_.assign(hit_start_.begin(), hit_start_.end() - 1);
-  for (const std::vector<ColumnHit>& list : thread_hits_)
-    for (const ColumnHit& e : list)
-      hits_[hit_fill_[hit_slot_[e.column]]++] = {e.bottom, e.top, e.held};
+    for (const ColumnHit& e : mine.hits) hits_[mine.at[e.column]++] = {e.bottom, e.top, e.held};
+    for (const std::uint32_t c : hit_columns_) mine.at[c] = 0;  // (zero for the next measure)
+  }
 
   // 3. H where it can change: columns hit now or at the last measure, or whose static top changed
   // (added to those measured since the last exchange)
@@ -384,6 +399,10 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing, const ColumnSet* e
   const Real flowing_min = p_.flowing_floor();
   // a layer that stopped flowing keeps its depth while DEM brings it to rest (flowing_hold)
   const Real hold = p_.hold_time();
+  // (each column from its own values: the threads take shares; the sets then take the columns
+  // in the order of the list)
+  next_.resize(todo.size());
+#pragma omp parallel for schedule(static) if (todo.size() >= 1024)
   for (std::size_t w = 0; w < todo.size(); ++w) {
     const std::size_t c = todo[w];
     // R_min: the visible surface is made of grains that can move, until the column has been at
@@ -400,10 +419,13 @@ void HeightField::exchange(Real dt, const ColumnSet& flowing, const ColumnSet* e
     h_[c] = h;
     R_[c] = H_[c] - h_[c];
     // (an open column counts its rest; a changed one, and its neighbours, may change again)
-    if (changed)
-      moved(c);
-    else if (!closed(c) || flows)
-      pending_.add(static_cast<std::uint32_t>(c));
+    next_[w] = changed ? kMoved : !closed(c) || flows ? kPending : kSettled;
+  }
+  for (std::size_t w = 0; w < todo.size(); ++w) {
+    if (next_[w] == kMoved)
+      moved(todo[w]);
+    else if (next_[w] == kPending)
+      pending_.add(todo[w]);
   }
   // a free face steeper than theta_max fails at once, with the wedge behind it: the avalanche's
   // rate alone held a lifted tube's sand up as a wall while it eroded; how fast the released

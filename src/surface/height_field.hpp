@@ -278,6 +278,9 @@ class HeightField {
   bool moved_all_ = true;
   std::size_t evaluated_ = 0;
   std::vector<Real> h_new_;
+  /// scratch of exchange(): per column evaluated, what follows for the sets
+  enum Next : std::uint8_t { kSettled, kPending, kMoved };
+  std::vector<Next> next_;
   std::vector<std::uint32_t> queue_;  ///< scratch of hold_max_slope()
   std::vector<std::uint8_t> faces_;   ///< scratch of hold_max_slope(): a seed's faces, one bit each
 
@@ -287,13 +290,17 @@ class HeightField {
     Real bottom, top;
     bool held;  ///< the grain is held on the pile (kHeldOnPile)
   };
-  std::vector<std::vector<ColumnHit>> thread_hits_;  ///< per thread, its grains' hits in order
+  struct ThreadHits {
+    std::vector<ColumnHit> hits;         ///< the thread's grains' hits, in grain order
+    std::vector<std::uint32_t> columns;  ///< the columns they hit, as first met
+    std::vector<std::uint32_t> at;       ///< per column: its count of hits, then where they go
+  };
+  std::vector<ThreadHits> thread_hits_;  ///< per thread
   static constexpr std::uint32_t kNoSlot = 0xffffffffu;
   std::vector<std::uint32_t> hit_slot_;     ///< per column: its place in hit_columns_, or kNoSlot
   std::vector<std::uint32_t> hit_columns_;  ///< the columns hit, as first met
   std::vector<std::uint32_t> hit_before_;   ///< the columns hit at the last measure
   std::vector<std::uint32_t> hit_start_;    ///< per column hit (+1): offsets into hits_
-  std::vector<std::uint32_t> hit_fill_;
   std::vector<std::uint8_t> relevelled_;  ///< per measured column: its level changed
   struct Hit {
     Real bottom, top;
